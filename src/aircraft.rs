@@ -1,0 +1,1 @@
+//! Per-aircraft configuration read from `aircraft/NAME.toml`.

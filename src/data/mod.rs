@@ -1,0 +1,1 @@
+//! Flight-data schema, CSV and MAVLink readers/writers, units and validation.

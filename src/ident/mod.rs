@@ -1,0 +1,1 @@
+//! Estimators: the paper's ARX least squares, instrumental variables / SRIVC, output error.

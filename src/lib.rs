@@ -1,0 +1,11 @@
+//! flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
+//!
+//! Data flows one way: `sim`/`data` produce records → `ident` estimates models (built on `lti`
+//! and `signal`) → comparison → `report`. The `cli` module only parses arguments and calls in.
+
+pub mod aircraft;
+pub mod data;
+pub mod ident;
+pub mod lti;
+pub mod signal;
+pub mod sim;

@@ -1,0 +1,1 @@
+//! Linear time-invariant systems: transfer functions, state space, conversions, simulation.

@@ -1,0 +1,1 @@
+//! Input design (doublet, 3-2-1-1, multisine, chirp), resampling, filtering, differentiation.
