@@ -4,6 +4,7 @@
 //! and `signal`) → comparison → `report`. The `cli` module only parses arguments and calls in.
 
 pub mod aircraft;
+pub mod cli;
 pub mod data;
 pub mod ident;
 pub mod lti;

@@ -1,0 +1,51 @@
+//! Command-line interface: argument parsing only; every command is a thin call into the library.
+//!
+//! Each command lives in its own file with a `clap::Args` struct and a `run` function returning
+//! `anyhow::Result<()>`. Exit codes: 0 ok, 1 failure, 2 bad usage or bad input (see [`UsageError`]).
+
+use clap::{Parser, Subcommand};
+
+/// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
+#[derive(Parser, Debug)]
+#[command(name = "flightid", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand, Debug)]
+pub enum Command {}
+
+/// An error caused by the user's input (bad file, unknown name): exit code 2.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
+
+/// Runs the CLI and returns the process exit code.
+pub fn main() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { 2 } else { 0 };
+        }
+    };
+    let result = match cli.command {};
+    #[allow(unreachable_code)]
+    match result {
+        Ok(()) => 0,
+        Err(e) => report_error(&e),
+    }
+}
+
+/// Prints an error chain on one line and picks the exit code.
+pub fn report_error(e: &anyhow::Error) -> i32 {
+    let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
+    eprintln!("error: {}", chain.join(": "));
+    if e.chain().any(|c| c.downcast_ref::<UsageError>().is_some()) {
+        2
+    } else {
+        1
+    }
+}
