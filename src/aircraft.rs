@@ -1,1 +1,178 @@
-//! Per-aircraft configuration read from `aircraft/NAME.toml`.
+//! Per-aircraft configuration read from `aircraft/NAME.toml`: which JSBSim model, default trim point, which
+//! properties are the elevator / aileron / rudder deflections the aero model reads, and their limits.
+//!
+//! The configurations of the repository are embedded in the binary; `FLIGHTID_AIRCRAFT_DIR` (or a path ending in
+//! `.toml`) adds the user's own.
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// How maneuvers reach the aircraft.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Drive {
+    /// Set the deflection the aero model reads, bypassing actuators (exact per-radian inputs).
+    Surface,
+    /// Move the pilot command (scaled by `rad_per_norm`) and log the surface the aircraft's FCS produces.
+    Command,
+}
+
+/// A control surface: its command property, what the aero model reads, and limits.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SurfaceConfig {
+    /// Normalised pilot command property (e.g. `fcs/elevator-cmd-norm`).
+    pub command: String,
+    /// Properties the aero model reads as this surface's deflection in radians.
+    pub aero_reads: Vec<String>,
+    /// Properties the aero model reads as the magnitude of this deflection.
+    #[serde(default)]
+    pub aero_reads_abs: Vec<String>,
+    /// Lower deflection limit, rad.
+    pub min_rad: f64,
+    /// Upper deflection limit, rad.
+    pub max_rad: f64,
+    /// Nominal surface deflection per unit command near trim, rad.
+    pub rad_per_norm: f64,
+}
+
+/// Default trim point.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct TrimDefaults {
+    /// Altitude above sea level, ft.
+    pub altitude_ft: f64,
+    /// True airspeed, kts.
+    pub speed_kts: f64,
+}
+
+/// One aircraft configuration.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct AircraftConfig {
+    /// Name flightid knows it by (file stem).
+    #[serde(default)]
+    pub name: String,
+    /// JSBSim model directory name.
+    pub model: String,
+    /// One line for humans.
+    pub description: String,
+    /// How maneuvers are applied.
+    pub drive: Drive,
+    /// Start the engines before trimming.
+    pub engine_running: bool,
+    /// Retract the gear before trimming.
+    pub gear_up: bool,
+    /// Default trim point.
+    pub trim: TrimDefaults,
+    /// Surfaces by name: `elevator`, `aileron`, `rudder`.
+    pub surfaces: BTreeMap<String, SurfaceConfig>,
+}
+
+/// Problems finding or reading an aircraft configuration.
+#[derive(Debug, thiserror::Error)]
+pub enum AircraftError {
+    /// Name not among the embedded configs and no file of that name.
+    #[error("unknown aircraft '{name}' (known: {known}; or give a path to an aircraft .toml)")]
+    Unknown { name: String, known: String },
+    /// TOML syntax or schema error.
+    #[error("aircraft configuration {file}: {detail}")]
+    Malformed { file: String, detail: String },
+    /// A surface name flightid does not know for this aircraft.
+    #[error("aircraft '{aircraft}' has no surface '{surface}' (it has: {known})")]
+    UnknownSurface {
+        aircraft: String,
+        surface: String,
+        known: String,
+    },
+}
+
+const EMBEDDED: &[(&str, &str)] = &[
+    ("c172x", include_str!("../aircraft/c172x.toml")),
+    ("737", include_str!("../aircraft/737.toml")),
+    ("f16", include_str!("../aircraft/f16.toml")),
+];
+
+/// Names of the embedded aircraft configurations.
+pub fn known() -> Vec<&'static str> {
+    EMBEDDED.iter().map(|(n, _)| *n).collect()
+}
+
+fn parse(name: &str, file: &str, text: &str) -> Result<AircraftConfig, AircraftError> {
+    let mut cfg: AircraftConfig = toml::from_str(text).map_err(|e| AircraftError::Malformed {
+        file: file.to_string(),
+        detail: e.to_string(),
+    })?;
+    cfg.name = name.to_string();
+    for s in ["elevator", "aileron", "rudder"] {
+        if !cfg.surfaces.contains_key(s) {
+            return Err(AircraftError::Malformed {
+                file: file.to_string(),
+                detail: format!("missing [surfaces.{s}]"),
+            });
+        }
+    }
+    Ok(cfg)
+}
+
+/// Loads an aircraft by name (embedded or in `FLIGHTID_AIRCRAFT_DIR`) or from a `.toml` path.
+pub fn load(name: &str) -> Result<AircraftConfig, AircraftError> {
+    if name.ends_with(".toml") {
+        let path = Path::new(name);
+        let text = std::fs::read_to_string(path).map_err(|e| AircraftError::Malformed {
+            file: name.to_string(),
+            detail: e.to_string(),
+        })?;
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or(name);
+        return parse(stem, name, &text);
+    }
+    if let Some(dir) = std::env::var_os("FLIGHTID_AIRCRAFT_DIR") {
+        let path = Path::new(&dir).join(format!("{name}.toml"));
+        if let Ok(text) = std::fs::read_to_string(&path) {
+            return parse(name, &path.display().to_string(), &text);
+        }
+    }
+    match EMBEDDED.iter().find(|(n, _)| *n == name) {
+        Some((n, text)) => parse(n, &format!("aircraft/{n}.toml"), text),
+        None => Err(AircraftError::Unknown {
+            name: name.to_string(),
+            known: known().join(", "),
+        }),
+    }
+}
+
+impl AircraftConfig {
+    /// The configuration of one surface, or an error naming the known ones.
+    pub fn surface(&self, name: &str) -> Result<&SurfaceConfig, AircraftError> {
+        self.surfaces
+            .get(name)
+            .ok_or_else(|| AircraftError::UnknownSurface {
+                aircraft: self.name.clone(),
+                surface: name.to_string(),
+                known: self.surfaces.keys().cloned().collect::<Vec<_>>().join(", "),
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_embedded_aircraft_parses_with_three_surfaces() {
+        for name in known() {
+            let cfg = load(name).expect(name);
+            assert_eq!(cfg.surfaces.len(), 3, "{name}");
+            for (s, sc) in &cfg.surfaces {
+                assert!(sc.min_rad < 0.0 && sc.max_rad > 0.0, "{name} {s} limits");
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_aircraft_names_the_known_ones() {
+        let e = load("concorde-x").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown aircraft 'concorde-x'") && e.contains("c172x"),
+            "{e}"
+        );
+    }
+}

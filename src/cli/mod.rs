@@ -5,6 +5,12 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod common;
+pub mod demo;
+pub mod fly;
+pub mod linearize;
+pub mod trim;
+
 /// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
 #[derive(Parser, Debug)]
 #[command(name = "flightid", version, about, long_about = None)]
@@ -15,7 +21,16 @@ pub struct Cli {
 
 /// The commands.
 #[derive(Subcommand, Debug)]
-pub enum Command {}
+pub enum Command {
+    /// The main job on the default aircraft: trim, linearize, three doublets, identification summary.
+    Demo(demo::DemoCmd),
+    /// Trim an aircraft at a steady level-flight point (JSBSim full trim).
+    Trim(trim::TrimCmd),
+    /// JSBSim's linearization at a trim point: A, B, C, D, transfer functions, modes.
+    Linearize(linearize::LinearizeCmd),
+    /// Fly a maneuver (doublet, 3211, multisine, chirp) from trim and write the flight-data CSV.
+    Fly(fly::FlyCmd),
+}
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
 #[derive(Debug, thiserror::Error)]
@@ -31,8 +46,12 @@ pub fn main() -> i32 {
             return if e.use_stderr() { 2 } else { 0 };
         }
     };
-    let result = match cli.command {};
-    #[allow(unreachable_code)]
+    let result = match &cli.command {
+        Command::Demo(a) => demo::run(a),
+        Command::Trim(a) => trim::run(a),
+        Command::Linearize(a) => linearize::run(a),
+        Command::Fly(a) => fly::run(a),
+    };
     match result {
         Ok(()) => 0,
         Err(e) => report_error(&e),

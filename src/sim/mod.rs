@@ -1,1 +1,166 @@
 //! The simulator: a trait, the JSBSim bridge (Python subprocess), and a linear-model stand-in.
+//!
+//! Units: SI and radians inside flightid; feet and knots only at this edge (JSBSim's own units).
+
+pub mod bridge;
+pub mod env;
+pub mod jsbsim;
+pub mod linear;
+
+use crate::data::FlightRecord;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+pub use jsbsim::JsbsimSim;
+
+/// Feet to metres.
+pub const FT_TO_M: f64 = 0.3048;
+/// Knots to metres per second.
+pub const KTS_TO_M_S: f64 = 1852.0 / 3600.0;
+
+/// Errors of the simulator layer.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// The Python environment could not be provided.
+    #[error(transparent)]
+    Env(#[from] env::EnvError),
+    /// The Python process could not be started.
+    #[error("could not start the JSBSim bridge with {python}: {source}")]
+    Spawn {
+        python: String,
+        source: std::io::Error,
+    },
+    /// The bridge process died or stopped answering.
+    #[error("the JSBSim bridge process died during '{during}' ({status}){}", if last_output.is_empty() { String::new() } else { format!("; its last output: {last_output}") })]
+    Crashed {
+        during: String,
+        status: String,
+        last_output: String,
+    },
+    /// The aircraft cannot be trimmed at the requested point.
+    #[error("trim failed: {0}")]
+    TrimFailed(String),
+    /// JSBSim does not know the aircraft model.
+    #[error("{0}")]
+    UnknownModel(String),
+    /// Any other error the bridge reported.
+    #[error("JSBSim bridge: {kind}: {message}")]
+    Bridge { kind: String, message: String },
+    /// Malformed traffic between flightid and its bridge.
+    #[error("JSBSim bridge protocol error: {0}")]
+    Protocol(String),
+    /// Request that makes no sense (e.g. fly before trim).
+    #[error("{0}")]
+    Usage(String),
+}
+
+/// A steady, wings-level trim point.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+pub struct TrimPoint {
+    /// Altitude above sea level, ft.
+    pub altitude_ft: f64,
+    /// True airspeed, kts.
+    pub speed_kts: f64,
+    /// True heading, deg.
+    pub heading_deg: f64,
+    /// Flight-path angle, deg.
+    pub gamma_deg: f64,
+}
+
+impl TrimPoint {
+    /// Level flight at an altitude and speed, heading north.
+    pub fn level(altitude_ft: f64, speed_kts: f64) -> Self {
+        TrimPoint {
+            altitude_ft,
+            speed_kts,
+            heading_deg: 0.0,
+            gamma_deg: 0.0,
+        }
+    }
+}
+
+/// The trimmed state: what an engineer checks first.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct TrimState {
+    /// Aircraft name.
+    pub aircraft: String,
+    /// The requested point.
+    pub point: TrimPoint,
+    /// Angle of attack, rad.
+    pub alpha_rad: f64,
+    /// Pitch attitude, rad.
+    pub theta_rad: f64,
+    /// Bank angle, rad.
+    pub phi_rad: f64,
+    /// Sideslip, rad.
+    pub beta_rad: f64,
+    /// True airspeed, m/s.
+    pub airspeed_m_s: f64,
+    /// Altitude above sea level, m.
+    pub altitude_m: f64,
+    /// Throttle position 0..1.
+    pub throttle: f64,
+    /// Surface deflections the aero model reads at trim, rad.
+    pub surfaces_rad: BTreeMap<String, f64>,
+    /// Trim commands (normalised): `pitch-trim`, `aileron`, `rudder`, `throttle`.
+    pub commands_norm: BTreeMap<String, f64>,
+}
+
+/// Input on one surface: deflection relative to trim, one value per simulation step, rad.
+#[derive(Debug, Clone)]
+pub struct SurfaceInput {
+    /// `elevator`, `aileron` or `rudder`.
+    pub surface: String,
+    /// Deflection relative to trim for each step, rad (held during the step).
+    pub deflection_rad: Vec<f64>,
+}
+
+/// A maneuver to fly from trim.
+#[derive(Debug, Clone)]
+pub struct FlightPlan {
+    /// Simulation and sampling rate, Hz.
+    pub rate_hz: f64,
+    /// Number of simulation steps (the record has `n_steps + 1` samples; sample 0 is the trim state).
+    pub n_steps: usize,
+    /// Surface inputs (several at once are allowed).
+    pub inputs: Vec<SurfaceInput>,
+}
+
+/// A linear model from the simulator: ẋ = A x + B u, y = C x + D u.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Linearization {
+    /// State names.
+    pub states: Vec<String>,
+    /// State units.
+    pub state_units: Vec<String>,
+    /// Input names.
+    pub inputs: Vec<String>,
+    /// Input units (`rad` for surfaces linearized per radian, `norm` for commands).
+    pub input_units: Vec<String>,
+    /// Output names.
+    pub outputs: Vec<String>,
+    /// Output units.
+    pub output_units: Vec<String>,
+    /// System matrix, row-major.
+    #[serde(rename = "A")]
+    pub a: Vec<Vec<f64>>,
+    /// Input matrix.
+    #[serde(rename = "B")]
+    pub b: Vec<Vec<f64>>,
+    /// Output matrix.
+    #[serde(rename = "C")]
+    pub c: Vec<Vec<f64>>,
+    /// Feedthrough matrix.
+    #[serde(rename = "D")]
+    pub d: Vec<Vec<f64>>,
+}
+
+/// Something that can be trimmed, linearized and flown: JSBSim, or a linear model standing in for it.
+pub trait Simulator {
+    /// Trims at a point; a failure is an error, never a garbage state.
+    fn trim(&mut self, point: &TrimPoint) -> Result<TrimState, SimError>;
+    /// Linear model at the current trim, inputs per radian of surface deflection where possible.
+    fn linearize(&mut self) -> Result<Linearization, SimError>;
+    /// Flies a maneuver from the current trim and returns the flight-data record (DESIGN.md section 4).
+    fn fly(&mut self, plan: &FlightPlan) -> Result<FlightRecord, SimError>;
+}

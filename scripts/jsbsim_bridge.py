@@ -1,0 +1,362 @@
+#!/usr/bin/env python3
+"""flightid's bridge to the official JSBSim (PyPI `jsbsim`): a long-lived batch server.
+
+Protocol (one request = one whole job, arrays come back whole):
+  request  : one JSON line on stdin; if it has "payload_f64": N, N little-endian float64 follow as raw bytes.
+  response : one JSON line on the protocol stream; if it has "payload_f64": N, N float64 follow as raw bytes.
+             {"ok": false, "kind": "...", "error": "..."} on failure; the process stays usable unless
+             "fatal" is true.
+
+The protocol stream is a duplicate of the original stdout; file descriptor 1 itself is pointed at stderr so that
+JSBSim's C++ console output (trim reports, warnings) cannot corrupt the protocol.
+
+Well-behaved simulation (DESIGN.md section 3):
+  * every process works in its own temporary root: a private copy of the aircraft directory with the aircraft
+    XML rewritten, `engine/` and `systems/` linked to the package's, and a private output path;
+  * root-level <input> and <output> elements are removed from the private copy: no network listeners, no logs;
+  * declared knob properties are added inside <aerodynamics>:
+      flightid/override/<surface>      0/1  (1: the aero model reads the bridge's value, bypassing actuators)
+      flightid/override/<surface>-rad  the surface deflection the aero model reads when overridden
+      flightid/lin/<surface>           0/1  (1: add (command - reference) * 1 rad, for per-radian linearization)
+      flightid/lin/<surface>-ref       the command reference for the above
+      flightid/knob/<coefficient>      factor on aero/coefficient/<coefficient> (default 1)
+    and every property the aero model reads for a surface is replaced by flightid/aero/<surface>-rad.
+"""
+
+import array
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+
+PROTO = os.fdopen(os.dup(1), "wb", buffering=0)
+os.dup2(2, 1)  # C++ std::cout now goes to stderr
+
+import jsbsim  # noqa: E402  (after the fd swap so import-time prints cannot reach the protocol)
+
+
+class BridgeError(Exception):
+    def __init__(self, kind, message):
+        super().__init__(message)
+        self.kind = kind
+
+
+def send(header, payload=None):
+    if payload is not None:
+        header["payload_f64"] = len(payload)
+    PROTO.write((json.dumps(header) + "\n").encode())
+    if payload is not None:
+        PROTO.write(payload.tobytes())
+
+
+def read_exact(n):
+    buf = bytearray()
+    while len(buf) < n:
+        chunk = sys.stdin.buffer.read(n - len(buf))
+        if not chunk:
+            raise EOFError("stdin closed in the middle of a payload")
+        buf.extend(chunk)
+    return bytes(buf)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Private aircraft copy
+# ----------------------------------------------------------------------------------------------------------
+
+def knob_function(surface, reads):
+    """The aero-side value of a surface: the aircraft's own position, or the bridge's override."""
+    p = reads[0]
+    xml = f"""
+    <function name="flightid/aero/{surface}-rad">
+      <sum>
+        <product>
+          <property>{p}</property>
+          <difference><value>1</value><property>flightid/override/{surface}</property></difference>
+        </product>
+        <product>
+          <property>flightid/override/{surface}</property>
+          <sum>
+            <property>flightid/override/{surface}-rad</property>
+            <product>
+              <property>flightid/lin/{surface}</property>
+              <difference>
+                <property>{CMD_PROPERTY[surface]}</property>
+                <property>flightid/lin/{surface}-ref</property>
+              </difference>
+            </product>
+          </sum>
+        </product>
+      </sum>
+    </function>"""
+    return ET.fromstring(xml)
+
+
+CMD_PROPERTY = {}
+
+
+def make_private_aircraft(root_dir, aircraft, surfaces):
+    """Writes root_dir/aircraft/<aircraft>/ with the rewritten XML; returns the list of coefficient knobs."""
+    pkg = jsbsim.get_default_root_dir()
+    src_dir = os.path.join(pkg, "aircraft", aircraft)
+    src_xml = os.path.join(src_dir, aircraft + ".xml")
+    if not os.path.isfile(src_xml):
+        known = sorted(d for d in os.listdir(os.path.join(pkg, "aircraft"))
+                       if os.path.isfile(os.path.join(pkg, "aircraft", d, d + ".xml")))
+        raise BridgeError("unknown_aircraft",
+                          f"JSBSim has no aircraft model '{aircraft}' (known: {', '.join(known)})")
+    for sub in ("engine", "systems"):
+        os.symlink(os.path.join(pkg, sub), os.path.join(root_dir, sub))
+    dst_dir = os.path.join(root_dir, "aircraft", aircraft)
+    os.makedirs(dst_dir)
+    for entry in os.listdir(src_dir):
+        if entry != aircraft + ".xml":
+            os.symlink(os.path.join(src_dir, entry), os.path.join(dst_dir, entry))
+
+    tree = ET.parse(src_xml)
+    root = tree.getroot()
+    for tag in ("input", "output"):
+        for el in root.findall(tag):
+            root.remove(el)
+    aero = root.find("aerodynamics")
+    if aero is None:
+        raise BridgeError("bad_aircraft", f"{src_xml} has no <aerodynamics> section")
+
+    # Replace every property the aero model reads for a surface by flightid/aero/<surface>-rad.
+    replace = {}
+    for surface, spec in surfaces.items():
+        CMD_PROPERTY[surface] = spec["command"]
+        for p in spec["aero_reads"]:
+            replace[p] = f"flightid/aero/{surface}-rad"
+        for p in spec.get("aero_reads_abs", []):
+            replace[p] = f"flightid/aero/{surface}-mag-rad"
+    for el in aero.iter():
+        if el.tag in ("property", "independentVar") and el.text and el.text.strip() in replace:
+            el.text = replace[el.text.strip()]
+
+    knobs = []
+    for fn in aero.iter("function"):
+        name = fn.get("name", "")
+        if not name.startswith("aero/coefficient/"):
+            continue
+        coef = name[len("aero/coefficient/"):]
+        body = [c for c in list(fn) if c.tag != "description"]
+        if len(body) != 1:
+            continue
+        fn.remove(body[0])
+        prod = ET.SubElement(fn, "product")
+        knob = ET.SubElement(prod, "property")
+        knob.text = f"flightid/knob/{coef}"
+        prod.append(body[0])
+        knobs.append(coef)
+
+    # Declarations and the surface functions go first in <aerodynamics> (pre-functions run before the axes).
+    head = []
+    for surface in surfaces:
+        for prop, value in ((f"flightid/override/{surface}", 0.0), (f"flightid/override/{surface}-rad", 0.0),
+                            (f"flightid/lin/{surface}", 0.0), (f"flightid/lin/{surface}-ref", 0.0)):
+            d = ET.Element("property", {"value": repr(value)})
+            d.text = prop
+            head.append(d)
+    for coef in knobs:
+        d = ET.Element("property", {"value": "1.0"})
+        d.text = f"flightid/knob/{coef}"
+        head.append(d)
+    for surface, spec in surfaces.items():
+        head.append(knob_function(surface, spec["aero_reads"]))
+        if spec.get("aero_reads_abs"):
+            head.append(ET.fromstring(
+                f'<function name="flightid/aero/{surface}-mag-rad"><abs>'
+                f'<property>flightid/aero/{surface}-rad</property></abs></function>'))
+    for i, el in enumerate(head):
+        aero.insert(i, el)
+    tree.write(os.path.join(dst_dir, aircraft + ".xml"), encoding="utf-8", xml_declaration=True)
+    return knobs
+
+
+# ----------------------------------------------------------------------------------------------------------
+# The simulation
+# ----------------------------------------------------------------------------------------------------------
+
+class Sim:
+    def __init__(self, req):
+        self.aircraft = req["aircraft"]
+        self.dt_s = float(req["dt_s"])
+        self.surfaces = req["surfaces"]
+        self.engine_running = req.get("engine_running", True)
+        self.gear_up = req.get("gear_up", False)
+        self.root = tempfile.mkdtemp(prefix="flightid-jsbsim-")
+        os.makedirs(os.path.join(self.root, "output"))
+        self.knobs = make_private_aircraft(self.root, self.aircraft, self.surfaces)
+        fdm = jsbsim.FGFDMExec(self.root)
+        fdm.set_debug_level(0)
+        fdm.set_dt(self.dt_s)
+        fdm.set_output_path(os.path.join(self.root, "output"))
+        if not fdm.load_model(self.aircraft):
+            raise BridgeError("load_failed", f"JSBSim could not load aircraft '{self.aircraft}'")
+        fdm.disable_output()
+        self.fdm = fdm
+        self.pm = fdm.get_property_manager()
+        self.trimmed = False
+
+    def close(self):
+        shutil.rmtree(self.root, ignore_errors=True)
+
+    def node(self, name):
+        n = self.pm.get_node(name)
+        if n is None:
+            raise BridgeError("unknown_property", f"aircraft '{self.aircraft}' has no property '{name}'")
+        return n
+
+    def set_many(self, props):
+        for k, v in props.items():
+            self.node(k).set_double_value(float(v))
+
+    def trim(self, req):
+        fdm = self.fdm
+        self.trimmed = False
+        for s in self.surfaces:
+            fdm[f"flightid/override/{s}"] = 0.0
+            fdm[f"flightid/lin/{s}"] = 0.0
+        for s, spec in self.surfaces.items():
+            fdm[spec["command"]] = 0.0
+        # Initial-condition order matters (DESIGN.md section 3): position, altitude, speed, heading, gamma.
+        fdm["ic/lat-geod-deg"] = float(req.get("latitude_deg", 0.0))
+        fdm["ic/long-gc-deg"] = float(req.get("longitude_deg", 0.0))
+        fdm["ic/h-sl-ft"] = float(req["altitude_ft"])
+        fdm["ic/vt-kts"] = float(req["speed_kts"])
+        fdm["ic/psi-true-deg"] = float(req.get("heading_deg", 0.0))
+        fdm["ic/gamma-deg"] = float(req.get("gamma_deg", 0.0))
+        for k, v in req.get("ic", {}).items():
+            fdm[k] = float(v)
+        self.set_many(req.get("knobs", {}))
+        if not fdm.run_ic():
+            raise BridgeError("trim_failed", "JSBSim rejected the initial conditions (run_ic failed)")
+        if self.engine_running:
+            fdm["propulsion/set-running"] = -1
+        if self.gear_up:
+            fdm["gear/gear-cmd-norm"] = 0.0
+            fdm["gear/gear-pos-norm"] = 0.0
+        try:
+            fdm["simulation/do_simple_trim"] = 1
+        except Exception as e:  # jsbsim.TrimFailureError; the state is garbage afterwards
+            raise BridgeError("trim_failed",
+                              f"{self.aircraft} cannot trim at {req['altitude_ft']} ft, {req['speed_kts']} kts: {e}")
+        self.trimmed = True
+        out = {k: fdm[k] for k in req.get("report", [])}
+        return out
+
+    def linearize(self, req):
+        """JSBSim's FGLinearization at the current trim; per-radian inputs when the surfaces are overridden."""
+        if not self.trimmed:
+            raise BridgeError("not_trimmed", "linearize needs a successful trim first")
+        fdm = self.fdm
+        per_radian = req.get("per_radian_surfaces", [])
+        for s in per_radian:
+            cmd = self.surfaces[s]["command"]
+            fdm[f"flightid/override/{s}-rad"] = fdm[f"flightid/aero/{s}-rad"]
+            fdm[f"flightid/lin/{s}-ref"] = fdm[cmd]
+            fdm[f"flightid/lin/{s}"] = 1.0
+            fdm[f"flightid/override/{s}"] = 1.0
+        try:
+            lin = jsbsim.FGLinearization(fdm)
+            a, b, c, d = lin.state_space
+        finally:
+            for s in per_radian:
+                fdm[f"flightid/lin/{s}"] = 0.0
+                fdm[f"flightid/override/{s}"] = 0.0
+        return {
+            "states": list(lin.x_names), "state_units": list(lin.x_units),
+            "inputs": list(lin.u_names), "input_units": list(lin.u_units),
+            "outputs": list(lin.y_names), "output_units": list(lin.y_units),
+            "A": a.tolist(), "B": b.tolist(), "C": c.tolist(), "D": d.tolist(),
+        }
+
+    def fly(self, req, payload):
+        """Runs n_steps from the current (trimmed) state; returns the recorded properties, step-major."""
+        if not self.trimmed:
+            raise BridgeError("not_trimmed", "fly needs a successful trim first")
+        n_steps = int(req["n_steps"])
+        record_every = int(req.get("record_every", 1))
+        drives = req["drives"]  # [{"property": name, "offset": k}] k = start of its n_steps values in payload
+        rec_nodes = [self.node(p) for p in req["record"]]
+        drive_nodes = [self.node(d["property"]) for d in drives]
+        for k, v in req.get("set_before", {}).items():
+            self.node(k).set_double_value(float(v))
+        u = payload
+        offsets = [d["offset"] for d in drives]
+        pairs = list(zip(drive_nodes, offsets))
+        out = array.array("d")
+        get = [n.get_double_value for n in rec_nodes]
+        run = self.fdm.run
+        t0 = time.perf_counter()
+        for g in get:
+            out.append(g())
+        for k in range(n_steps):
+            for node, off in pairs:
+                node.set_double_value(u[off + k])
+            if not run():
+                raise BridgeError("sim_stopped", f"JSBSim stopped at step {k}")
+            if (k + 1) % record_every == 0:
+                for g in get:
+                    out.append(g())
+        elapsed = time.perf_counter() - t0
+        self.trimmed = False
+        return {"n_records": len(out) // max(1, len(get)), "loop_s": elapsed}, out
+
+
+def main():
+    sim = None
+    stdin = sys.stdin.buffer
+    while True:
+        line = stdin.readline()
+        if not line:
+            break
+        try:
+            req = json.loads(line)
+        except json.JSONDecodeError as e:
+            send({"ok": False, "kind": "protocol", "error": f"bad request line: {e}", "fatal": True})
+            break
+        payload = None
+        if req.get("payload_f64"):
+            payload = array.array("d")
+            payload.frombytes(read_exact(8 * int(req["payload_f64"])))
+        cmd = req.get("cmd")
+        try:
+            if cmd == "load":
+                if sim is not None:
+                    sim.close()
+                    sim = None
+                sim = Sim(req)
+                send({"ok": True, "knobs": sim.knobs, "jsbsim_version": jsbsim.__version__})
+            elif cmd == "quit":
+                send({"ok": True})
+                break
+            elif sim is None:
+                raise BridgeError("not_loaded", f"'{cmd}' before 'load'")
+            elif cmd == "trim":
+                send({"ok": True, "values": sim.trim(req)})
+            elif cmd == "get":
+                send({"ok": True, "values": {k: sim.node(k).get_double_value() for k in req["properties"]}})
+            elif cmd == "set":
+                sim.set_many(req["values"])
+                send({"ok": True})
+            elif cmd == "linearize":
+                send(dict(ok=True, **sim.linearize(req)))
+            elif cmd == "fly":
+                header, out = sim.fly(req, payload)
+                send(dict(ok=True, **header), out)
+            else:
+                raise BridgeError("protocol", f"unknown command '{cmd}'")
+        except BridgeError as e:
+            send({"ok": False, "kind": e.kind, "error": str(e)})
+        except Exception as e:  # a JSBSim exception: report it, keep serving
+            send({"ok": False, "kind": "jsbsim", "error": f"{type(e).__name__}: {e}"})
+    if sim is not None:
+        sim.close()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,104 @@
+//! Argument groups and output helpers shared by several commands.
+
+use crate::aircraft::{self, AircraftConfig};
+use crate::cli::UsageError;
+use crate::sim::{JsbsimSim, Simulator, TrimPoint, TrimState};
+use anyhow::Context;
+use std::io::Write;
+use std::path::Path;
+
+/// Which aircraft and where to trim it.
+#[derive(clap::Args, Debug, Clone)]
+pub struct TrimArgs {
+    /// Aircraft configuration: a name from aircraft/ (c172x, 737, f16) or a path to an aircraft .toml.
+    #[arg(long, default_value = "c172x")]
+    pub aircraft: String,
+    /// Trim altitude above sea level, ft [default: the aircraft's default trim point].
+    #[arg(long)]
+    pub altitude_ft: Option<f64>,
+    /// Trim true airspeed, kts [default: the aircraft's default trim point].
+    #[arg(long)]
+    pub speed_kts: Option<f64>,
+    /// Simulation rate, Hz (JSBSim integrates at this rate; records are sampled at it).
+    #[arg(long, default_value_t = 120.0)]
+    pub rate_hz: f64,
+}
+
+impl TrimArgs {
+    /// Loads the aircraft configuration (unknown names are a usage error).
+    pub fn config(&self) -> anyhow::Result<AircraftConfig> {
+        aircraft::load(&self.aircraft).map_err(|e| UsageError(e.to_string()).into())
+    }
+
+    /// The trim point: given values or the aircraft's defaults.
+    pub fn point(&self, cfg: &AircraftConfig) -> anyhow::Result<TrimPoint> {
+        let p = TrimPoint::level(
+            self.altitude_ft.unwrap_or(cfg.trim.altitude_ft),
+            self.speed_kts.unwrap_or(cfg.trim.speed_kts),
+        );
+        if !(p.speed_kts.is_finite() && p.speed_kts > 0.0) {
+            return Err(
+                UsageError(format!("--speed-kts must be positive, got {}", p.speed_kts)).into(),
+            );
+        }
+        if !(p.altitude_ft.is_finite() && p.altitude_ft >= 0.0) {
+            return Err(
+                UsageError(format!("--altitude-ft must be >= 0, got {}", p.altitude_ft)).into(),
+            );
+        }
+        Ok(p)
+    }
+
+    /// Starts JSBSim and trims; errors carry the aircraft and the point.
+    pub fn start_and_trim(&self) -> anyhow::Result<(JsbsimSim, TrimState)> {
+        let cfg = self.config()?;
+        let point = self.point(&cfg)?;
+        if !(self.rate_hz.is_finite() && self.rate_hz >= 10.0 && self.rate_hz <= 2000.0) {
+            return Err(UsageError(format!(
+                "--rate-hz must be within 10..2000, got {}",
+                self.rate_hz
+            ))
+            .into());
+        }
+        let mut sim = JsbsimSim::start(&cfg, self.rate_hz)
+            .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
+        let trim = sim.trim(&point)?;
+        Ok((sim, trim))
+    }
+}
+
+/// Writes bytes to `path` atomically (temporary file in the same directory, then rename): never a partial file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(anyhow::anyhow!("cannot write {}: {e}", path.display()));
+    }
+    Ok(())
+}
+
+/// Emits a JSON value: to stdout for `-`, else atomically to the file.
+pub fn emit_json<T: serde::Serialize>(target: &str, value: &T) -> anyhow::Result<()> {
+    let mut text = serde_json::to_string_pretty(value)?;
+    text.push('\n');
+    if target == "-" {
+        std::io::stdout().write_all(text.as_bytes())?;
+        Ok(())
+    } else {
+        write_atomic(Path::new(target), text.as_bytes())
+    }
+}

@@ -1,0 +1,190 @@
+//! `flightid fly`: fly a designed maneuver from trim and write the flight-data CSV.
+
+use super::common::{emit_json, TrimArgs};
+use crate::cli::UsageError;
+use crate::data;
+use crate::signal::{self, Maneuver};
+use crate::sim::{FlightPlan, Simulator, SurfaceInput};
+use std::path::PathBuf;
+
+/// Input shapes.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ManeuverKind {
+    /// +A for one pulse, -A for one pulse.
+    Doublet,
+    /// 3-2-1-1: +A 3T, -A 2T, +A T, -A T.
+    #[value(name = "3211")]
+    ThreeTwoOneOne,
+    /// Sum of harmonics with Schroeder phases (low peak factor), --f-min-hz..--f-max-hz.
+    Multisine,
+    /// Frequency sweep --f-min-hz..--f-max-hz over the record (--log-sweep for logarithmic).
+    Chirp,
+}
+
+/// The maneuver design shared by `fly` and the commands that fly for themselves.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ManeuverArgs {
+    /// Surface to excite: elevator, aileron or rudder; repeat for simultaneous inputs.
+    #[arg(long = "surface", default_value = "elevator")]
+    pub surfaces: Vec<String>,
+    /// Input shape.
+    #[arg(long, value_enum, default_value = "doublet")]
+    pub maneuver: ManeuverKind,
+    /// Peak surface deflection relative to trim, deg.
+    #[arg(long, default_value_t = 2.0)]
+    pub amplitude_deg: f64,
+    /// Pulse width of doublet / 3-2-1-1 (the unit T), s.
+    #[arg(long, default_value_t = 1.0)]
+    pub pulse_s: f64,
+    /// Time the maneuver starts after the trim state, s.
+    #[arg(long, default_value_t = 1.0)]
+    pub start_s: f64,
+    /// Record length, s.
+    #[arg(long, default_value_t = 30.0)]
+    pub duration_s: f64,
+    /// Lowest frequency of multisine and chirp, Hz.
+    #[arg(long, default_value_t = 0.1)]
+    pub f_min_hz: f64,
+    /// Highest frequency of multisine and chirp, Hz.
+    #[arg(long, default_value_t = 2.0)]
+    pub f_max_hz: f64,
+    /// Logarithmic chirp instead of linear.
+    #[arg(long)]
+    pub log_sweep: bool,
+}
+
+impl ManeuverArgs {
+    /// The maneuver shape.
+    pub fn maneuver(&self) -> anyhow::Result<Maneuver> {
+        let active_s = self.duration_s - self.start_s;
+        if !(self.duration_s > 0.0 && self.start_s >= 0.0 && active_s > 0.0) {
+            return Err(UsageError(format!(
+                "--duration-s ({}) must exceed --start-s ({}) and both be non-negative",
+                self.duration_s, self.start_s
+            ))
+            .into());
+        }
+        if !(self.f_min_hz > 0.0 && self.f_max_hz > self.f_min_hz) {
+            return Err(UsageError(format!(
+                "need 0 < --f-min-hz < --f-max-hz, got {} and {}",
+                self.f_min_hz, self.f_max_hz
+            ))
+            .into());
+        }
+        Ok(match self.maneuver {
+            ManeuverKind::Doublet => Maneuver::Doublet {
+                pulse_s: self.pulse_s,
+            },
+            ManeuverKind::ThreeTwoOneOne => Maneuver::ThreeTwoOneOne {
+                pulse_s: self.pulse_s,
+            },
+            ManeuverKind::Multisine => {
+                let period_s = active_s.min(1.0 / self.f_min_hz);
+                let f_low = 1.0 / period_s;
+                let n_harmonics =
+                    ((self.f_max_hz - f_low) * period_s).floor().max(1.0) as usize + 1;
+                Maneuver::Multisine {
+                    f_min_hz: f_low,
+                    f_max_hz: self.f_max_hz,
+                    n_harmonics,
+                    period_s,
+                }
+            }
+            ManeuverKind::Chirp => Maneuver::Chirp {
+                f0_hz: self.f_min_hz,
+                f1_hz: self.f_max_hz,
+                sweep_s: active_s,
+                log: self.log_sweep,
+            },
+        })
+    }
+
+    /// The flight plan at a rate: every listed surface gets the same shape, amplitude in radians.
+    pub fn plan(&self, rate_hz: f64) -> anyhow::Result<FlightPlan> {
+        if !(self.amplitude_deg.is_finite() && self.amplitude_deg.abs() <= 30.0) {
+            return Err(UsageError(format!(
+                "--amplitude-deg must be within ±30, got {}",
+                self.amplitude_deg
+            ))
+            .into());
+        }
+        let m = self.maneuver()?;
+        let dt_s = 1.0 / rate_hz;
+        let n_steps = (self.duration_s * rate_hz).round() as usize;
+        let mut unit = signal::generate(&m, dt_s, self.duration_s, self.start_s);
+        unit.resize(n_steps, 0.0);
+        let amp = self.amplitude_deg.to_radians();
+        let mut inputs = Vec::new();
+        for s in &self.surfaces {
+            if !["elevator", "aileron", "rudder"].contains(&s.as_str()) {
+                return Err(UsageError(format!(
+                    "unknown surface '{s}' (use elevator, aileron or rudder)"
+                ))
+                .into());
+            }
+            if inputs.iter().any(|i: &SurfaceInput| &i.surface == s) {
+                return Err(UsageError(format!("surface '{s}' given twice")).into());
+            }
+            inputs.push(SurfaceInput {
+                surface: s.clone(),
+                deflection_rad: unit.iter().map(|u| amp * u).collect(),
+            });
+        }
+        Ok(FlightPlan {
+            rate_hz,
+            n_steps,
+            inputs,
+        })
+    }
+}
+
+/// Fly a maneuver from trim and write the flight-data CSV (DESIGN.md section 4, all columns, SI units), sampled
+/// at the simulation rate. The first sample is the trim state. Nothing is written if anything fails.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples:\n  flightid fly --aircraft c172x --surface elevator --maneuver doublet --amplitude-deg 2 --pulse-s 1 --duration-s 30 --out flight.csv\n  flightid fly --aircraft 737 --surface aileron --surface rudder --maneuver 3211 --amplitude-deg 1 --out lat.csv"
+)]
+pub struct FlyCmd {
+    #[command(flatten)]
+    pub trim: TrimArgs,
+    #[command(flatten)]
+    pub maneuver: ManeuverArgs,
+    /// Output CSV file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also print a JSON summary (to stdout, or to the file given).
+    #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
+    pub json: Option<String>,
+}
+
+/// Runs `flightid fly`.
+pub fn run(args: &FlyCmd) -> anyhow::Result<()> {
+    let plan = args.maneuver.plan(args.trim.rate_hz)?;
+    let (mut sim, trim) = args.trim.start_and_trim()?;
+    let mut rec = sim.fly(&plan)?;
+    rec.metadata.push(format!(
+        "maneuver: {:?} on {} amplitude {} deg, start {} s",
+        args.maneuver.maneuver,
+        args.maneuver.surfaces.join("+"),
+        args.maneuver.amplitude_deg,
+        args.maneuver.start_s
+    ));
+    data::write_csv_atomic(&args.out, &rec)?;
+    let summary = serde_json::json!({
+        "out": args.out.display().to_string(), "samples": rec.len(), "rate_hz": args.trim.rate_hz,
+        "aircraft": trim.aircraft, "trim": trim,
+    });
+    match &args.json {
+        Some(target) => emit_json(target, &summary)?,
+        None => eprintln!(
+            "wrote {} ({} samples at {} Hz, {} from trim at {} ft, {} kts)",
+            args.out.display(),
+            rec.len(),
+            args.trim.rate_hz,
+            args.maneuver.surfaces.join("+"),
+            trim.point.altitude_ft,
+            trim.point.speed_kts
+        ),
+    }
+    Ok(())
+}

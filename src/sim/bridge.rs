@@ -1,0 +1,200 @@
+//! The JSBSim bridge process: a long-lived Python subprocess (`scripts/jsbsim_bridge.py`) spoken to with a
+//! batch protocol — one JSON line per request, whole float64 arrays as raw little-endian bytes.
+
+use super::env;
+use super::SimError;
+use serde_json::{json, Value};
+use std::collections::VecDeque;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::sync::{Arc, Mutex};
+
+const STDERR_LINES_KEPT: usize = 40;
+
+/// One running bridge process.
+pub struct Bridge {
+    child: Child,
+    stdin: ChildStdin,
+    stdout: BufReader<ChildStdout>,
+    stderr_tail: Arc<Mutex<VecDeque<String>>>,
+}
+
+/// A response: its JSON header and the float64 payload (empty when there is none).
+pub struct Response {
+    /// The JSON header (`ok` is true).
+    pub header: Value,
+    /// Raw float64 array sent after the header.
+    pub payload: Vec<f64>,
+}
+
+impl Bridge {
+    /// Starts a bridge process with the provisioned (or user's) Python.
+    pub fn spawn() -> Result<Self, SimError> {
+        let python = env::python()?;
+        let script = env::bridge_script()?;
+        let mut child = Command::new(&python)
+            .arg("-u")
+            .arg(&script)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|source| SimError::Spawn {
+                python: python.display().to_string(),
+                source,
+            })?;
+        let stdin = child.stdin.take().expect("stdin is piped");
+        let stdout =
+            BufReader::with_capacity(1 << 20, child.stdout.take().expect("stdout is piped"));
+        let stderr = child.stderr.take().expect("stderr is piped");
+        let stderr_tail = Arc::new(Mutex::new(VecDeque::new()));
+        let tail = Arc::clone(&stderr_tail);
+        // Drain stderr continuously (JSBSim prints there); keep the last lines for error messages.
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                let mut t = tail.lock().unwrap_or_else(|e| e.into_inner());
+                if t.len() == STDERR_LINES_KEPT {
+                    t.pop_front();
+                }
+                t.push_back(line);
+            }
+        });
+        Ok(Bridge {
+            child,
+            stdin,
+            stdout,
+            stderr_tail,
+        })
+    }
+
+    /// Operating-system process id of the Python process.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Sends one request (with an optional float64 payload) and waits for its response.
+    pub fn request(&mut self, mut req: Value, payload: &[f64]) -> Result<Response, SimError> {
+        let cmd = req
+            .get("cmd")
+            .and_then(Value::as_str)
+            .unwrap_or("?")
+            .to_string();
+        if !payload.is_empty() {
+            req["payload_f64"] = json!(payload.len());
+        }
+        let mut buf = serde_json::to_vec(&req).map_err(|e| SimError::Protocol(e.to_string()))?;
+        buf.push(b'\n');
+        buf.reserve(payload.len() * 8);
+        for x in payload {
+            buf.extend_from_slice(&x.to_le_bytes());
+        }
+        if self
+            .stdin
+            .write_all(&buf)
+            .and_then(|_| self.stdin.flush())
+            .is_err()
+        {
+            return Err(self.crashed(&cmd));
+        }
+        let mut line = String::new();
+        match self.stdout.read_line(&mut line) {
+            Ok(0) | Err(_) => return Err(self.crashed(&cmd)),
+            Ok(_) => {}
+        }
+        let header: Value = serde_json::from_str(&line).map_err(|e| {
+            SimError::Protocol(format!("bad response to '{cmd}': {e}: {}", line.trim()))
+        })?;
+        let n = header
+            .get("payload_f64")
+            .and_then(Value::as_u64)
+            .unwrap_or(0) as usize;
+        let mut payload_out = Vec::new();
+        if n > 0 {
+            let mut bytes = vec![0u8; n * 8];
+            if self.stdout.read_exact(&mut bytes).is_err() {
+                return Err(self.crashed(&cmd));
+            }
+            payload_out = bytes
+                .chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+                .collect();
+        }
+        if header.get("ok").and_then(Value::as_bool) != Some(true) {
+            let kind = header
+                .get("kind")
+                .and_then(Value::as_str)
+                .unwrap_or("error")
+                .to_string();
+            let message = header
+                .get("error")
+                .and_then(Value::as_str)
+                .unwrap_or("unknown error")
+                .to_string();
+            return Err(SimError::Bridge { kind, message });
+        }
+        Ok(Response {
+            header,
+            payload: payload_out,
+        })
+    }
+
+    /// The error for a bridge that stopped answering: exit status and its last stderr lines.
+    fn crashed(&mut self, during: &str) -> SimError {
+        // Give the process a moment to be reaped so the status is known.
+        let mut status = None;
+        for _ in 0..50 {
+            if let Ok(Some(s)) = self.child.try_wait() {
+                status = Some(s);
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        let status = match status {
+            Some(s) => describe_status(s),
+            None => "still running but not answering".to_string(),
+        };
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let tail = self.stderr_tail.lock().unwrap_or_else(|e| e.into_inner());
+        let last = tail
+            .iter()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .cloned()
+            .unwrap_or_default();
+        SimError::Crashed {
+            during: during.to_string(),
+            status,
+            last_output: last,
+        }
+    }
+}
+
+fn describe_status(s: std::process::ExitStatus) -> String {
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(sig) = s.signal() {
+            return format!("killed by signal {sig}");
+        }
+    }
+    match s.code() {
+        Some(c) => format!("exit code {c}"),
+        None => "unknown exit status".to_string(),
+    }
+}
+
+impl Drop for Bridge {
+    fn drop(&mut self) {
+        let _ = self.stdin.write_all(b"{\"cmd\":\"quit\"}\n");
+        let _ = self.stdin.flush();
+        // Give it a short while to clean up its private directory, then make sure it is gone.
+        for _ in 0..100 {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}

@@ -1,0 +1,354 @@
+//! [`Simulator`] backed by the official JSBSim through the bridge process.
+
+use super::bridge::Bridge;
+use super::{FlightPlan, Linearization, SimError, Simulator, TrimPoint, TrimState, FT_TO_M};
+use crate::aircraft::{AircraftConfig, Drive};
+use crate::data::FlightRecord;
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+
+/// Recorded channels: (CSV column, JSBSim property, factor to SI). Surfaces are added per aircraft.
+const RECORDED: &[(&str, &str, f64)] = &[
+    ("throttle", "fcs/throttle-pos-norm", 1.0),
+    ("phi_rad", "attitude/phi-rad", 1.0),
+    ("theta_rad", "attitude/theta-rad", 1.0),
+    ("psi_rad", "attitude/psi-rad", 1.0),
+    ("p_rad_s", "velocities/p-rad_sec", 1.0),
+    ("q_rad_s", "velocities/q-rad_sec", 1.0),
+    ("r_rad_s", "velocities/r-rad_sec", 1.0),
+    ("alpha_rad", "aero/alpha-rad", 1.0),
+    ("beta_rad", "aero/beta-rad", 1.0),
+    ("airspeed_m_s", "velocities/vt-fps", FT_TO_M),
+    ("altitude_m", "position/h-sl-ft", FT_TO_M),
+    ("ax_m_s2", "accelerations/a-pilot-x-ft_sec2", FT_TO_M),
+    ("ay_m_s2", "accelerations/a-pilot-y-ft_sec2", FT_TO_M),
+    ("az_m_s2", "accelerations/a-pilot-z-ft_sec2", FT_TO_M),
+];
+
+/// Surfaces in CSV column order.
+pub const SURFACES: [&str; 3] = ["elevator", "aileron", "rudder"];
+
+/// JSBSim (one bridge process, one aircraft loaded).
+pub struct JsbsimSim {
+    bridge: Bridge,
+    config: AircraftConfig,
+    rate_hz: f64,
+    trim: Option<TrimState>,
+    knob_values: BTreeMap<String, f64>,
+    /// Names of the aerodynamic coefficient functions that carry a scale knob (`flightid/knob/NAME`).
+    pub coefficient_knobs: Vec<String>,
+}
+
+fn surface_property(surface: &str) -> String {
+    format!("flightid/aero/{surface}-rad")
+}
+
+impl JsbsimSim {
+    /// Starts a bridge and loads the aircraft (a private copy, see `scripts/jsbsim_bridge.py`) at `rate_hz`.
+    pub fn start(config: &AircraftConfig, rate_hz: f64) -> Result<Self, SimError> {
+        if !(rate_hz.is_finite() && rate_hz > 0.0) {
+            return Err(SimError::Usage(format!(
+                "simulation rate must be positive, got {rate_hz} Hz"
+            )));
+        }
+        let mut bridge = Bridge::spawn()?;
+        let surfaces: serde_json::Map<String, Value> = config
+            .surfaces
+            .iter()
+            .map(|(name, s)| {
+                (
+                    name.clone(),
+                    json!({"command": s.command, "aero_reads": s.aero_reads, "aero_reads_abs": s.aero_reads_abs}),
+                )
+            })
+            .collect();
+        let req = json!({
+            "cmd": "load", "aircraft": config.model, "dt_s": 1.0 / rate_hz, "surfaces": surfaces,
+            "engine_running": config.engine_running, "gear_up": config.gear_up,
+        });
+        let resp = bridge.request(req, &[]).map_err(|e| match e {
+            SimError::Bridge { kind, message } if kind == "unknown_aircraft" => {
+                SimError::UnknownModel(message)
+            }
+            other => other,
+        })?;
+        let coefficient_knobs = resp.header["knobs"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|v| v.as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default();
+        Ok(JsbsimSim {
+            bridge,
+            config: config.clone(),
+            rate_hz,
+            trim: None,
+            knob_values: BTreeMap::new(),
+            coefficient_knobs,
+        })
+    }
+
+    /// The bridge's process id (for supervision and tests).
+    pub fn bridge_pid(&self) -> u32 {
+        self.bridge.pid()
+    }
+
+    /// The aircraft configuration in use.
+    pub fn config(&self) -> &AircraftConfig {
+        &self.config
+    }
+
+    /// Simulation rate, Hz.
+    pub fn rate_hz(&self) -> f64 {
+        self.rate_hz
+    }
+
+    /// Sets the factor on an aerodynamic coefficient function (e.g. `Cmalpha`), applied from the next trim on.
+    pub fn set_coefficient_scale(
+        &mut self,
+        coefficient: &str,
+        factor: f64,
+    ) -> Result<(), SimError> {
+        if !self.coefficient_knobs.iter().any(|k| k == coefficient) {
+            return Err(SimError::Usage(format!(
+                "aircraft '{}' has no aerodynamic coefficient '{coefficient}' (it has: {})",
+                self.config.name,
+                self.coefficient_knobs.join(", ")
+            )));
+        }
+        self.knob_values
+            .insert(format!("flightid/knob/{coefficient}"), factor);
+        Ok(())
+    }
+
+    /// Reads arbitrary JSBSim properties (current state).
+    pub fn get_properties(&mut self, names: &[&str]) -> Result<BTreeMap<String, f64>, SimError> {
+        let resp = self
+            .bridge
+            .request(json!({"cmd": "get", "properties": names}), &[])?;
+        Ok(values_map(&resp.header["values"]))
+    }
+}
+
+fn values_map(v: &Value) -> BTreeMap<String, f64> {
+    v.as_object()
+        .map(|o| {
+            o.iter()
+                .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(f64::NAN)))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+impl Simulator for JsbsimSim {
+    fn trim(&mut self, point: &TrimPoint) -> Result<TrimState, SimError> {
+        self.trim = None;
+        let mut report: Vec<String> = [
+            "aero/alpha-rad",
+            "attitude/theta-rad",
+            "attitude/phi-rad",
+            "aero/beta-rad",
+            "velocities/vt-fps",
+            "position/h-sl-ft",
+            "fcs/throttle-pos-norm",
+            "fcs/throttle-cmd-norm",
+            "fcs/pitch-trim-cmd-norm",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        for (name, s) in &self.config.surfaces {
+            report.push(surface_property(name));
+            report.push(s.command.clone());
+        }
+        let req = json!({
+            "cmd": "trim", "altitude_ft": point.altitude_ft, "speed_kts": point.speed_kts,
+            "heading_deg": point.heading_deg, "gamma_deg": point.gamma_deg,
+            "knobs": self.knob_values, "report": report,
+        });
+        let resp = self.bridge.request(req, &[]).map_err(|e| match e {
+            SimError::Bridge { kind, message } if kind == "trim_failed" => {
+                SimError::TrimFailed(message)
+            }
+            other => other,
+        })?;
+        let v = values_map(&resp.header["values"]);
+        let get = |k: &str| v.get(k).copied().unwrap_or(f64::NAN);
+        let mut surfaces_rad = BTreeMap::new();
+        let mut commands_norm = BTreeMap::new();
+        for (name, s) in &self.config.surfaces {
+            surfaces_rad.insert(name.clone(), get(&surface_property(name)));
+            commands_norm.insert(name.clone(), get(&s.command));
+        }
+        commands_norm.insert("pitch-trim".into(), get("fcs/pitch-trim-cmd-norm"));
+        commands_norm.insert("throttle".into(), get("fcs/throttle-cmd-norm"));
+        let state = TrimState {
+            aircraft: self.config.name.clone(),
+            point: *point,
+            alpha_rad: get("aero/alpha-rad"),
+            theta_rad: get("attitude/theta-rad"),
+            phi_rad: get("attitude/phi-rad"),
+            beta_rad: get("aero/beta-rad"),
+            airspeed_m_s: get("velocities/vt-fps") * FT_TO_M,
+            altitude_m: get("position/h-sl-ft") * FT_TO_M,
+            throttle: get("fcs/throttle-pos-norm"),
+            surfaces_rad,
+            commands_norm,
+        };
+        let all_finite = [
+            state.alpha_rad,
+            state.theta_rad,
+            state.airspeed_m_s,
+            state.throttle,
+        ]
+        .iter()
+        .chain(state.surfaces_rad.values())
+        .all(|x| x.is_finite());
+        if !all_finite {
+            return Err(SimError::TrimFailed(format!(
+                "{} at {} ft, {} kts: JSBSim reported a non-finite trim state",
+                self.config.name, point.altitude_ft, point.speed_kts
+            )));
+        }
+        self.trim = Some(state.clone());
+        Ok(state)
+    }
+
+    fn linearize(&mut self) -> Result<Linearization, SimError> {
+        if self.trim.is_none() {
+            return Err(SimError::Usage(
+                "linearize needs a successful trim first".into(),
+            ));
+        }
+        let per_radian: Vec<&str> = match self.config.drive {
+            Drive::Surface => SURFACES.to_vec(),
+            Drive::Command => vec![],
+        };
+        let resp = self.bridge.request(
+            json!({"cmd": "linearize", "per_radian_surfaces": per_radian}),
+            &[],
+        )?;
+        let mut lin: Linearization = serde_json::from_value(resp.header)
+            .map_err(|e| SimError::Protocol(format!("linearize: {e}")))?;
+        // JSBSim names its inputs ThtlCmd, DaCmd, DeCmd, DrCmd; make them per radian of surface deflection.
+        for (j, name) in lin.inputs.clone().iter().enumerate() {
+            let surface = match name.as_str() {
+                "DaCmd" => "aileron",
+                "DeCmd" => "elevator",
+                "DrCmd" => "rudder",
+                _ => continue,
+            };
+            let scale = match self.config.drive {
+                Drive::Surface => 1.0,
+                Drive::Command => {
+                    1.0 / self
+                        .config
+                        .surface(surface)
+                        .map_err(|e| SimError::Usage(e.to_string()))?
+                        .rad_per_norm
+                }
+            };
+            for row in lin.b.iter_mut().chain(lin.d.iter_mut()) {
+                row[j] *= scale;
+            }
+            lin.inputs[j] = surface.to_string();
+            lin.input_units[j] = "rad".to_string();
+        }
+        Ok(lin)
+    }
+
+    fn fly(&mut self, plan: &FlightPlan) -> Result<FlightRecord, SimError> {
+        let trim = self
+            .trim
+            .take()
+            .ok_or_else(|| SimError::Usage("fly needs a successful trim first".into()))?;
+        if (plan.rate_hz - self.rate_hz).abs() > 1e-9 {
+            return Err(SimError::Usage(format!(
+                "plan rate {} Hz differs from the simulation rate {} Hz",
+                plan.rate_hz, self.rate_hz
+            )));
+        }
+        let n = plan.n_steps;
+        let mut drives = Vec::new();
+        let mut payload = Vec::with_capacity(n * plan.inputs.len());
+        let mut set_before = serde_json::Map::new();
+        for input in &plan.inputs {
+            let sc = self
+                .config
+                .surface(&input.surface)
+                .map_err(|e| SimError::Usage(e.to_string()))?;
+            if input.deflection_rad.len() != n {
+                return Err(SimError::Usage(format!(
+                    "{} input has {} values for {} steps",
+                    input.surface,
+                    input.deflection_rad.len(),
+                    n
+                )));
+            }
+            let offset = payload.len();
+            match self.config.drive {
+                Drive::Surface => {
+                    let base = trim.surfaces_rad[&input.surface];
+                    payload.extend(input.deflection_rad.iter().map(|d| base + d));
+                    set_before.insert(format!("flightid/override/{}", input.surface), json!(1.0));
+                    set_before.insert(
+                        format!("flightid/override/{}-rad", input.surface),
+                        json!(base),
+                    );
+                    drives.push(json!({"property": format!("flightid/override/{}-rad", input.surface), "offset": offset}));
+                }
+                Drive::Command => {
+                    let base = trim.commands_norm[&input.surface];
+                    payload.extend(
+                        input
+                            .deflection_rad
+                            .iter()
+                            .map(|d| base + d / sc.rad_per_norm),
+                    );
+                    drives.push(json!({"property": sc.command, "offset": offset}));
+                }
+            }
+        }
+        let mut record: Vec<String> = SURFACES.iter().map(|s| surface_property(s)).collect();
+        record.extend(RECORDED.iter().map(|(_, p, _)| p.to_string()));
+        let req = json!({"cmd": "fly", "n_steps": n, "drives": drives, "record": record, "set_before": set_before});
+        let resp = self.bridge.request(req, &payload)?;
+        let width = record.len();
+        let rows = resp.payload.len() / width;
+        if rows != n + 1 || resp.payload.len() % width != 0 {
+            return Err(SimError::Protocol(format!(
+                "fly returned {} values, expected {}",
+                resp.payload.len(),
+                (n + 1) * width
+            )));
+        }
+        let dt_s = 1.0 / self.rate_hz;
+        let mut rec = FlightRecord::new((0..rows).map(|k| k as f64 * dt_s).collect());
+        let column = |j: usize, factor: f64| -> Vec<f64> {
+            (0..rows)
+                .map(|k| resp.payload[k * width + j] * factor)
+                .collect()
+        };
+        for (j, s) in SURFACES.iter().enumerate() {
+            rec.push_column(&format!("{s}_rad"), column(j, 1.0));
+        }
+        for (i, (name, _, factor)) in RECORDED.iter().enumerate() {
+            rec.push_column(name, column(SURFACES.len() + i, *factor));
+        }
+        rec.metadata.push(format!(
+            "aircraft: {} (JSBSim model {})",
+            self.config.name, self.config.model
+        ));
+        rec.metadata.push(format!(
+            "trim: {} ft, {} kts; alpha {:.6} rad, theta {:.6} rad",
+            trim.point.altitude_ft, trim.point.speed_kts, trim.alpha_rad, trim.theta_rad
+        ));
+        rec.metadata.push(format!(
+            "drive: {:?}; rate {} Hz",
+            self.config.drive, self.rate_hz
+        ));
+        Ok(rec)
+    }
+}

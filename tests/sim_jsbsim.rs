@@ -1,0 +1,442 @@
+//! The JSBSim bridge, driven for real: trim, linearize, fly, and the ways it must fail cleanly.
+
+use flightid::aircraft;
+use flightid::lti;
+use flightid::sim::linear::{paper_transfer_functions, submodel_modes};
+use flightid::sim::{JsbsimSim, Simulator, TrimPoint};
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn start(name: &str) -> JsbsimSim {
+    JsbsimSim::start(&aircraft::load(name).unwrap(), 120.0).unwrap()
+}
+
+fn flightid() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_flightid"))
+}
+
+#[test]
+fn every_configured_aircraft_trims_at_its_default_point() {
+    for name in aircraft::known() {
+        let cfg = aircraft::load(name).unwrap();
+        let mut sim = JsbsimSim::start(&cfg, 120.0).unwrap();
+        let t = sim
+            .trim(&TrimPoint::level(cfg.trim.altitude_ft, cfg.trim.speed_kts))
+            .unwrap();
+        // A level trim has a small positive alpha, theta = alpha (gamma = 0), wings level, throttle in range.
+        assert!(
+            t.alpha_rad > -0.05 && t.alpha_rad < 0.2,
+            "{name}: alpha {}",
+            t.alpha_rad
+        );
+        assert!(
+            (t.theta_rad - t.alpha_rad).abs() < 0.01,
+            "{name}: theta {} vs alpha {}",
+            t.theta_rad,
+            t.alpha_rad
+        );
+        assert!(t.phi_rad.abs() < 0.02, "{name}: phi {}", t.phi_rad);
+        assert!(
+            t.throttle > 0.0 && t.throttle <= 1.0,
+            "{name}: throttle {}",
+            t.throttle
+        );
+        let speed_m_s = cfg.trim.speed_kts * flightid::sim::KTS_TO_M_S;
+        assert!(
+            (t.airspeed_m_s - speed_m_s).abs() / speed_m_s < 0.01,
+            "{name}: airspeed {}",
+            t.airspeed_m_s
+        );
+    }
+}
+
+/// Reference values (decoupled 4-state submodels, c172x, 4000 ft, 100 KTAS), computed independently with
+/// python-control from the same A, B by `scripts/oracle_linearize.py` and in DESIGN.md section 3.
+#[test]
+fn c172x_linearization_has_the_known_short_period_and_dutch_roll() {
+    let mut sim = start("c172x");
+    sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
+    let lin = sim.linearize().unwrap();
+    let modes = submodel_modes(&lin).unwrap();
+    let sp = modes["longitudinal"]
+        .iter()
+        .find(|m| m.oscillatory && m.omega_n_rad_s > 1.0)
+        .expect("short period");
+    let dr = modes["lateral"]
+        .iter()
+        .find(|m| m.oscillatory)
+        .expect("dutch roll");
+    // 1 % is the issue's tolerance; the model is deterministic, so the slack covers only JSBSim's finite
+    // differences in FGLinearization.
+    assert!(
+        (sp.omega_n_rad_s / 6.11 - 1.0).abs() < 0.01,
+        "short period wn {}",
+        sp.omega_n_rad_s
+    );
+    assert!(
+        (sp.zeta / 0.675 - 1.0).abs() < 0.01,
+        "short period zeta {}",
+        sp.zeta
+    );
+    assert!(
+        (dr.omega_n_rad_s / 2.13 - 1.0).abs() < 0.01,
+        "dutch roll wn {}",
+        dr.omega_n_rad_s
+    );
+    assert!(
+        (dr.zeta / 0.157 - 1.0).abs() < 0.01,
+        "dutch roll zeta {}",
+        dr.zeta
+    );
+
+    // Independent check of the transfer functions: python-control's ss2tf on the same submodels.
+    let tfs = paper_transfer_functions(&lin).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let lin_path = dir.path().join("lin.json");
+    std::fs::write(&lin_path, serde_json::to_string(&lin).unwrap()).unwrap();
+    let out = Command::new(flightid::sim::env::python().unwrap())
+        .arg(repo().join("scripts/oracle_linearize.py"))
+        .arg(&lin_path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let oracle: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for (key, tf) in &tfs {
+        for part in ["num", "den"] {
+            let want: Vec<f64> = serde_json::from_value(oracle[key][part].clone()).unwrap();
+            let got = if part == "num" { &tf.num } else { &tf.den };
+            assert_eq!(want.len(), got.len(), "{key} {part}: {got:?} vs {want:?}");
+            let scale = want.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            for (g, w) in got.iter().zip(&want) {
+                assert!(
+                    (g - w).abs() <= 1e-9 * scale,
+                    "{key} {part}: {got:?} vs python-control {want:?}"
+                );
+            }
+        }
+    }
+}
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn doublet_csv_passes_schema_validation_and_starts_at_trim() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("flight.csv");
+    let out = flightid()
+        .args([
+            "fly",
+            "--aircraft",
+            "c172x",
+            "--altitude-ft",
+            "4000",
+            "--speed-kts",
+            "100",
+            "--surface",
+            "elevator",
+        ])
+        .args([
+            "--maneuver",
+            "doublet",
+            "--amplitude-deg",
+            "2",
+            "--pulse-s",
+            "1",
+            "--duration-s",
+            "10",
+            "--out",
+        ])
+        .arg(&csv)
+        .args(["--json", "-"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rec = flightid::data::read_csv(&csv).unwrap();
+    rec.validate().unwrap();
+    for col in flightid::data::SCHEMA_COLUMNS.iter().skip(1) {
+        assert!(rec.column(col).is_some(), "missing column {col}");
+    }
+    assert_eq!(rec.len(), 1201, "10 s at 120 Hz plus the trim sample");
+    let trim = &summary["trim"];
+    let first = |c: &str| rec.column(c).unwrap()[0];
+    // Sample 0 is the trim state itself, to the printing precision of the CSV (round-trip exact).
+    assert_eq!(first("alpha_rad"), trim["alpha_rad"].as_f64().unwrap());
+    assert_eq!(first("theta_rad"), trim["theta_rad"].as_f64().unwrap());
+    assert_eq!(
+        first("elevator_rad"),
+        trim["surfaces_rad"]["elevator"].as_f64().unwrap()
+    );
+    assert_eq!(first("throttle"), trim["throttle"].as_f64().unwrap());
+    // The elevator moves by exactly the commanded ±2° around trim (surface drive, no actuator).
+    let e = rec.column("elevator_rad").unwrap();
+    let peak = e
+        .iter()
+        .map(|x| x - e[0])
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(
+        (peak - 2f64.to_radians()).abs() < 1e-12,
+        "elevator peak {peak}"
+    );
+    // Level flight: body z specific force is about -g.
+    assert!(
+        (first("az_m_s2") + 9.81).abs() < 0.2,
+        "az {}",
+        first("az_m_s2")
+    );
+}
+
+/// Issue 2 acceptance: for a 0.5° elevator doublet on the 737, linearize's θ/δe driven by the logged elevator
+/// deflection reproduces the logged θ within 3 % (RMS error over peak response).
+#[test]
+fn b737_small_elevator_doublet_matches_the_linearization() {
+    let mut sim = start("737");
+    sim.trim(&TrimPoint::level(30000.0, 450.0)).unwrap();
+    let lin = sim.linearize().unwrap();
+    let tf = paper_transfer_functions(&lin)
+        .unwrap()
+        .remove("theta/elevator")
+        .unwrap();
+    let cfg = aircraft::load("737").unwrap();
+    sim.trim(&TrimPoint::level(cfg.trim.altitude_ft, cfg.trim.speed_kts))
+        .unwrap();
+    let rate_hz = 120.0;
+    let n = (20.0 * rate_hz) as usize;
+    let unit = flightid::signal::generate(
+        &flightid::signal::Maneuver::Doublet { pulse_s: 1.0 },
+        1.0 / rate_hz,
+        20.0,
+        1.0,
+    );
+    let plan = flightid::sim::FlightPlan {
+        rate_hz,
+        n_steps: n,
+        inputs: vec![flightid::sim::SurfaceInput {
+            surface: "elevator".into(),
+            deflection_rad: unit[..n].iter().map(|u| u * 0.5f64.to_radians()).collect(),
+        }],
+    };
+    let rec = sim.fly(&plan).unwrap();
+    let e = rec.column("elevator_rad").unwrap();
+    let th = rec.column("theta_rad").unwrap();
+    let de: Vec<f64> = e.iter().map(|x| x - e[0]).collect();
+    let dth: Vec<f64> = th.iter().map(|x| x - th[0]).collect();
+    let sim_th = lti::lsim(&tf, &de, 1.0 / rate_hz);
+    let rms = (dth
+        .iter()
+        .zip(&sim_th)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / dth.len() as f64)
+        .sqrt();
+    let peak = dth.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(peak > 1e-3, "the doublet must move theta (peak {peak} rad)");
+    assert!(
+        rms / peak < 0.03,
+        "737 theta: linear vs nonlinear RMS {rms} over peak {peak} = {:.2} %",
+        100.0 * rms / peak
+    );
+}
+
+fn run_fails(args: &[&str], envs: &[(&str, &str)]) -> (i32, String) {
+    let mut cmd = flightid();
+    cmd.args(args);
+    for (k, v) in envs {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).to_string(),
+    )
+}
+
+#[test]
+fn unknown_aircraft_is_a_one_line_usage_error() {
+    let (code, err) = run_fails(&["trim", "--aircraft", "concorde-x"], &[]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("unknown aircraft 'concorde-x'"), "{err}");
+}
+
+#[test]
+fn impossible_trim_fails_with_exit_1_and_leaves_no_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("slow.csv");
+    let (code, err) = run_fails(
+        &[
+            "fly",
+            "--aircraft",
+            "c172x",
+            "--speed-kts",
+            "15",
+            "--duration-s",
+            "5",
+            "--out",
+            csv.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("trim failed"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().next().is_none(),
+        "nothing may be written"
+    );
+}
+
+#[test]
+fn missing_python_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("x.csv");
+    let (code, err) = run_fails(
+        &["fly", "--out", csv.to_str().unwrap()],
+        &[("FLIGHTID_PYTHON", "/nonexistent/python3")],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("FLIGHTID_PYTHON=/nonexistent/python3"),
+        "{err}"
+    );
+    assert!(!csv.exists());
+    // No base interpreter to provision with, in an empty cache: the message says what to install.
+    let cache = tempfile::tempdir().unwrap();
+    let (code, err) = run_fails(
+        &["trim"],
+        &[
+            ("FLIGHTID_CACHE_DIR", cache.path().to_str().unwrap()),
+            ("FLIGHTID_BASE_PYTHON", "/nonexistent/python3"),
+        ],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("no Python 3 interpreter found"), "{err}");
+}
+
+fn children(pid: u32) -> Vec<u32> {
+    std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children"))
+        .unwrap_or_default()
+        .split_whitespace()
+        .filter_map(|s| s.parse().ok())
+        .collect()
+}
+
+#[test]
+fn killed_bridge_mid_run_is_an_error_and_leaves_no_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("long.csv");
+    // A long record (2 hours of flight) so the kill lands while JSBSim is flying.
+    let mut child = flightid()
+        .args([
+            "fly",
+            "--aircraft",
+            "c172x",
+            "--maneuver",
+            "multisine",
+            "--duration-s",
+            "7200",
+            "--out",
+        ])
+        .arg(&csv)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut bridge = None;
+    for _ in 0..400 {
+        if let Some(&p) = children(child.id()).first() {
+            bridge = Some(p);
+            std::thread::sleep(std::time::Duration::from_millis(800));
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(25));
+    }
+    let bridge = bridge.expect("flightid starts a bridge process");
+    Command::new("kill")
+        .args(["-9", &bridge.to_string()])
+        .status()
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("bridge process died") && err.contains("signal 9"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        std::fs::read_dir(dir.path()).unwrap().next().is_none(),
+        "no partial CSV"
+    );
+}
+
+fn package_files() -> BTreeSet<PathBuf> {
+    let py = flightid::sim::env::python().unwrap();
+    let out = Command::new(py)
+        .args([
+            "-c",
+            "import jsbsim, os; print(os.path.dirname(jsbsim.__file__))",
+        ])
+        .output()
+        .unwrap();
+    let root = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+    let mut files = BTreeSet::new();
+    fn walk(p: &Path, acc: &mut BTreeSet<PathBuf>) {
+        for e in std::fs::read_dir(p).unwrap().flatten() {
+            let path = e.path();
+            if path.is_dir() && !path.is_symlink() {
+                if path.file_name().is_some_and(|n| n != "__pycache__") {
+                    walk(&path, acc);
+                }
+            } else {
+                acc.insert(path);
+            }
+        }
+    }
+    walk(&root, &mut files);
+    files
+}
+
+/// No file appears in the JSBSim package, and a 737 bridge holds no socket at all (the 737's telnet/UDP
+/// `<input>` is stripped from the private copy).
+#[test]
+fn b737_run_writes_nothing_into_the_package_and_opens_no_socket() {
+    let before = package_files();
+    let mut sim = start("737");
+    sim.trim(&TrimPoint::level(30000.0, 450.0)).unwrap();
+    let pid = sim.bridge_pid();
+    let plan = flightid::sim::FlightPlan {
+        rate_hz: 120.0,
+        n_steps: 600,
+        inputs: vec![flightid::sim::SurfaceInput {
+            surface: "rudder".into(),
+            deflection_rad: vec![0.01; 600],
+        }],
+    };
+    sim.fly(&plan).unwrap();
+    let sockets: Vec<String> = std::fs::read_dir(format!("/proc/{pid}/fd"))
+        .unwrap()
+        .flatten()
+        .filter_map(|e| std::fs::read_link(e.path()).ok())
+        .map(|l| l.display().to_string())
+        .filter(|l| l.starts_with("socket:"))
+        .collect();
+    assert!(sockets.is_empty(), "bridge holds sockets: {sockets:?}");
+    drop(sim);
+    let after = package_files();
+    let new: Vec<_> = after.difference(&before).collect();
+    assert!(
+        new.is_empty(),
+        "files appeared in the JSBSim package: {new:?}"
+    );
+}
