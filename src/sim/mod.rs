@@ -6,12 +6,14 @@ pub mod bridge;
 pub mod env;
 pub mod jsbsim;
 pub mod linear;
+pub mod linear_model;
 
 use crate::data::FlightRecord;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 pub use jsbsim::JsbsimSim;
+pub use linear_model::LinearSim;
 
 /// Feet to metres.
 pub const FT_TO_M: f64 = 0.3048;
