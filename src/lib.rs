@@ -8,5 +8,6 @@ pub mod cli;
 pub mod data;
 pub mod ident;
 pub mod lti;
+pub mod report;
 pub mod signal;
 pub mod sim;

@@ -1,0 +1,303 @@
+//! Reports: SVG line plots (plotters, no system fonts), Markdown and self-contained HTML (inline SVG, no
+//! network), and the JSON behind every table. Every file is written atomically.
+
+use plotters::prelude::*;
+use serde::Serialize;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Report-writing failures.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// Drawing failed.
+    #[error("plot '{title}': {detail}")]
+    Plot { title: String, detail: String },
+    /// File system.
+    #[error("cannot write {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+}
+
+/// One curve of a plot.
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// Legend text.
+    pub label: String,
+    /// Abscissa values.
+    pub x: Vec<f64>,
+    /// Ordinate values (non-finite points are skipped).
+    pub y: Vec<f64>,
+    /// Dashed look for reference curves (drawn thinner and lighter).
+    pub reference: bool,
+}
+
+impl Series {
+    /// A solid curve.
+    pub fn new(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Series { label: label.into(), x, y, reference: false }
+    }
+}
+
+/// A line plot with labelled axes (units in the labels) and a legend.
+#[derive(Debug, Clone)]
+pub struct LinePlot {
+    /// Caption.
+    pub title: String,
+    /// Abscissa label with unit, e.g. `time, s`.
+    pub x_label: String,
+    /// Ordinate label with unit, e.g. `theta, deg`.
+    pub y_label: String,
+    /// Curves.
+    pub series: Vec<Series>,
+    /// Logarithmic abscissa (Bode plots).
+    pub log_x: bool,
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(23, 190, 207),
+];
+
+fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// Renders a line plot to SVG text (800 × 420 px).
+pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
+    let err = |e: String| ReportError::Plot { title: plot.title.clone(), detail: e };
+    let (x0, x1) = finite_range(plot.series.iter().flat_map(|s| s.x.iter().copied()).filter(|x| !plot.log_x || *x > 0.0))
+        .ok_or_else(|| err("no finite x values".into()))?;
+    let (mut y0, mut y1) = finite_range(plot.series.iter().flat_map(|s| s.y.iter().copied())).ok_or_else(|| err("no finite y values".into()))?;
+    let pad = if y1 > y0 { 0.06 * (y1 - y0) } else { y0.abs().max(1e-9) * 0.1 };
+    y0 -= pad;
+    y1 += pad;
+    let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (800, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+        let mut builder = ChartBuilder::on(&root);
+        builder.caption(&plot.title, ("sans-serif", 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
+        macro_rules! draw {
+            ($chart:expr) => {{
+                let mut chart = $chart;
+                chart
+                    .configure_mesh()
+                    .x_desc(plot.x_label.as_str())
+                    .y_desc(plot.y_label.as_str())
+                    .label_style(("sans-serif", 12))
+                    .draw()
+                    .map_err(|e| err(e.to_string()))?;
+                for (i, s) in plot.series.iter().enumerate() {
+                    let color = PALETTE[i % PALETTE.len()];
+                    let style = if s.reference { color.mix(0.6).stroke_width(1) } else { color.stroke_width(2) };
+                    let points: Vec<(f64, f64)> = s
+                        .x
+                        .iter()
+                        .zip(&s.y)
+                        .filter(|(x, y)| x.is_finite() && y.is_finite() && (!plot.log_x || **x > 0.0))
+                        .map(|(x, y)| (*x, *y))
+                        .collect();
+                    chart
+                        .draw_series(LineSeries::new(points, style))
+                        .map_err(|e| err(e.to_string()))?
+                        .label(s.label.as_str())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                }
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .label_font(("sans-serif", 12))
+                    .position(SeriesLabelPosition::UpperRight)
+                    .draw()
+                    .map_err(|e| err(e.to_string()))?;
+            }};
+        }
+        if plot.log_x {
+            draw!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1).map_err(|e| err(e.to_string()))?);
+        } else {
+            draw!(builder.build_cartesian_2d(x0..x1, y0..y1).map_err(|e| err(e.to_string()))?);
+        }
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    Ok(svg)
+}
+
+/// A table: header and rows of already formatted cells.
+#[derive(Debug, Clone, Serialize)]
+pub struct Table {
+    /// Caption.
+    pub caption: String,
+    /// Column headers.
+    pub header: Vec<String>,
+    /// Rows.
+    pub rows: Vec<Vec<String>>,
+}
+
+/// A report section.
+#[derive(Debug, Clone, Default)]
+pub struct Section {
+    /// Heading.
+    pub heading: String,
+    /// Paragraphs of plain text.
+    pub paragraphs: Vec<String>,
+    /// Tables.
+    pub tables: Vec<Table>,
+    /// Plots: (file stem, plot).
+    pub plots: Vec<(String, LinePlot)>,
+}
+
+/// A whole report.
+#[derive(Debug, Clone, Default)]
+pub struct Report {
+    /// Title.
+    pub title: String,
+    /// Sections in order.
+    pub sections: Vec<Section>,
+}
+
+/// Writes `bytes` to `path` through a temporary file and a rename: readers never see a partial file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
+    let io = |source| ReportError::Io { path: path.to_path_buf(), source };
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io(e));
+    }
+    Ok(())
+}
+
+fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+fn markdown_table(t: &Table) -> String {
+    let mut s = format!("**{}**\n\n| {} |\n|{}\n", t.caption, t.header.join(" | "), "---|".repeat(t.header.len()));
+    for r in &t.rows {
+        s.push_str(&format!("| {} |\n", r.join(" | ")));
+    }
+    s.push('\n');
+    s
+}
+
+fn html_table(t: &Table) -> String {
+    let mut s = format!("<table><caption>{}</caption><tr>", html_escape(&t.caption));
+    for h in &t.header {
+        s.push_str(&format!("<th>{}</th>", html_escape(h)));
+    }
+    s.push_str("</tr>");
+    for r in &t.rows {
+        s.push_str("<tr>");
+        for c in r {
+            s.push_str(&format!("<td>{}</td>", html_escape(c)));
+        }
+        s.push_str("</tr>");
+    }
+    s.push_str("</table>\n");
+    s
+}
+
+/// Writes `dir/index.html` (self-contained), `dir/report.md`, one `dir/NAME.svg` per plot and `dir/report.json`.
+/// Returns the path of `index.html`.
+pub fn write_report(dir: &Path, report: &Report, json: &serde_json::Value) -> Result<PathBuf, ReportError> {
+    std::fs::create_dir_all(dir).map_err(|source| ReportError::Io { path: dir.to_path_buf(), source })?;
+    // Render every plot first: a drawing failure leaves nothing behind.
+    let mut rendered = Vec::new();
+    for section in &report.sections {
+        let mut svgs = Vec::new();
+        for (name, plot) in &section.plots {
+            svgs.push((name.clone(), plot.title.clone(), line_plot_svg(plot)?));
+        }
+        rendered.push(svgs);
+    }
+    let mut md = format!("# {}\n\n", report.title);
+    let mut html = format!(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{0}</title><style>\
+         body{{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}}\
+         table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}\
+         caption{{font-weight:bold;text-align:left;padding:4px 0}}figure{{margin:1em 0}}</style></head><body><h1>{0}</h1>\n",
+        html_escape(&report.title)
+    );
+    for (section, svgs) in report.sections.iter().zip(&rendered) {
+        md.push_str(&format!("## {}\n\n", section.heading));
+        html.push_str(&format!("<h2>{}</h2>\n", html_escape(&section.heading)));
+        for p in &section.paragraphs {
+            md.push_str(&format!("{p}\n\n"));
+            html.push_str(&format!("<p>{}</p>\n", html_escape(p)));
+        }
+        for t in &section.tables {
+            md.push_str(&markdown_table(t));
+            html.push_str(&html_table(t));
+        }
+        for (name, title, svg) in svgs {
+            write_atomic(&dir.join(format!("{name}.svg")), svg.as_bytes())?;
+            md.push_str(&format!("![{title}]({name}.svg)\n\n"));
+            html.push_str(&format!("<figure id=\"{name}\">{svg}</figure>\n"));
+        }
+    }
+    html.push_str("</body></html>\n");
+    let json_text = serde_json::to_string_pretty(json).unwrap_or_else(|_| "{}".into());
+    write_atomic(&dir.join("report.json"), json_text.as_bytes())?;
+    write_atomic(&dir.join("report.md"), md.as_bytes())?;
+    let index = dir.join("index.html");
+    write_atomic(&index, html.as_bytes())?;
+    Ok(index)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_holds_inline_svg_with_axis_labels_and_legend() {
+        let t: Vec<f64> = (0..200).map(|k| k as f64 * 0.05).collect();
+        let plot = LinePlot {
+            title: "theta response".into(),
+            x_label: "time, s".into(),
+            y_label: "theta, deg".into(),
+            series: vec![
+                Series::new("nonlinear", t.clone(), t.iter().map(|x| x.sin()).collect()),
+                Series::new("linear", t.clone(), t.iter().map(|x| 0.9 * x.sin()).collect()),
+            ],
+            log_x: false,
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let report = Report {
+            title: "test".into(),
+            sections: vec![Section {
+                heading: "overlay".into(),
+                paragraphs: vec!["a < b".into()],
+                tables: vec![Table { caption: "fit".into(), header: vec!["model".into(), "fit %".into()], rows: vec![vec!["ls".into(), "99.1".into()]] }],
+                plots: vec![("theta".into(), plot)],
+            }],
+        };
+        let index = write_report(dir.path(), &report, &serde_json::json!({"fit": 99.1})).unwrap();
+        let html = std::fs::read_to_string(index).unwrap();
+        assert!(html.contains("<svg") && html.contains("time, s") && html.contains("theta, deg"));
+        assert!(html.contains("nonlinear") && html.contains("a &lt; b") && html.contains("<td>99.1</td>"));
+        assert!(!html.contains("http://") || html.matches("http://").all(|_| html.contains("xmlns")), "no external links");
+        assert!(dir.path().join("theta.svg").exists() && dir.path().join("report.md").exists());
+    }
+
+    #[test]
+    fn empty_plot_is_an_error_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let plot = LinePlot { title: "empty".into(), x_label: "x".into(), y_label: "y".into(), series: vec![], log_x: false };
+        let report = Report { title: "t".into(), sections: vec![Section { plots: vec![("e".into(), plot)], ..Default::default() }] };
+        assert!(write_report(dir.path(), &report, &serde_json::json!({})).is_err());
+        assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none());
+    }
+}
