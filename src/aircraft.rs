@@ -61,6 +61,9 @@ pub struct AircraftConfig {
     pub engine_running: bool,
     /// Retract the gear before trimming.
     pub gear_up: bool,
+    /// Number of engines (throttle inputs drive all of them).
+    #[serde(default = "one")]
+    pub engines: usize,
     /// Default trim point.
     pub trim: TrimDefaults,
     /// Surfaces by name: `elevator`, `aileron`, `rudder`.
@@ -83,6 +86,10 @@ pub enum AircraftError {
         surface: String,
         known: String,
     },
+}
+
+fn one() -> usize {
+    1
 }
 
 const EMBEDDED: &[(&str, &str)] = &[

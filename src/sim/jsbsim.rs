@@ -275,10 +275,6 @@ impl Simulator for JsbsimSim {
         let mut payload = Vec::with_capacity(n * plan.inputs.len());
         let mut set_before = serde_json::Map::new();
         for input in &plan.inputs {
-            let sc = self
-                .config
-                .surface(&input.surface)
-                .map_err(|e| SimError::Usage(e.to_string()))?;
             if input.deflection_rad.len() != n {
                 return Err(SimError::Usage(format!(
                     "{} input has {} values for {} steps",
@@ -287,6 +283,20 @@ impl Simulator for JsbsimSim {
                     n
                 )));
             }
+            if input.surface == "throttle" {
+                // Throttle moves relative to its trim on every engine; values are positions 0..1 (not radians).
+                let offset = payload.len();
+                let base = trim.commands_norm["throttle"];
+                payload.extend(input.deflection_rad.iter().map(|d| (base + d).clamp(0.0, 1.0)));
+                for i in 0..self.config.engines {
+                    drives.push(json!({"property": format!("fcs/throttle-cmd-norm[{i}]"), "offset": offset}));
+                }
+                continue;
+            }
+            let sc = self
+                .config
+                .surface(&input.surface)
+                .map_err(|e| SimError::Usage(e.to_string()))?;
             let offset = payload.len();
             match self.config.drive {
                 Drive::Surface => {

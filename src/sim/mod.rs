@@ -109,9 +109,10 @@ pub struct TrimState {
 }
 
 /// Input on one surface: deflection relative to trim, one value per simulation step, rad.
+/// (`throttle` is accepted too: position relative to trim, 0..1 units.)
 #[derive(Debug, Clone)]
 pub struct SurfaceInput {
-    /// `elevator`, `aileron` or `rudder`.
+    /// `elevator`, `aileron`, `rudder` (or `throttle`).
     pub surface: String,
     /// Deflection relative to trim for each step, rad (held during the step).
     pub deflection_rad: Vec<f64>,
