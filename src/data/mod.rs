@@ -1,1 +1,16 @@
 //! Flight-data schema, CSV and MAVLink readers/writers, units and validation.
+//!
+//! The exchange format is the CSV schema of DESIGN.md §4 ([`SCHEMA_COLUMNS`]): SI units, radians,
+//! `time_s` strictly increasing, unknown columns kept. [`FlightRecord`] is its in-memory form.
+
+mod csv_io;
+mod error;
+mod record;
+mod resample;
+
+pub use csv_io::{
+    parse_csv_bytes, read_csv, read_csv_with_warnings, write_csv_atomic, write_csv_to,
+};
+pub use error::{DataError, Warning, WarningKind, IN_MEMORY};
+pub use record::{sampling_warning, unit_warnings, FlightRecord, G0_M_S2, SCHEMA_COLUMNS};
+pub use resample::{resample_uniform, RESAMPLE_METHOD};

@@ -1,0 +1,151 @@
+//! Errors and warnings of the `data` module.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// Where in-memory records are reported from when they did not come from a file.
+pub const IN_MEMORY: &str = "<in-memory record>";
+
+/// A hard problem with flight data: the data cannot be used as it is.
+///
+/// Every variant names the file and, where it applies, the 1-based line number and the column.
+#[derive(Debug, thiserror::Error)]
+pub enum DataError {
+    /// The file could not be read or written.
+    #[error("{file}: {action}: {source}")]
+    Io {
+        file: PathBuf,
+        action: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file holds no header row at all.
+    #[error("{file}: the file is empty (expected a header row starting with `time_s`)")]
+    Empty { file: String },
+    /// The header exists but no data row follows it.
+    #[error("{file}: the header (line {line}) is not followed by any data row")]
+    NoRows { file: String, line: usize },
+    /// The header lacks the required `time_s` column.
+    #[error("{file}:{line}: the header has no `time_s` column (found: {found}); every flight-data CSV needs time in seconds")]
+    MissingTime {
+        file: String,
+        line: usize,
+        found: String,
+    },
+    /// A column name appears twice in the header.
+    #[error("{file}:{line}: column `{column}` appears more than once in the header")]
+    DuplicateColumn {
+        file: String,
+        line: usize,
+        column: String,
+    },
+    /// A row has a different number of fields than the header.
+    #[error("{file}:{line}: row has {found} fields but the header has {expected}")]
+    Ragged {
+        file: String,
+        line: usize,
+        expected: usize,
+        found: usize,
+    },
+    /// A cell is not a number.
+    #[error("{file}:{line}: column `{column}`: `{cell}` is not a number")]
+    NonNumeric {
+        file: String,
+        line: usize,
+        column: String,
+        cell: String,
+    },
+    /// A cell is NaN or infinite.
+    #[error("{file}:{line}: column `{column}`: value `{cell}` is not finite (NaN/inf are not allowed; drop or fill the sample)")]
+    NonFinite {
+        file: String,
+        line: usize,
+        column: String,
+        cell: String,
+    },
+    /// Time does not strictly increase.
+    #[error("{file}:{line}: column `time_s`: {time_s} {relation} the previous time {previous_s} (line {previous_line}); time must strictly increase")]
+    TimeNotIncreasing {
+        file: String,
+        line: usize,
+        time_s: f64,
+        previous_s: f64,
+        previous_line: usize,
+        /// "repeats" (duplicated time) or "goes back from" (time running backwards).
+        relation: &'static str,
+    },
+    /// A column of an in-memory record has the wrong length.
+    #[error("{file}: column `{column}` has {found} values but `time_s` has {expected}")]
+    LengthMismatch {
+        file: String,
+        column: String,
+        expected: usize,
+        found: usize,
+    },
+    /// A tool needs a column the data does not have.
+    #[error(
+        "column `{column}` is required {why}, but the data has no such column (present: {present})"
+    )]
+    MissingColumn {
+        column: String,
+        why: String,
+        present: String,
+    },
+    /// The CSV parser failed (e.g. invalid UTF-8 in the header).
+    #[error("{file}:{line}: {message}")]
+    Parse {
+        file: String,
+        line: usize,
+        message: String,
+    },
+    /// An argument is out of range (e.g. a non-positive resampling rate).
+    #[error("invalid argument: {0}")]
+    InvalidArgument(String),
+    /// A MAVLink telemetry log could not be turned into a flight record.
+    #[error("{file}: {message}")]
+    Tlog { file: String, message: String },
+    /// An airframe mapping file is missing or invalid.
+    #[error("airframe `{airframe}` ({file}): {message}")]
+    Airframe {
+        airframe: String,
+        file: PathBuf,
+        message: String,
+    },
+}
+
+/// What kind of soft problem a [`Warning`] reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WarningKind {
+    /// A `_rad` column holds values that look like degrees.
+    LooksLikeDegrees,
+    /// A `_rad_s` column holds values that look like deg/s.
+    LooksLikeDegreesPerSecond,
+    /// Accelerations look like g instead of m/s².
+    LooksLikeG,
+    /// `throttle` lies outside 0..1 (percent?).
+    ThrottleOutOfRange,
+    /// Sample spacing is not uniform.
+    IrregularSampling,
+    /// Anything else the reader wants the user to know (e.g. skipped bytes in a tlog).
+    Other,
+}
+
+/// A soft problem: the data can be used, but the user should look at the evidence.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Warning {
+    /// The kind of problem.
+    pub kind: WarningKind,
+    /// The column concerned, if any.
+    pub column: Option<String>,
+    /// The evidence in words and numbers.
+    pub message: String,
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.column {
+            Some(c) => write!(f, "column `{c}`: {}", self.message),
+            None => write!(f, "{}", self.message),
+        }
+    }
+}

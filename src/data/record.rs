@@ -1,0 +1,341 @@
+//! The in-memory flight record (DESIGN.md §4), its validation and unit-sanity checks.
+
+use super::error::{DataError, Warning, WarningKind, IN_MEMORY};
+
+/// The schema columns of DESIGN.md §4, in their canonical order.
+pub const SCHEMA_COLUMNS: &[&str] = &[
+    "time_s",
+    "elevator_rad",
+    "aileron_rad",
+    "rudder_rad",
+    "throttle",
+    "phi_rad",
+    "theta_rad",
+    "psi_rad",
+    "p_rad_s",
+    "q_rad_s",
+    "r_rad_s",
+    "alpha_rad",
+    "beta_rad",
+    "airspeed_m_s",
+    "altitude_m",
+    "ax_m_s2",
+    "ay_m_s2",
+    "az_m_s2",
+];
+
+/// Standard gravity, m/s² (ISO 80000-3).
+pub const G0_M_S2: f64 = 9.80665;
+
+/// A flight record: a time vector and named columns of equal length, SI units.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FlightRecord {
+    /// Sample times, seconds, strictly increasing.
+    pub time_s: Vec<f64>,
+    /// Data columns in file order, excluding `time_s`.
+    pub columns: Vec<(String, Vec<f64>)>,
+    /// Metadata: the `#` lines before the header, without the `#`.
+    pub metadata: Vec<String>,
+}
+
+impl FlightRecord {
+    /// An empty record over the given time vector.
+    pub fn new(time_s: Vec<f64>) -> Self {
+        Self {
+            time_s,
+            columns: Vec::new(),
+            metadata: Vec::new(),
+        }
+    }
+
+    /// Adds a column, or replaces the values of an existing column of the same name.
+    pub fn push_column(&mut self, name: &str, values: Vec<f64>) {
+        if let Some(slot) = self.columns.iter_mut().find(|(n, _)| n == name) {
+            slot.1 = values;
+        } else {
+            self.columns.push((name.to_string(), values));
+        }
+    }
+
+    /// The values of a column (`time_s` included), if present.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        if name == "time_s" {
+            return Some(&self.time_s);
+        }
+        self.columns
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_slice())
+    }
+
+    /// The values of a column, or an error saying which tool needs it and why.
+    pub fn require(&self, name: &str, why: &str) -> Result<&[f64], DataError> {
+        self.column(name).ok_or_else(|| DataError::MissingColumn {
+            column: name.to_string(),
+            why: why.to_string(),
+            present: self.column_names().join(", "),
+        })
+    }
+
+    /// All column names, `time_s` first.
+    pub fn column_names(&self) -> Vec<&str> {
+        std::iter::once("time_s")
+            .chain(self.columns.iter().map(|(n, _)| n.as_str()))
+            .collect()
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.time_s.len()
+    }
+
+    /// True when the record holds no samples.
+    pub fn is_empty(&self) -> bool {
+        self.time_s.is_empty()
+    }
+
+    /// The median time step, seconds (robust to a few dropouts); `None` with fewer than 2 samples.
+    pub fn dt_s(&self) -> Option<f64> {
+        let mut steps = time_steps(&self.time_s);
+        if steps.is_empty() {
+            return None;
+        }
+        Some(median_in_place(&mut steps))
+    }
+
+    /// The samples in `[start, end)` as a new record (metadata kept).
+    pub fn slice(&self, start: usize, end: usize) -> FlightRecord {
+        let end = end.min(self.len());
+        let start = start.min(end);
+        FlightRecord {
+            time_s: self.time_s[start..end].to_vec(),
+            columns: self
+                .columns
+                .iter()
+                .map(|(n, v)| (n.clone(), v[start..end].to_vec()))
+                .collect(),
+            metadata: self.metadata.clone(),
+        }
+    }
+
+    /// Checks the hard rules (equal lengths, finite values, strictly increasing time, not empty)
+    /// and returns the soft findings (unit sanity, irregular sampling) as warnings.
+    pub fn validate(&self) -> Result<Vec<Warning>, DataError> {
+        let file = IN_MEMORY.to_string();
+        if self.time_s.is_empty() {
+            return Err(DataError::NoRows { file, line: 1 });
+        }
+        for (name, values) in &self.columns {
+            if values.len() != self.time_s.len() {
+                return Err(DataError::LengthMismatch {
+                    file,
+                    column: name.clone(),
+                    expected: self.time_s.len(),
+                    found: values.len(),
+                });
+            }
+        }
+        // In-memory rows are numbered like a file with one header line: sample i is line i + 2.
+        let columns = std::iter::once(("time_s", self.time_s.as_slice()))
+            .chain(self.columns.iter().map(|(n, v)| (n.as_str(), v.as_slice())));
+        for (name, values) in columns {
+            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                return Err(DataError::NonFinite {
+                    file,
+                    line: i + 2,
+                    column: name.to_string(),
+                    cell: values[i].to_string(),
+                });
+            }
+        }
+        check_time_increasing(&self.time_s, &file, |i| i + 2)?;
+        Ok(self.warnings())
+    }
+
+    /// Soft findings only: unit sanity and sampling regularity (see [`unit_warnings`]).
+    pub fn warnings(&self) -> Vec<Warning> {
+        let mut w = unit_warnings(self);
+        if let Some(s) = sampling_warning(&self.time_s) {
+            w.push(s);
+        }
+        w
+    }
+}
+
+/// Differences between consecutive times.
+fn time_steps(time_s: &[f64]) -> Vec<f64> {
+    time_s.windows(2).map(|w| w[1] - w[0]).collect()
+}
+
+/// Median of a non-empty slice (reorders it).
+pub(crate) fn median_in_place(v: &mut [f64]) -> f64 {
+    let n = v.len();
+    let mid = n / 2;
+    let (_, m, _) = v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    let m = *m;
+    if n % 2 == 1 {
+        m
+    } else {
+        let lower = v[..mid].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        0.5 * (lower + m)
+    }
+}
+
+/// Fails on the first time sample that does not exceed its predecessor.
+pub(crate) fn check_time_increasing(
+    time_s: &[f64],
+    file: &str,
+    line_of: impl Fn(usize) -> usize,
+) -> Result<(), DataError> {
+    for i in 1..time_s.len() {
+        if time_s[i] <= time_s[i - 1] {
+            return Err(DataError::TimeNotIncreasing {
+                file: file.to_string(),
+                line: line_of(i),
+                time_s: time_s[i],
+                previous_s: time_s[i - 1],
+                previous_line: line_of(i - 1),
+                relation: if time_s[i] == time_s[i - 1] {
+                    "repeats"
+                } else {
+                    "goes back from"
+                },
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Largest |value| and its index.
+fn max_abs(values: &[f64]) -> Option<(usize, f64)> {
+    values
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (i, v.abs()))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// Unit-sanity heuristics, each with its evidence:
+/// - a `_rad` angle (except `psi_rad`, which may be unwrapped) beyond ±π rad (180°) is implausible in
+///   radians and typical of degrees; `psi_rad` is flagged only when it stays within 0..360 and exceeds 2π;
+/// - a `_rad_s` rate beyond 10 rad/s (573 °/s) is implausible for an aircraft and typical of deg/s;
+/// - a median specific-force magnitude of 0.5..2 means g (in m/s² it is ≈ 9.81 in 1-g flight);
+/// - `throttle` outside −0.05..1.05 is not a 0..1 fraction (percent?).
+pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
+    let mut out = Vec::new();
+    for (name, values) in &rec.columns {
+        let Some((i, m)) = max_abs(values) else {
+            continue;
+        };
+        if name.ends_with("_rad") {
+            let suspicious = if name == "psi_rad" {
+                let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+                m > 2.0 * std::f64::consts::PI * 1.01 && min >= -360.0 && m <= 360.0
+            } else {
+                m > std::f64::consts::PI
+            };
+            if suspicious {
+                out.push(Warning {
+                    kind: WarningKind::LooksLikeDegrees,
+                    column: Some(name.clone()),
+                    message: format!(
+                        "values look like degrees: |value| reaches {m:.4} at sample {} (t = {} s), \
+                         which would be {:.0}° if it were radians",
+                        i + 1,
+                        rec.time_s.get(i).copied().unwrap_or(f64::NAN),
+                        m.to_degrees()
+                    ),
+                });
+            }
+        } else if name.ends_with("_rad_s") && m > 10.0 {
+            out.push(Warning {
+                kind: WarningKind::LooksLikeDegreesPerSecond,
+                column: Some(name.clone()),
+                message: format!(
+                    "values look like deg/s: |value| reaches {m:.4} at sample {} (t = {} s), \
+                     which would be {:.0} °/s if it were rad/s",
+                    i + 1,
+                    rec.time_s.get(i).copied().unwrap_or(f64::NAN),
+                    m.to_degrees()
+                ),
+            });
+        } else if name == "throttle" {
+            let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if min < -0.05 || max > 1.05 {
+                out.push(Warning {
+                    kind: WarningKind::ThrottleOutOfRange,
+                    column: Some(name.clone()),
+                    message: format!(
+                        "throttle spans {min}..{max}, expected a fraction 0..1 (percent?)"
+                    ),
+                });
+            }
+        }
+    }
+    if let Some(w) = accel_g_warning(rec) {
+        out.push(w);
+    }
+    out
+}
+
+/// Flags accelerations recorded in g: the median specific-force magnitude is 0.5..2.
+fn accel_g_warning(rec: &FlightRecord) -> Option<Warning> {
+    let axes: Vec<(&str, &[f64])> = ["ax_m_s2", "ay_m_s2", "az_m_s2"]
+        .iter()
+        .filter_map(|n| rec.column(n).map(|v| (*n, v)))
+        .collect();
+    if axes.is_empty() || rec.is_empty() {
+        return None;
+    }
+    let mut mags: Vec<f64> = (0..rec.len())
+        .map(|i| axes.iter().map(|(_, v)| v[i] * v[i]).sum::<f64>().sqrt())
+        .collect();
+    let med = median_in_place(&mut mags);
+    // Only meaningful when the vertical axis is there: ax/ay alone are near zero in either unit.
+    if axes.iter().any(|(n, _)| *n == "az_m_s2") && (0.5..2.0).contains(&med) {
+        let names: Vec<&str> = axes.iter().map(|(n, _)| *n).collect();
+        return Some(Warning {
+            kind: WarningKind::LooksLikeG,
+            column: Some(names.join("/")),
+            message: format!(
+                "accelerations look like g: median specific-force magnitude is {med:.3}, \
+                 but 1-g flight gives ≈ {G0_M_S2} m/s²; multiply by {G0_M_S2} if they are in g"
+            ),
+        });
+    }
+    None
+}
+
+/// Flags non-uniform sampling: steps deviating more than 10 % from the median step.
+pub fn sampling_warning(time_s: &[f64]) -> Option<Warning> {
+    let steps = time_steps(time_s);
+    if steps.len() < 2 {
+        return None;
+    }
+    let mut sorted = steps.clone();
+    let median = median_in_place(&mut sorted);
+    let off: Vec<usize> = steps
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| ((*s - median) / median).abs() > 0.1)
+        .map(|(i, _)| i)
+        .collect();
+    if off.is_empty() {
+        return None;
+    }
+    let min = steps.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = steps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Some(Warning {
+        kind: WarningKind::IrregularSampling,
+        column: Some("time_s".into()),
+        message: format!(
+            "irregular sampling: {} of {} steps differ from the median step {median} s by more than 10 % \
+             (steps range {min} .. {max} s; first at t = {} s); resample onto a uniform grid \
+             (--resample-hz) before identification",
+            off.len(),
+            steps.len(),
+            time_s[off[0]]
+        ),
+    })
+}

@@ -1,0 +1,238 @@
+//! Specification of the flight-data CSV reader/writer (DESIGN.md §4, issue 6 item 1).
+
+use flightid::data::{
+    parse_csv_bytes, read_csv, resample_uniform, write_csv_atomic, DataError, FlightRecord,
+    WarningKind, SCHEMA_COLUMNS,
+};
+
+fn parse(text: &str) -> Result<FlightRecord, DataError> {
+    parse_csv_bytes(text.as_bytes(), "test.csv")
+}
+
+/// A 100 Hz record with every schema column holding a distinct smooth signal.
+fn synthetic_record(n: usize) -> FlightRecord {
+    let time_s: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    let mut rec = FlightRecord::new(time_s.clone());
+    for (k, name) in SCHEMA_COLUMNS.iter().enumerate().skip(1) {
+        let values = time_s
+            .iter()
+            .map(|t| 0.1 * (k as f64 * 0.37 * t).sin() + 1e-3 * k as f64 / 3.0)
+            .collect();
+        rec.push_column(name, values);
+    }
+    rec.metadata.push(" aircraft: c172x".into());
+    rec
+}
+
+#[test]
+fn write_then_read_gives_bit_identical_values_metadata_and_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flight.csv");
+    let mut rec = synthetic_record(500);
+    rec.push_column(
+        "custom_sensor",
+        (0..500).map(|i| (i as f64).sqrt() / 7.0).collect(),
+    );
+    write_csv_atomic(&path, &rec).unwrap();
+    let back = read_csv(&path).unwrap();
+    // Shortest round-trip float formatting: exact equality, not a tolerance.
+    assert_eq!(back, rec);
+    assert_eq!(back.columns.last().unwrap().0, "custom_sensor");
+    // No temporary file is left behind.
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(leftovers.len(), 1);
+}
+
+#[test]
+fn column_lookup_require_and_median_step() {
+    let rec = parse("#note\ntime_s,q_rad_s\n0,1\n0.01,2\n0.02,3\n0.05,4\n").unwrap();
+    assert_eq!(rec.metadata, vec!["note".to_string()]);
+    assert_eq!(rec.len(), 4);
+    assert_eq!(rec.column("q_rad_s"), Some(&[1.0, 2.0, 3.0, 4.0][..]));
+    // Steps 0.01, 0.01, 0.03: the median ignores the dropout.
+    assert!((rec.dt_s().unwrap() - 0.01).abs() < 1e-12);
+    let err = rec
+        .require("alpha_rad", "to fit CL_alpha")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("alpha_rad") && err.contains("CL_alpha") && err.contains("q_rad_s"),
+        "{err}"
+    );
+}
+
+#[test]
+fn time_column_may_be_anywhere_and_whitespace_and_crlf_are_tolerated() {
+    let rec = parse("q_rad_s, time_s\r\n 1.5 ,0\r\n2.5, 0.1\r\n\r\n").unwrap();
+    assert_eq!(rec.time_s, vec![0.0, 0.1]);
+    assert_eq!(rec.column("q_rad_s"), Some(&[1.5, 2.5][..]));
+}
+
+#[test]
+fn empty_file_is_refused() {
+    assert!(matches!(parse(""), Err(DataError::Empty { .. })));
+    assert!(matches!(
+        parse("# only metadata\n\n"),
+        Err(DataError::Empty { .. })
+    ));
+    assert!(matches!(
+        parse("time_s,q_rad_s\n"),
+        Err(DataError::NoRows { line: 1, .. })
+    ));
+}
+
+#[test]
+fn missing_time_column_is_named() {
+    let err = parse("t,q_rad_s\n0,1\n").unwrap_err();
+    assert!(
+        matches!(err, DataError::MissingTime { line: 1, .. }),
+        "{err}"
+    );
+    assert!(err.to_string().contains("time_s"));
+}
+
+#[test]
+fn duplicated_time_reports_the_line_of_the_repeat() {
+    // Line 1 metadata, line 2 header, rows on lines 3, 4, 5.
+    let err = parse("# m\ntime_s,q_rad_s\n0,1\n0.1,2\n0.1,3\n").unwrap_err();
+    match err {
+        DataError::TimeNotIncreasing {
+            line,
+            previous_line,
+            relation,
+            ..
+        } => {
+            assert_eq!((line, previous_line, relation), (5, 4, "repeats"));
+        }
+        e => panic!("wrong error {e}"),
+    }
+    let err = parse("time_s,q\n0,1\n0.2,2\n0.1,3\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("test.csv:4") && err.contains("goes back"),
+        "{err}"
+    );
+}
+
+#[test]
+fn nan_inf_and_non_numeric_cells_name_file_line_and_column() {
+    let err = parse("time_s,q_rad_s\n0,1\n0.1,NaN\n").unwrap_err();
+    assert!(
+        matches!(&err, DataError::NonFinite { line: 3, column, .. } if column == "q_rad_s"),
+        "{err}"
+    );
+    let err = parse("time_s,q_rad_s\n0,inf\n").unwrap_err();
+    assert!(matches!(err, DataError::NonFinite { line: 2, .. }));
+    let err = parse("time_s,q_rad_s\n0,1\n0.1,1.2.3\n").unwrap_err();
+    assert!(
+        matches!(&err, DataError::NonNumeric { line: 3, column, cell, .. } if column == "q_rad_s" && cell == "1.2.3"),
+        "{err}"
+    );
+    let msg = err.to_string();
+    assert!(msg.starts_with("test.csv:3: column `q_rad_s`"), "{msg}");
+    let err = parse("time_s,q_rad_s\n0,\n").unwrap_err();
+    assert!(matches!(err, DataError::NonNumeric { line: 2, .. }));
+}
+
+#[test]
+fn ragged_rows_report_expected_and_found_field_counts() {
+    let err = parse("time_s,a,b\n0,1,2\n0.1,1\n").unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DataError::Ragged {
+                line: 3,
+                expected: 3,
+                found: 2,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let err = parse("time_s,a\n0,1,2\n").unwrap_err();
+    assert!(matches!(
+        err,
+        DataError::Ragged {
+            line: 2,
+            expected: 2,
+            found: 3,
+            ..
+        }
+    ));
+}
+
+#[test]
+fn duplicate_and_empty_column_names_are_refused() {
+    assert!(matches!(
+        parse("time_s,a,a\n0,1,2\n"),
+        Err(DataError::DuplicateColumn { .. })
+    ));
+    assert!(matches!(
+        parse("time_s,a,\n0,1,2\n"),
+        Err(DataError::Parse { .. })
+    ));
+}
+
+#[test]
+fn degrees_in_a_rad_column_are_flagged_with_evidence() {
+    // theta in degrees: 5° trim with a ±10° doublet; in radians it would be 860°.
+    let time_s: Vec<f64> = (0..200).map(|i| i as f64 * 0.02).collect();
+    let mut rec = FlightRecord::new(time_s.clone());
+    rec.push_column(
+        "theta_rad",
+        time_s
+            .iter()
+            .map(|t| 5.0 + 10.0 * (t * 2.0).sin())
+            .collect(),
+    );
+    rec.push_column("q_rad_s", time_s.iter().map(|t| 0.1 * t.cos()).collect());
+    let warnings = rec.validate().unwrap();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_eq!(warnings[0].kind, WarningKind::LooksLikeDegrees);
+    assert_eq!(warnings[0].column.as_deref(), Some("theta_rad"));
+    assert!(
+        warnings[0].message.contains("reaches 14.99"),
+        "evidence names the peak: {}",
+        warnings[0]
+    );
+}
+
+#[test]
+fn accelerations_in_g_are_flagged_and_m_s2_are_not() {
+    let time_s: Vec<f64> = (0..100).map(|i| i as f64 * 0.01).collect();
+    let mut rec = FlightRecord::new(time_s.clone());
+    rec.push_column("ax_m_s2", vec![0.05; 100]);
+    rec.push_column(
+        "az_m_s2",
+        time_s.iter().map(|t| -1.0 + 0.1 * t.sin()).collect(),
+    );
+    let w = rec.validate().unwrap();
+    assert!(w.iter().any(|w| w.kind == WarningKind::LooksLikeG), "{w:?}");
+    rec.push_column("ax_m_s2", vec![0.5; 100]);
+    rec.push_column("az_m_s2", vec![-9.81; 100]);
+    assert!(rec.validate().unwrap().is_empty());
+}
+
+#[test]
+fn irregular_sampling_is_detected_and_resampled_linearly() {
+    // 50 Hz with jittered times; a ramp survives linear interpolation exactly.
+    let time_s: Vec<f64> = (0..101)
+        .map(|i| i as f64 * 0.02 + if i % 7 == 3 { 0.008 } else { 0.0 })
+        .collect();
+    let mut rec = FlightRecord::new(time_s.clone());
+    rec.push_column("q_rad_s", time_s.iter().map(|t| 0.3 * t - 0.1).collect());
+    let w = rec.validate().unwrap();
+    assert!(
+        w.iter().any(|w| w.kind == WarningKind::IrregularSampling),
+        "{w:?}"
+    );
+    let u = resample_uniform(&rec, 50.0).unwrap();
+    assert_eq!(u.len(), 101, "0..2 s at 50 Hz");
+    assert!(u.validate().unwrap().is_empty());
+    for (t, q) in u.time_s.iter().zip(u.column("q_rad_s").unwrap()) {
+        assert!((q - (0.3 * t - 0.1)).abs() < 1e-12);
+    }
+    assert!(u.metadata.last().unwrap().contains("linear interpolation"));
+    assert!(resample_uniform(&rec, 0.0).is_err());
+}
