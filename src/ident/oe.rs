@@ -1,0 +1,219 @@
+//! `oe` — output error: Levenberg–Marquardt on the simulated output of the continuous model,
+//! with Cramér–Rao standard errors corrected for coloured residuals.
+//!
+//! Cost (Morelli & Klein 2016, *Aircraft System Identification*, 2nd ed., ch. 6):
+//! `J(θ) = ½ Σ_k (y(k) − ŷ(k; θ))²`, `ŷ = B(s)/A(s) · e^{−τs} u` simulated exactly for a ZOH
+//! input, `θ = [b_0 … b_m, a_1 … a_n, (τ)]`.
+//!
+//! Sensitivities by filtering (Ljung 1999 §10.3): with `ξ = e^{−τs}u / A(s)²`,
+//! - `∂ŷ/∂b_j = s^j A(s) ξ`,
+//! - `∂ŷ/∂a_i = −s^{n−i} B(s) ξ`,
+//! all linear combinations of the 2n states of one SVF run for `1/A²`; `∂ŷ/∂τ` by a central
+//! difference. Levenberg–Marquardt step `(H + μ diag H) δ = Sᵀr` with `H = SᵀS`
+//! (Marquardt 1963).
+//!
+//! Standard errors: the Cramér–Rao bound `Cov = σ² (SᵀS)⁻¹` assumes white residuals. Residuals of
+//! real models are coloured, which makes that bound optimistic; the correction of Morelli &
+//! Klein (NASA CR-194893, 1994; book §6.6) uses the residual autocorrelation `R_vv`:
+//! `Cov = M⁻¹ [Σ_i Σ_j s_i R_vv(i−j) s_jᵀ] M⁻¹`, `M = SᵀS`. The double sum is truncated at
+//! |i − j| ≤ N/10 lags, where the sample autocorrelation is still a usable estimate.
+
+use super::filter::{combine, simulate, Hold, Svf};
+use super::linalg::{inverse, matmul, poly_mul, solve_square};
+use super::{ContinuousModel, IdentError};
+
+const MAX_ITER: usize = 100;
+
+/// Simulated output for parameters `theta` = [num (m+1), a_1..a_n].
+fn sim(theta: &[f64], m: usize, u: &[f64], dt_s: f64, delay_s: f64) -> Vec<f64> {
+    let num = &theta[..=m];
+    let mut den = vec![1.0];
+    den.extend_from_slice(&theta[m + 1..]);
+    simulate(num, &den, u, dt_s, delay_s)
+}
+
+fn sse(y: &[f64], y_hat: &[f64]) -> f64 {
+    y.iter().zip(y_hat).map(|(a, b)| (a - b) * (a - b)).sum()
+}
+
+/// Sensitivity matrix (N × p, row-major) at `theta`; a last column for τ when `with_delay`.
+fn sensitivities(
+    theta: &[f64],
+    m: usize,
+    u: &[f64],
+    dt_s: f64,
+    delay_s: f64,
+    with_delay: bool,
+) -> Vec<f64> {
+    let num = &theta[..=m];
+    let mut den = vec![1.0];
+    den.extend_from_slice(&theta[m + 1..]);
+    let n = den.len() - 1;
+    let a2 = poly_mul(&den, &den);
+    let svf = Svf::new(&a2, dt_s, Hold::Zoh { delay_s });
+    let xi = svf.run(u);
+    let len = u.len();
+    let p = m + 1 + n + usize::from(with_delay);
+    let mut s = vec![0.0; len * p];
+    // ∂ŷ/∂b (num index c ↔ s^{m−c}): s^{m−c} A ξ
+    for c in 0..=m {
+        let mut poly = den.clone();
+        poly.extend(std::iter::repeat_n(0.0, m - c));
+        let col = combine(&xi, 2 * n, &poly, len);
+        for k in 0..len {
+            s[k * p + c] = col[k];
+        }
+    }
+    // ∂ŷ/∂a_i = −s^{n−i} B ξ
+    for i in 1..=n {
+        let mut poly: Vec<f64> = num.iter().map(|b| -b).collect();
+        poly.extend(std::iter::repeat_n(0.0, n - i));
+        let col = combine(&xi, 2 * n, &poly, len);
+        for k in 0..len {
+            s[k * p + m + i] = col[k];
+        }
+    }
+    if with_delay {
+        let h = 0.1 * dt_s;
+        let (lo, hi) = if delay_s > h {
+            (delay_s - h, delay_s + h)
+        } else {
+            (delay_s, delay_s + h)
+        };
+        let y_lo = sim(theta, m, u, dt_s, lo);
+        let y_hi = sim(theta, m, u, dt_s, hi);
+        for k in 0..len {
+            s[k * p + p - 1] = (y_hi[k] - y_lo[k]) / (hi - lo);
+        }
+    }
+    s
+}
+
+/// `SᵀS` and `Sᵀr`.
+fn normal(s: &[f64], r: &[f64], p: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut h = vec![0.0; p * p];
+    let mut g = vec![0.0; p];
+    for (k, rk) in r.iter().enumerate() {
+        let row = &s[k * p..(k + 1) * p];
+        for a in 0..p {
+            g[a] += row[a] * rk;
+            for b in a..p {
+                h[a * p + b] += row[a] * row[b];
+            }
+        }
+    }
+    for a in 0..p {
+        for b in 0..a {
+            h[a * p + b] = h[b * p + a];
+        }
+    }
+    (h, g)
+}
+
+/// Output-error estimate from `start` (usually SRIVC); `with_delay` adds τ as a parameter.
+pub(crate) fn oe(
+    u: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    start: ContinuousModel,
+    with_delay: bool,
+) -> Result<ContinuousModel, IdentError> {
+    let m = start.num.len() - 1;
+    let n = start.den.len() - 1;
+    let mut theta: Vec<f64> = start.num.clone();
+    theta.extend_from_slice(&start.den[1..]);
+    let mut delay_s = start.delay_s;
+    let np = m + 1 + n;
+    let p = np + usize::from(with_delay);
+    let mut cost = sse(y, &sim(&theta, m, u, dt_s, delay_s));
+    if !cost.is_finite() {
+        return Err(IdentError::Failed {
+            method: "oe".into(),
+            reason: "the starting model's simulation overflows".into(),
+        });
+    }
+    let mut mu = 1e-3;
+    for _ in 0..MAX_ITER {
+        let s = sensitivities(&theta, m, u, dt_s, delay_s, with_delay);
+        let y_hat = sim(&theta, m, u, dt_s, delay_s);
+        let r: Vec<f64> = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
+        let (h, g) = normal(&s, &r, p);
+        let mut accepted = false;
+        let mut last_gain = 0.0;
+        for _ in 0..12 {
+            let mut hm = h.clone();
+            for a in 0..p {
+                hm[a * p + a] += mu * h[a * p + a].max(1e-300);
+            }
+            let Some(delta) = solve_square(&hm, &g) else {
+                mu *= 10.0;
+                continue;
+            };
+            let trial: Vec<f64> = theta.iter().zip(&delta).map(|(t, d)| t + d).collect();
+            let trial_delay = if with_delay {
+                (delay_s + delta[np]).max(0.0)
+            } else {
+                delay_s
+            };
+            let c = sse(y, &sim(&trial[..np], m, u, dt_s, trial_delay));
+            if c.is_finite() && c < cost {
+                last_gain = (cost - c) / cost;
+                theta = trial[..np].to_vec();
+                delay_s = trial_delay;
+                cost = c;
+                mu = (mu / 10.0).max(1e-12);
+                accepted = true;
+                break;
+            }
+            mu *= 10.0;
+        }
+        if !accepted || last_gain < 1e-12 {
+            break;
+        }
+    }
+    // covariance at the optimum
+    let s = sensitivities(&theta, m, u, dt_s, delay_s, with_delay);
+    let y_hat = sim(&theta, m, u, dt_s, delay_s);
+    let r: Vec<f64> = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
+    let (mmat, _) = normal(&s, &r, p);
+    let cov = inverse(&mmat, p).map(|minv| coloured_covariance(&s, &r, &minv, p));
+    let mut den = vec![1.0];
+    den.extend_from_slice(&theta[m + 1..]);
+    Ok(ContinuousModel {
+        num: theta[..=m].to_vec(),
+        den,
+        delay_s,
+        cov,
+    })
+}
+
+/// `M⁻¹ [Σ_i Σ_j s_i R(i−j) s_jᵀ] M⁻¹` (Morelli & Klein 1994), lags truncated at N/10.
+fn coloured_covariance(s: &[f64], r: &[f64], minv: &[f64], p: usize) -> Vec<f64> {
+    let len = r.len();
+    let max_lag = (len / 10).max(1).min(len - 1);
+    let acf: Vec<f64> = (0..=max_lag)
+        .map(|l| (l..len).map(|k| r[k] * r[k - l]).sum::<f64>() / len as f64)
+        .collect();
+    // W = Σ_i s_i w_iᵀ with w_i = Σ_j R(|i−j|) s_j
+    let mut w = vec![0.0; p * p];
+    let mut wi = vec![0.0; p];
+    for i in 0..len {
+        wi.iter_mut().for_each(|v| *v = 0.0);
+        let lo = i.saturating_sub(max_lag);
+        let hi = (i + max_lag).min(len - 1);
+        for j in lo..=hi {
+            let rr = acf[i.abs_diff(j)];
+            let row = &s[j * p..(j + 1) * p];
+            for c in 0..p {
+                wi[c] += rr * row[c];
+            }
+        }
+        let si = &s[i * p..(i + 1) * p];
+        for a in 0..p {
+            for b in 0..p {
+                w[a * p + b] += si[a] * wi[b];
+            }
+        }
+    }
+    matmul(&matmul(minv, &w, p), minv, p)
+}

@@ -1,0 +1,179 @@
+//! `srivc` — simplified refined instrumental variable for continuous-time models
+//! (Young & Jakeman 1980, "Refined instrumental variable methods of recursive time-series
+//! analysis, Part III: extensions", IJC 31(4); the algorithm of Garnier's CONTSID toolbox,
+//! Garnier, Gilson & Huselstein 2003, IFAC SYSID).
+//!
+//! Model: `A(s) y(t) = B(s) u(t − τ) + A(s) e(t)`, A monic of degree n, B of degree m.
+//! Each iteration j, with the previous estimate (Â, B̂):
+//! 1. prefilter every signal with the SVF bank `s^i / Â(s)` (i = 0..n) — the optimal prefilter
+//!    for white output noise;
+//! 2. auxiliary-model output `x̂ = B̂/Â · u` (the instrument source);
+//! 3. solve the IV normal equations `Σ ζ̂_f φ_fᵀ θ = Σ ζ̂_f y_f^{(n)}` with
+//!    `φ_f = [−y_f^{(n−1)} … −y_f, u_f^{(m)} … u_f]` and `ζ̂_f` the same with `x̂_f` for `y_f`.
+//! Unstable Â are reflected into the left half plane before filtering (as CONTSID does);
+//! this changes only the efficiency, not the consistency, of the estimate.
+//!
+//! Initialisation: the plain SVF least-squares estimate (instruments = regressors) with the
+//! fixed prefilter `(s + λ)^n`, tried for several λ; the run with the best simulation fit wins.
+
+use super::filter::{Hold, Svf};
+use super::linalg::{poly_from_roots, solve_square, stabilize_continuous};
+use super::{nrmse_fit, ContinuousModel, IdentError};
+use num_complex::Complex64;
+
+/// Maximum SRIVC iterations (CONTSID's default is 10–20; convergence is usually reached in 5).
+const MAX_ITER: usize = 30;
+
+/// One IV step with prefilter `den_f`; `aux_num` = None means plain LS (instruments = regressors).
+fn iv_step(
+    u: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    delay_s: f64,
+    m: usize,
+    den_f: &[f64],
+    aux_num: Option<&[f64]>,
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let n = den_f.len() - 1;
+    let len = y.len();
+    let svf_u = Svf::new(den_f, dt_s, Hold::Zoh { delay_s });
+    let svf_y = Svf::new(den_f, dt_s, Hold::Foh);
+    let xu = svf_u.run(u);
+    let xy = svf_y.run(y);
+    let xx = aux_num.map(|b| {
+        let xhat = super::filter::combine(&xu, n, b, len);
+        let s = svf_y.run(&xhat);
+        (xhat, s)
+    });
+    let p = n + m + 1;
+    let mut zphi = vec![0.0; p * p];
+    let mut zy = vec![0.0; p];
+    let mut phi = vec![0.0; p];
+    let mut zeta = vec![0.0; p];
+    for k in 0..len {
+        for i in 0..n {
+            phi[i] = -xy[k * n + n - 1 - i];
+        }
+        for j in 0..=m {
+            phi[n + j] = xu[k * n + m - j];
+        }
+        let target = svf_y.top_derivative(&xy, k, y[k]);
+        match &xx {
+            Some((_, sx)) => {
+                for i in 0..n {
+                    zeta[i] = -sx[k * n + n - 1 - i];
+                }
+                zeta[n..].copy_from_slice(&phi[n..]);
+            }
+            None => zeta.copy_from_slice(&phi),
+        }
+        for r in 0..p {
+            let zr = zeta[r];
+            zy[r] += zr * target;
+            for c in 0..p {
+                zphi[r * p + c] += zr * phi[c];
+            }
+        }
+    }
+    let theta = solve_square(&zphi, &zy)?;
+    let mut den = vec![1.0];
+    den.extend_from_slice(&theta[..n]);
+    Some((theta[n..].to_vec(), den))
+}
+
+/// Simulation fit (%) of a candidate model, with the unstable part reflected so a wild
+/// candidate cannot overflow.
+fn candidate_fit(num: &[f64], den: &[f64], u: &[f64], y: &[f64], dt_s: f64, delay_s: f64) -> f64 {
+    let y_sim = super::filter::simulate(num, den, u, dt_s, delay_s);
+    let f = nrmse_fit(y, &y_sim);
+    if f.is_finite() {
+        f
+    } else {
+        f64::NEG_INFINITY
+    }
+}
+
+/// SRIVC iterations from a starting estimate; returns the iterate with the best simulation fit.
+fn iterate(
+    u: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    delay_s: f64,
+    m: usize,
+    start: (Vec<f64>, Vec<f64>),
+) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+    let (mut num, mut den) = start;
+    let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
+    for _ in 0..MAX_ITER {
+        let den_f = stabilize_continuous(&den);
+        let aux_num = num.clone();
+        let (num_new, den_new) = iv_step(u, y, dt_s, delay_s, m, &den_f, Some(&aux_num))?;
+        if num_new.iter().chain(den_new.iter()).any(|v| !v.is_finite()) {
+            break;
+        }
+        let change = den_new
+            .iter()
+            .zip(&den)
+            .chain(num_new.iter().zip(&num))
+            .map(|(a, b)| (a - b).abs() / (1e-6 + b.abs()))
+            .fold(0.0_f64, f64::max);
+        num = num_new;
+        den = den_new;
+        let fit = candidate_fit(&num, &stabilize_if_wild(&den), u, y, dt_s, delay_s);
+        if best.as_ref().is_none_or(|b| fit > b.2) {
+            best = Some((num.clone(), den.clone(), fit));
+        }
+        if change < 1e-9 {
+            break;
+        }
+    }
+    best
+}
+
+/// Reflects only poles fast and unstable enough to overflow a simulation; slow unstable poles
+/// (an aircraft's spiral mode) are physical and kept.
+fn stabilize_if_wild(den: &[f64]) -> Vec<f64> {
+    let r = super::linalg::roots(den);
+    if r.iter().all(|p| p.re < 0.5) {
+        den.to_vec()
+    } else {
+        stabilize_continuous(den)
+    }
+}
+
+/// SRIVC estimate with `m` zeros and `n` poles, for a known input delay.
+pub(crate) fn srivc(
+    u: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    n: usize,
+    m: usize,
+    delay_s: f64,
+) -> Result<ContinuousModel, IdentError> {
+    // λ candidates: a decade-spaced set below the Nyquist frequency
+    let nyquist = std::f64::consts::PI / dt_s;
+    let lambdas: Vec<f64> = [0.5, 2.0, 8.0, 30.0]
+        .into_iter()
+        .filter(|l| *l < 0.2 * nyquist)
+        .collect();
+    let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
+    for lambda in lambdas {
+        let den_f = poly_from_roots(&vec![Complex64::new(-lambda, 0.0); n]);
+        let Some(start) = iv_step(u, y, dt_s, delay_s, m, &den_f, None) else {
+            continue;
+        };
+        if let Some(cand) = iterate(u, y, dt_s, delay_s, m, start) {
+            if best.as_ref().is_none_or(|b| cand.2 > b.2) {
+                best = Some(cand);
+            }
+        }
+    }
+    match best {
+        Some((num, den, _)) => Ok(ContinuousModel::new(num, den, delay_s)),
+        None => Err(IdentError::SingularRegression {
+            method: "srivc".into(),
+            rank: 0,
+            n_params: n + m + 1,
+        }),
+    }
+}
