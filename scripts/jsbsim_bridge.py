@@ -232,6 +232,7 @@ class Sim:
         for k, v in req.get("ic", {}).items():
             fdm[k] = float(v)
         self.set_many(req.get("knobs", {}))
+        fdm.set_dt(self.dt_s)
         if not fdm.run_ic():
             raise BridgeError("trim_failed", "JSBSim rejected the initial conditions (run_ic failed)")
         if self.engine_running:
@@ -267,6 +268,10 @@ class Sim:
             for s in per_radian:
                 fdm[f"flightid/lin/{s}"] = 0.0
                 fdm[f"flightid/override/{s}"] = 0.0
+            # FGLinearization leaves integration suspended (dt = 0): restore it, or later runs stand still.
+            if fdm.integration_suspended():
+                fdm.resume_integration()
+            fdm.set_dt(self.dt_s)
         return {
             "states": list(lin.x_names), "state_units": list(lin.x_units),
             "inputs": list(lin.u_names), "input_units": list(lin.u_units),
@@ -278,6 +283,8 @@ class Sim:
         """Runs n_steps from the current (trimmed) state; returns the recorded properties, step-major."""
         if not self.trimmed:
             raise BridgeError("not_trimmed", "fly needs a successful trim first")
+        if self.fdm["simulation/dt"] <= 0.0:
+            raise BridgeError("sim_held", "JSBSim integration is suspended (dt = 0); refusing to fly a frozen state")
         n_steps = int(req["n_steps"])
         record_every = int(req.get("record_every", 1))
         drives = req["drives"]  # [{"property": name, "offset": k}] k = start of its n_steps values in payload

@@ -95,7 +95,7 @@ pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
         let dy: Vec<f64> = y.iter().map(|x| x - y[0]).collect();
         let lin_tf = &truth[key];
         let lin_modes = crate::lti::modes(&lin_tf.poles());
-        let lin_fit = ident::fit_percent(&dy, &crate::lti::lsim(lin_tf, &du, dt_s));
+        let lin_fit = ident::nrmse_fit(&dy, &crate::lti::lsim(lin_tf, &du, dt_s));
         let mut row = serde_json::Map::new();
         row.insert(
             "jsbsim_linearization".into(),
@@ -123,7 +123,7 @@ pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
                 Ok(r) => {
                     show(
                         &format!("{method:?}").to_lowercase(),
-                        &r.modes,
+                        &crate::lti::modes(&r.poles),
                         r.fit_sim_percent,
                     );
                     row.insert(

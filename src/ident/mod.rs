@@ -233,7 +233,7 @@ impl ContinuousModel {
 }
 
 /// NRMSE fit in percent: 100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖).
-pub(crate) fn nrmse_fit(y: &[f64], y_hat: &[f64]) -> f64 {
+pub fn nrmse_fit(y: &[f64], y_hat: &[f64]) -> f64 {
     let mean = y.iter().sum::<f64>() / y.len() as f64;
     let num: f64 = y.iter().zip(y_hat).map(|(a, b)| (a - b) * (a - b)).sum();
     let den: f64 = y.iter().map(|a| (a - mean) * (a - mean)).sum();

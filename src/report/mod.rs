@@ -14,7 +14,10 @@ pub enum ReportError {
     Plot { title: String, detail: String },
     /// File system.
     #[error("cannot write {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 }
 
 /// One curve of a plot.
@@ -33,7 +36,12 @@ pub struct Series {
 impl Series {
     /// A solid curve.
     pub fn new(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
-        Series { label: label.into(), x, y, reference: false }
+        Series {
+            label: label.into(),
+            x,
+            y,
+            reference: false,
+        }
     }
 }
 
@@ -62,17 +70,34 @@ const PALETTE: [RGBColor; 6] = [
 ];
 
 fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
-    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        });
     (lo <= hi).then_some((lo, hi))
 }
 
 /// Renders a line plot to SVG text (800 × 420 px).
 pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
-    let err = |e: String| ReportError::Plot { title: plot.title.clone(), detail: e };
-    let (x0, x1) = finite_range(plot.series.iter().flat_map(|s| s.x.iter().copied()).filter(|x| !plot.log_x || *x > 0.0))
-        .ok_or_else(|| err("no finite x values".into()))?;
-    let (mut y0, mut y1) = finite_range(plot.series.iter().flat_map(|s| s.y.iter().copied())).ok_or_else(|| err("no finite y values".into()))?;
-    let pad = if y1 > y0 { 0.06 * (y1 - y0) } else { y0.abs().max(1e-9) * 0.1 };
+    let err = |e: String| ReportError::Plot {
+        title: plot.title.clone(),
+        detail: e,
+    };
+    let (x0, x1) = finite_range(
+        plot.series
+            .iter()
+            .flat_map(|s| s.x.iter().copied())
+            .filter(|x| !plot.log_x || *x > 0.0),
+    )
+    .ok_or_else(|| err("no finite x values".into()))?;
+    let (mut y0, mut y1) = finite_range(plot.series.iter().flat_map(|s| s.y.iter().copied()))
+        .ok_or_else(|| err("no finite y values".into()))?;
+    let pad = if y1 > y0 {
+        0.06 * (y1 - y0)
+    } else {
+        y0.abs().max(1e-9) * 0.1
+    };
     y0 -= pad;
     y1 += pad;
     let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
@@ -81,7 +106,11 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
         let root = SVGBackend::with_string(&mut svg, (800, 420)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
         let mut builder = ChartBuilder::on(&root);
-        builder.caption(&plot.title, ("sans-serif", 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
+        builder
+            .caption(&plot.title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70);
         macro_rules! draw {
             ($chart:expr) => {{
                 let mut chart = $chart;
@@ -94,19 +123,26 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
                     .map_err(|e| err(e.to_string()))?;
                 for (i, s) in plot.series.iter().enumerate() {
                     let color = PALETTE[i % PALETTE.len()];
-                    let style = if s.reference { color.mix(0.6).stroke_width(1) } else { color.stroke_width(2) };
-                    let points: Vec<(f64, f64)> = s
-                        .x
-                        .iter()
-                        .zip(&s.y)
-                        .filter(|(x, y)| x.is_finite() && y.is_finite() && (!plot.log_x || **x > 0.0))
-                        .map(|(x, y)| (*x, *y))
-                        .collect();
+                    let style = if s.reference {
+                        color.mix(0.6).stroke_width(1)
+                    } else {
+                        color.stroke_width(2)
+                    };
+                    let points: Vec<(f64, f64)> =
+                        s.x.iter()
+                            .zip(&s.y)
+                            .filter(|(x, y)| {
+                                x.is_finite() && y.is_finite() && (!plot.log_x || **x > 0.0)
+                            })
+                            .map(|(x, y)| (*x, *y))
+                            .collect();
                     chart
                         .draw_series(LineSeries::new(points, style))
                         .map_err(|e| err(e.to_string()))?
                         .label(s.label.as_str())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                        });
                 }
                 chart
                     .configure_series_labels()
@@ -119,9 +155,13 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
             }};
         }
         if plot.log_x {
-            draw!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1).map_err(|e| err(e.to_string()))?);
+            draw!(builder
+                .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+                .map_err(|e| err(e.to_string()))?);
         } else {
-            draw!(builder.build_cartesian_2d(x0..x1, y0..y1).map_err(|e| err(e.to_string()))?);
+            draw!(builder
+                .build_cartesian_2d(x0..x1, y0..y1)
+                .map_err(|e| err(e.to_string()))?);
         }
         root.present().map_err(|e| err(e.to_string()))?;
     }
@@ -163,9 +203,18 @@ pub struct Report {
 
 /// Writes `bytes` to `path` through a temporary file and a rename: readers never see a partial file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
-    let io = |source| ReportError::Io { path: path.to_path_buf(), source };
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let io = |source| ReportError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
     let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
     let result = (|| -> std::io::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;
@@ -181,11 +230,18 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
 }
 
 fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 fn markdown_table(t: &Table) -> String {
-    let mut s = format!("**{}**\n\n| {} |\n|{}\n", t.caption, t.header.join(" | "), "---|".repeat(t.header.len()));
+    let mut s = format!(
+        "**{}**\n\n| {} |\n|{}\n",
+        t.caption,
+        t.header.join(" | "),
+        "---|".repeat(t.header.len())
+    );
     for r in &t.rows {
         s.push_str(&format!("| {} |\n", r.join(" | ")));
     }
@@ -212,8 +268,15 @@ fn html_table(t: &Table) -> String {
 
 /// Writes `dir/index.html` (self-contained), `dir/report.md`, one `dir/NAME.svg` per plot and `dir/report.json`.
 /// Returns the path of `index.html`.
-pub fn write_report(dir: &Path, report: &Report, json: &serde_json::Value) -> Result<PathBuf, ReportError> {
-    std::fs::create_dir_all(dir).map_err(|source| ReportError::Io { path: dir.to_path_buf(), source })?;
+pub fn write_report(
+    dir: &Path,
+    report: &Report,
+    json: &serde_json::Value,
+) -> Result<PathBuf, ReportError> {
+    std::fs::create_dir_all(dir).map_err(|source| ReportError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     // Render every plot first: a drawing failure leaves nothing behind.
     let mut rendered = Vec::new();
     for section in &report.sections {
@@ -270,7 +333,11 @@ mod tests {
             y_label: "theta, deg".into(),
             series: vec![
                 Series::new("nonlinear", t.clone(), t.iter().map(|x| x.sin()).collect()),
-                Series::new("linear", t.clone(), t.iter().map(|x| 0.9 * x.sin()).collect()),
+                Series::new(
+                    "linear",
+                    t.clone(),
+                    t.iter().map(|x| 0.9 * x.sin()).collect(),
+                ),
             ],
             log_x: false,
         };
@@ -280,23 +347,46 @@ mod tests {
             sections: vec![Section {
                 heading: "overlay".into(),
                 paragraphs: vec!["a < b".into()],
-                tables: vec![Table { caption: "fit".into(), header: vec!["model".into(), "fit %".into()], rows: vec![vec!["ls".into(), "99.1".into()]] }],
+                tables: vec![Table {
+                    caption: "fit".into(),
+                    header: vec!["model".into(), "fit %".into()],
+                    rows: vec![vec!["ls".into(), "99.1".into()]],
+                }],
                 plots: vec![("theta".into(), plot)],
             }],
         };
         let index = write_report(dir.path(), &report, &serde_json::json!({"fit": 99.1})).unwrap();
         let html = std::fs::read_to_string(index).unwrap();
         assert!(html.contains("<svg") && html.contains("time, s") && html.contains("theta, deg"));
-        assert!(html.contains("nonlinear") && html.contains("a &lt; b") && html.contains("<td>99.1</td>"));
-        assert!(!html.contains("http://") || html.matches("http://").all(|_| html.contains("xmlns")), "no external links");
+        assert!(
+            html.contains("nonlinear")
+                && html.contains("a &lt; b")
+                && html.contains("<td>99.1</td>")
+        );
+        assert!(
+            !html.contains("http://") || html.matches("http://").all(|_| html.contains("xmlns")),
+            "no external links"
+        );
         assert!(dir.path().join("theta.svg").exists() && dir.path().join("report.md").exists());
     }
 
     #[test]
     fn empty_plot_is_an_error_and_writes_nothing() {
         let dir = tempfile::tempdir().unwrap();
-        let plot = LinePlot { title: "empty".into(), x_label: "x".into(), y_label: "y".into(), series: vec![], log_x: false };
-        let report = Report { title: "t".into(), sections: vec![Section { plots: vec![("e".into(), plot)], ..Default::default() }] };
+        let plot = LinePlot {
+            title: "empty".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            series: vec![],
+            log_x: false,
+        };
+        let report = Report {
+            title: "t".into(),
+            sections: vec![Section {
+                plots: vec![("e".into(), plot)],
+                ..Default::default()
+            }],
+        };
         assert!(write_report(dir.path(), &report, &serde_json::json!({})).is_err());
         assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none());
     }

@@ -287,7 +287,12 @@ impl Simulator for JsbsimSim {
                 // Throttle moves relative to its trim on every engine; values are positions 0..1 (not radians).
                 let offset = payload.len();
                 let base = trim.commands_norm["throttle"];
-                payload.extend(input.deflection_rad.iter().map(|d| (base + d).clamp(0.0, 1.0)));
+                payload.extend(
+                    input
+                        .deflection_rad
+                        .iter()
+                        .map(|d| (base + d).clamp(0.0, 1.0)),
+                );
                 for i in 0..self.config.engines {
                     drives.push(json!({"property": format!("fcs/throttle-cmd-norm[{i}]"), "offset": offset}));
                 }
@@ -334,8 +339,7 @@ impl Simulator for JsbsimSim {
                 (n + 1) * width
             )));
         }
-        let dt_s = 1.0 / self.rate_hz;
-        let mut rec = FlightRecord::new((0..rows).map(|k| k as f64 * dt_s).collect());
+        let mut rec = FlightRecord::new((0..rows).map(|k| k as f64 / self.rate_hz).collect());
         let column = |j: usize, factor: f64| -> Vec<f64> {
             (0..rows)
                 .map(|k| resp.payload[k * width + j] * factor)

@@ -29,7 +29,11 @@ pub struct LinearSim {
 impl LinearSim {
     /// A linear simulator from a linearization (inputs named `elevator`, `aileron`, `rudder` in rad) and its trim.
     pub fn new(lin: Linearization, trim: TrimState) -> Self {
-        LinearSim { lin, trim, trimmed: false }
+        LinearSim {
+            lin,
+            trim,
+            trimmed: false,
+        }
     }
 }
 
@@ -60,21 +64,36 @@ impl Simulator for LinearSim {
         let n_states = self.lin.states.len();
         let mut u = vec![vec![0.0; n + 1]; self.lin.inputs.len()];
         for input in &plan.inputs {
-            let j = self.lin.inputs.iter().position(|i| i == &input.surface).ok_or_else(|| {
-                SimError::Usage(format!("the linear model has no input '{}' (has: {})", input.surface, self.lin.inputs.join(", ")))
-            })?;
+            let j = self
+                .lin
+                .inputs
+                .iter()
+                .position(|i| i == &input.surface)
+                .ok_or_else(|| {
+                    SimError::Usage(format!(
+                        "the linear model has no input '{}' (has: {})",
+                        input.surface,
+                        self.lin.inputs.join(", ")
+                    ))
+                })?;
             u[j][..n].copy_from_slice(&input.deflection_rad);
             u[j][n] = input.deflection_rad.last().copied().unwrap_or(0.0);
         }
-        let identity: Vec<Vec<f64>> = (0..n_states).map(|r| (0..n_states).map(|c| f64::from(u8::from(r == c))).collect()).collect();
+        let identity: Vec<Vec<f64>> = (0..n_states)
+            .map(|r| (0..n_states).map(|c| f64::from(u8::from(r == c))).collect())
+            .collect();
         let zeros = vec![vec![0.0; self.lin.inputs.len()]; n_states];
-        let ss = StateSpace::from_rows(&self.lin.a, &self.lin.b, &identity, &zeros).map_err(|e| SimError::Usage(e.to_string()))?;
+        let ss = StateSpace::from_rows(&self.lin.a, &self.lin.b, &identity, &zeros)
+            .map_err(|e| SimError::Usage(e.to_string()))?;
         let x = lti::lsim_ss(&ss, &u, 1.0 / plan.rate_hz, None);
         let mut rec = FlightRecord::new((0..=n).map(|k| k as f64 / plan.rate_hz).collect());
         for surface in ["elevator", "aileron", "rudder"] {
             let base = self.trim.surfaces_rad.get(surface).copied().unwrap_or(0.0);
             let j = self.lin.inputs.iter().position(|i| i == surface);
-            rec.push_column(&format!("{surface}_rad"), (0..=n).map(|k| base + j.map_or(0.0, |j| u[j][k])).collect());
+            rec.push_column(
+                &format!("{surface}_rad"),
+                (0..=n).map(|k| base + j.map_or(0.0, |j| u[j][k])).collect(),
+            );
         }
         let base = |col: &str| -> f64 {
             match col {
@@ -92,7 +111,10 @@ impl Simulator for LinearSim {
                 rec.push_column(col, x[i].iter().map(|v| base(col) + factor * v).collect());
             }
         }
-        rec.metadata.push(format!("linear model of {} at {} ft, {} kts", self.trim.aircraft, self.trim.point.altitude_ft, self.trim.point.speed_kts));
+        rec.metadata.push(format!(
+            "linear model of {} at {} ft, {} kts",
+            self.trim.aircraft, self.trim.point.altitude_ft, self.trim.point.speed_kts
+        ));
         Ok(rec)
     }
 }
