@@ -11,7 +11,7 @@ mod sim;
 mod ss;
 mod tf;
 
-pub use discretize::{c2d, c2d_tf, d2c, d2c_tf, expm, logm, Discretization};
+pub use discretize::{c2d, c2d_tf, d2c, d2c_tf, expm, log1pm, logm, Discretization};
 pub use modes::{modes, Mode};
 pub use poly::{
     poly_add, poly_from_roots, poly_mul, polyval, polyval_complex, roots, strip_leading,
@@ -59,3 +59,6 @@ pub enum LtiError {
     #[error("{what} did not converge")]
     NoConvergence { what: &'static str },
 }
+
+#[cfg(test)]
+mod tests;
