@@ -17,7 +17,7 @@ pub use poly::{
     poly_add, poly_from_roots, poly_mul, polyval, polyval_complex, roots, strip_leading,
 };
 pub use sim::{lsim, lsim_ss};
-pub use ss::{charpoly, mat_to_rows, ss2tf, tf2ss, StateSpace, StateSpaceRows};
+pub use ss::{charpoly, mat_to_rows, ss2tf, tf2ss, Rows, StateSpace, StateSpaceRows};
 pub use tf::{bode, TransferFunction, LEADING_ZERO_REL_TOL};
 
 /// What can go wrong with a linear model.
