@@ -5,6 +5,7 @@ use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
+use super::poly::{balance, taylor_shift};
 use super::ss::{ss2tf, tf2ss, StateSpace};
 use super::tf::TransferFunction;
 use super::LtiError;
@@ -98,18 +99,31 @@ fn sqrtm(a: &Mat<f64>) -> Option<Mat<f64>> {
     None
 }
 
-/// Principal matrix logarithm by inverse scaling and squaring (Kenney & Laub 1989; Higham 2008 §11.5):
-/// square roots until ‖X − I‖∞ ≤ 0.05, then log X = 2·atanh(Z) = 2 Σ Z^(2i+1)/(2i+1) with
-/// Z = (X − I)(X + I)⁻¹ (‖Z‖ ≲ 0.026, so eleven terms reach round-off), times 2^k.
-/// Fails when an eigenvalue lies on the closed negative real axis (no real logarithm).
+/// Principal matrix logarithm log(A); see [`log1pm`].
 pub fn logm(a: &Mat<f64>) -> Result<Mat<f64>, LtiError> {
     let n = a.nrows();
+    log1pm(&lin(a, 1.0, &identity(n), -1.0))
+}
+
+/// Principal logarithm log(I + E), taking the deviation E from the identity as input so that a
+/// matrix close to I (a discrete model sampled fast) loses no digits to the subtraction.
+///
+/// Inverse scaling and squaring (Kenney & Laub 1989; Higham, *Functions of Matrices*, 2008, §11.5):
+/// while ‖E‖∞ > 0.05, replace I + E by its square root I + E(I + S)⁻¹, S = (I + E)^½ (Denman–Beavers),
+/// counting k roots; then log(I + E) = 2·atanh(Z) = 2 Σ Z^(2i+1)/(2i+1) with Z = E(2I + E)⁻¹
+/// (‖Z‖ ≲ 0.026, eleven terms reach round-off), times 2^k. Fails when I + E has an eigenvalue on the
+/// closed negative real axis (no real logarithm).
+pub fn log1pm(e: &Mat<f64>) -> Result<Mat<f64>, LtiError> {
+    let n = e.nrows();
     if n == 0 {
         return Ok(Mat::zeros(0, 0));
     }
-    let eig = a.eigenvalues().map_err(|_| LtiError::NoConvergence {
-        what: "eigenvalues for the matrix logarithm",
-    })?;
+    let eye = identity(n);
+    let eig = lin(&eye, 1.0, e, 1.0)
+        .eigenvalues()
+        .map_err(|_| LtiError::NoConvergence {
+            what: "eigenvalues for the matrix logarithm",
+        })?;
     if let Some(z) = eig
         .iter()
         .find(|z| z.re <= 0.0 && z.im.abs() <= 1e-12 * z.norm().max(1e-300))
@@ -119,26 +133,22 @@ pub fn logm(a: &Mat<f64>) -> Result<Mat<f64>, LtiError> {
             pole_im: z.im,
         });
     }
-    let eye = identity(n);
-    let mut x = a.clone();
+    let mut e = e.clone();
     let mut k = 0;
-    while norm_inf(&lin(&x, 1.0, &eye, -1.0)) > 0.05 {
+    while norm_inf(&e) > 0.05 {
         if k >= 64 {
             return Err(LtiError::NoConvergence {
                 what: "matrix logarithm (square roots)",
             });
         }
-        x = sqrtm(&x).ok_or(LtiError::NoConvergence {
+        let s = sqrtm(&lin(&eye, 1.0, &e, 1.0)).ok_or(LtiError::NoConvergence {
             what: "matrix square root (Denman-Beavers)",
         })?;
+        // (I + E)^½ − I = E (I + S)⁻¹; E and S commute
+        e = solve(&lin(&eye, 1.0, &s, 1.0), &e);
         k += 1;
     }
-    let z = solve(
-        &lin(&x, 1.0, &eye, 1.0).transpose().to_owned(),
-        &lin(&x, 1.0, &eye, -1.0).transpose().to_owned(),
-    )
-    .transpose()
-    .to_owned();
+    let z = solve(&lin(&eye, 2.0, &e, 1.0), &e);
     let z2 = &z * &z;
     let mut term = z.clone();
     let mut sum = z.clone();
@@ -214,26 +224,41 @@ pub fn c2d(ss: &StateSpace, dt_s: f64, method: Discretization) -> StateSpace {
 
 /// Continuous model whose discretisation with `method` is `ss` (the inverse of [`c2d`]).
 ///
-/// ZOH: log([[A_d, B_d], [0, I]])/dt = [[A, B], [0, 0]] with the principal logarithm ([`logm`]);
-/// fails on a pole on the closed negative real z axis, which no continuous system produces under ZOH.
-/// Tustin: with M = 2(A_d + I)⁻¹ = I − αA, A = (I − M)/α, B = M·B_d/dt, C = C_d·M, D = D_d − ½·C·B_d;
-/// fails on a pole at z = −1.
+/// ZOH: log([[A_d, B_d], [0, I]])/dt = [[A, B], [0, 0]] with the principal logarithm ([`log1pm`]),
+/// after balancing A_d; fails on a pole on the closed negative real z axis, which no continuous
+/// system produces under ZOH. Tustin: with M = 2(A_d + I)⁻¹ = I − αA, A = (I − M)/α,
+/// B = M·B_d/dt, C = C_d·M, D = D_d − ½·C·B_d; fails on a pole at z = −1.
 pub fn d2c(ss: &StateSpace, method: Discretization) -> Result<StateSpace, LtiError> {
+    let n = ss.n_states();
+    let e = lin(&ss.a, 1.0, &identity(n), -1.0);
+    d2c_delta(&e, ss, method)
+}
+
+/// [`d2c`] of the discrete model (I + E, B, C, D) given E = A_d − I directly (the δ form), so that
+/// a fast-sampled model keeps the digits that A_d − I would lose. `ss.a` is ignored.
+fn d2c_delta(
+    e: &Mat<f64>,
+    ss: &StateSpace,
+    method: Discretization,
+) -> Result<StateSpace, LtiError> {
     let dt_s = ss.dt_s.ok_or(LtiError::NotDiscrete)?;
     check_dt(dt_s)?;
     let (n, m) = (ss.n_states(), ss.n_inputs());
+    let eye = identity(n);
     match method {
         Discretization::Zoh => {
+            // balancing (exact power-of-two similarity) keeps the logarithm's square roots few
+            let mut eb = e.clone();
+            let scale = balance(&mut eb);
             let aug = Mat::from_fn(n + m, n + m, |i, j| match (i < n, j < n) {
-                (true, true) => ss.a[(i, j)],
-                (true, false) => ss.b[(i, j - n)],
-                (false, false) if i == j => 1.0,
+                (true, true) => eb[(i, j)],
+                (true, false) => ss.b[(i, j - n)] / scale[i],
                 _ => 0.0,
             });
-            let l = logm(&aug)?;
+            let l = log1pm(&aug)?;
             Ok(StateSpace {
-                a: Mat::from_fn(n, n, |i, j| l[(i, j)] / dt_s),
-                b: Mat::from_fn(n, m, |i, j| l[(i, n + j)] / dt_s),
+                a: Mat::from_fn(n, n, |i, j| l[(i, j)] * scale[i] / scale[j] / dt_s),
+                b: Mat::from_fn(n, m, |i, j| l[(i, n + j)] * scale[i] / dt_s),
                 c: ss.c.clone(),
                 d: ss.d.clone(),
                 dt_s: None,
@@ -241,19 +266,17 @@ pub fn d2c(ss: &StateSpace, method: Discretization) -> Result<StateSpace, LtiErr
         }
         Discretization::Tustin => {
             let alpha = dt_s / 2.0;
-            let eye = identity(n);
-            if let Some(z) = ss
-                .poles()
-                .into_iter()
-                .find(|z| (z.re + 1.0).abs() < 1e-12 && z.im.abs() < 1e-12)
-            {
+            let two_plus_e = lin(&eye, 2.0, e, 1.0);
+            let eig = two_plus_e.eigenvalues().unwrap_or_default();
+            if eig.iter().any(|z| z.norm() < 1e-12) {
                 return Err(LtiError::NoRealLogarithm {
-                    pole_re: z.re,
-                    pole_im: z.im,
+                    pole_re: -1.0,
+                    pole_im: 0.0,
                 });
             }
-            let m_mat = scaled(&inverse(&lin(&ss.a, 1.0, &eye, 1.0)), 2.0);
-            let a = scaled(&lin(&eye, 1.0, &m_mat, -1.0), 1.0 / alpha);
+            // M = 2(2I + E)⁻¹; I − M = E(2I + E)⁻¹ = (2I + E)⁻¹E
+            let m_mat = scaled(&inverse(&two_plus_e), 2.0);
+            let a = scaled(&solve(&two_plus_e, e), 1.0 / alpha);
             let b = scaled(&(&m_mat * &ss.b), 1.0 / dt_s);
             let c = &ss.c * &m_mat;
             let d = if n == 0 {
@@ -283,12 +306,21 @@ pub fn c2d_tf(tf: &TransferFunction, dt_s: f64, method: Discretization) -> Trans
     out
 }
 
-/// [`d2c`] for a transfer function (through its controllable canonical realisation).
+/// [`d2c`] for a transfer function (through the controllable canonical realisation in w = z − 1).
 pub fn d2c_tf(tf: &TransferFunction, method: Discretization) -> Result<TransferFunction, LtiError> {
     if !tf.is_discrete() {
         return Err(LtiError::NotDiscrete);
     }
-    let ssc = d2c(&tf2ss(tf), method)?;
+    // realise in the δ variable w = z − 1: the companion matrix of den(w + 1) is E = A_d − I
+    // exactly, so the slow poles near z = 1 keep the digits that the coefficients carry
+    let monic = tf.monic();
+    let delta = TransferFunction {
+        num: taylor_shift(&monic.num, 1.0),
+        den: taylor_shift(&monic.den, 1.0),
+        dt_s: tf.dt_s,
+    };
+    let ss_delta = tf2ss(&delta);
+    let ssc = d2c_delta(&ss_delta.a, &ss_delta, method)?;
     Ok(ss2tf(&ssc, 0, 0))
 }
 

@@ -11,13 +11,13 @@ mod sim;
 mod ss;
 mod tf;
 
-pub use discretize::{c2d, c2d_tf, d2c, d2c_tf, expm, logm, Discretization};
-pub use modes::{modes, Mode};
+pub use discretize::{c2d, c2d_tf, d2c, d2c_tf, expm, log1pm, logm, Discretization};
+pub use modes::{modes, modes_discrete, Mode};
 pub use poly::{
     poly_add, poly_from_roots, poly_mul, polyval, polyval_complex, roots, strip_leading,
 };
 pub use sim::{lsim, lsim_ss};
-pub use ss::{charpoly, mat_to_rows, ss2tf, tf2ss, StateSpace, StateSpaceRows};
+pub use ss::{charpoly, mat_to_rows, ss2tf, tf2ss, Rows, StateSpace, StateSpaceRows};
 pub use tf::{bode, TransferFunction, LEADING_ZERO_REL_TOL};
 
 /// What can go wrong with a linear model.
@@ -59,3 +59,6 @@ pub enum LtiError {
     #[error("{what} did not converge")]
     NoConvergence { what: &'static str },
 }
+
+#[cfg(test)]
+mod tests;

@@ -51,6 +51,17 @@ impl Mode {
     }
 }
 
+/// Modes of discrete-time poles z with sample period `dt_s`, through s = ln(z)/dt (the pole mapping
+/// of ZOH sampling). A pole at z = 0 (or non-positive real z) has no such s and is skipped.
+pub fn modes_discrete(poles_z: &[Complex64], dt_s: f64) -> Vec<Mode> {
+    let s: Vec<Complex64> = poles_z
+        .iter()
+        .filter(|z| !(z.re <= 0.0 && z.im == 0.0))
+        .map(|z| z.ln() / dt_s)
+        .collect();
+    modes(&s)
+}
+
 /// Imaginary part, relative to |p|, below which a pole counts as real.
 const REAL_POLE_REL_TOL: f64 = 1e-9;
 
@@ -98,5 +109,23 @@ mod complex_as_pair {
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Complex64, D::Error> {
         let [re, im] = <[f64; 2]>::deserialize(d)?;
         Ok(Complex64::new(re, im))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn discrete_poles_map_back_to_the_continuous_mode() {
+        // s = −1 ± 2i sampled at 0.1 s: z = e^{s dt}
+        let s = Complex64::new(-1.0, 2.0);
+        let z = (s * 0.1).exp();
+        let m = modes_discrete(&[z, z.conj()], 0.1);
+        assert_eq!(m.len(), 1);
+        assert!((m[0].omega_n_rad_s - 5.0_f64.sqrt()).abs() < 1e-12);
+        assert!((m[0].zeta - 1.0 / 5.0_f64.sqrt()).abs() < 1e-12);
+        assert!((m[0].period_s.unwrap() - std::f64::consts::PI).abs() < 1e-12);
+        assert!((m[0].time_to_half_s().unwrap() - std::f64::consts::LN_2).abs() < 1e-12);
     }
 }

@@ -39,7 +39,7 @@ pub fn roots(coeffs_highest_first: &[f64]) -> Vec<Complex64> {
     for i in 1..n {
         comp[(i, i - 1)] = 1.0;
     }
-    balance(&mut comp);
+    let _ = balance(&mut comp);
     let eig = match comp.eigenvalues() {
         Ok(e) => e,
         Err(_) => return out,
@@ -86,9 +86,11 @@ fn polish(p: &[f64], mut z: Complex64) -> Complex64 {
     z
 }
 
-/// Parlett–Reinsch balancing by powers of two: a similarity that evens row and column norms.
-fn balance(a: &mut Mat<f64>) {
+/// Parlett–Reinsch balancing by powers of two: replaces `a` by D⁻¹AD, which evens row and column
+/// norms without rounding error, and returns the diagonal of D.
+pub(crate) fn balance(a: &mut Mat<f64>) -> Vec<f64> {
     let n = a.nrows();
+    let mut scale = vec![1.0; n];
     let radix = 2.0_f64;
     for _ in 0..100 {
         let mut converged = true;
@@ -118,6 +120,7 @@ fn balance(a: &mut Mat<f64>) {
             }
             if (c + r) < 0.95 * total {
                 converged = false;
+                scale[i] *= f;
                 for j in 0..n {
                     a[(i, j)] /= f;
                 }
@@ -130,6 +133,20 @@ fn balance(a: &mut Mat<f64>) {
             break;
         }
     }
+    scale
+}
+
+/// Coefficients of q(w) = p(w + 1) (Taylor shift by one; repeated synthetic division, Knuth TAOCP
+/// vol. 2 §4.6.4). Used to write a z-domain polynomial in the δ variable w = z − 1.
+pub fn taylor_shift(p: &[f64], by: f64) -> Vec<f64> {
+    let mut c = p.to_vec();
+    let n = c.len().saturating_sub(1);
+    for i in 0..n {
+        for j in 1..=(n - i) {
+            c[j] += by * c[j - 1];
+        }
+    }
+    c
 }
 
 /// Monic real polynomial with the given roots (complex roots should come in conjugate pairs; the

@@ -139,7 +139,7 @@ mod tests {
         let tf = TransferFunction::discrete(vec![0.3, 0.1], vec![1.0, -1.2, 0.5], 0.05);
         let u: Vec<f64> = (0..50).map(|k| ((k as f64) * 0.37).sin()).collect();
         let y1 = lsim(&tf, &u, 0.05);
-        let y2 = lsim_ss(&tf2ss(&tf), &[u.clone()], 0.05, None).remove(0);
+        let y2 = lsim_ss(&tf2ss(&tf), std::slice::from_ref(&u), 0.05, None).remove(0);
         for (a, b) in y1.iter().zip(y2) {
             assert!((a - b).abs() < 1e-13);
         }

@@ -26,6 +26,9 @@ pub struct StateSpace {
     pub dt_s: Option<f64>,
 }
 
+/// A matrix as a list of rows.
+pub type Rows = Vec<Vec<f64>>;
+
 /// Row-list form of a [`StateSpace`], used for serialisation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StateSpaceRows {
@@ -173,7 +176,7 @@ impl StateSpace {
     }
 
     /// (A, B, C, D) as row lists.
-    pub fn to_rows(&self) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    pub fn to_rows(&self) -> (Rows, Rows, Rows, Rows) {
         (
             mat_to_rows(&self.a),
             mat_to_rows(&self.b),
