@@ -194,7 +194,8 @@ pub struct IdentResult {
     pub modes: Vec<Mode>,
     /// Simulation fit, NRMSE %: 100 (1 − ‖y − ŷ_sim‖ / ‖y − ȳ‖).
     pub fit_sim_percent: f64,
-    /// One-step-ahead (equation-error predictor of the ZOH model) fit, NRMSE %.
+    /// One-step-ahead fit, NRMSE %: the ARX predictor of the ZOH model for `ls`/`iv`, equal to
+    /// the simulation fit for the output-error noise model of `srivc`/`oe`.
     pub fit_one_step_percent: f64,
     /// Autocorrelation test of the simulation residuals (lags 1…25).
     pub residual_whiteness: CorrelationTest,

@@ -141,6 +141,38 @@ fn stabilize_if_wild(den: &[f64]) -> Vec<f64> {
     }
 }
 
+/// The plain SVF least-squares estimate with prefilter `(s + λ)^n`, for the λ among a few
+/// decade-spaced values (below a fifth of the Nyquist frequency) whose model simulates best.
+pub(crate) fn svf_ls_start(
+    u: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    n: usize,
+    m: usize,
+    delay_s: f64,
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
+    for lambda in lambdas(dt_s) {
+        let den_f = poly_from_roots(&vec![Complex64::new(-lambda, 0.0); n]);
+        if let Some((num, den)) = iv_step(u, y, dt_s, delay_s, m, &den_f, None) {
+            let fit = candidate_fit(&num, &stabilize_if_wild(&den), u, y, dt_s, delay_s);
+            if best.as_ref().is_none_or(|b| fit > b.2) {
+                best = Some((num, den, fit));
+            }
+        }
+    }
+    best.map(|(num, den, _)| (num, den))
+}
+
+/// Prefilter break frequencies tried for the SVF-LS start, rad/s.
+fn lambdas(dt_s: f64) -> Vec<f64> {
+    let nyquist = std::f64::consts::PI / dt_s;
+    [0.5, 2.0, 8.0, 30.0]
+        .into_iter()
+        .filter(|l| *l < 0.2 * nyquist)
+        .collect()
+}
+
 /// SRIVC estimate with `m` zeros and `n` poles, for a known input delay.
 pub(crate) fn srivc(
     u: &[f64],
@@ -150,14 +182,8 @@ pub(crate) fn srivc(
     m: usize,
     delay_s: f64,
 ) -> Result<ContinuousModel, IdentError> {
-    // λ candidates: a decade-spaced set below the Nyquist frequency
-    let nyquist = std::f64::consts::PI / dt_s;
-    let lambdas: Vec<f64> = [0.5, 2.0, 8.0, 30.0]
-        .into_iter()
-        .filter(|l| *l < 0.2 * nyquist)
-        .collect();
     let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
-    for lambda in lambdas {
+    for lambda in lambdas(dt_s) {
         let den_f = poly_from_roots(&vec![Complex64::new(-lambda, 0.0); n]);
         let Some(start) = iv_step(u, y, dt_s, delay_s, m, &den_f, None) else {
             continue;
