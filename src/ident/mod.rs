@@ -60,6 +60,12 @@ impl Method {
     }
 }
 
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl std::str::FromStr for Method {
     type Err = IdentError;
     fn from_str(s: &str) -> Result<Method, IdentError> {
@@ -325,6 +331,38 @@ pub fn identify(
         u_offset,
         y_offset,
     ))
+}
+
+/// Simulated response of the continuous `num/den` (den monic, highest power first, degree of
+/// num below that of den) to a zero-order-hold input sampled every `dt_s`, from rest.
+pub fn simulate_tf(num: &[f64], den_monic: &[f64], u: &[f64], dt_s: f64) -> Vec<f64> {
+    filter::simulate(num, den_monic, u, dt_s, 0.0)
+}
+
+/// The paper's discrete ARX least squares alone (eq. 59–64): returns
+/// `[a₁ … a_n, b₁ … b_nb]` of `y(k) = −Σ a_i y(k−i) + Σ b_j u(k−j)`, solved by pivoted QR.
+pub fn arx_least_squares(
+    u: &[f64],
+    y: &[f64],
+    n: usize,
+    nb: usize,
+) -> Result<Vec<f64>, IdentError> {
+    if u.len() != y.len() {
+        return Err(IdentError::LengthMismatch {
+            input: u.len(),
+            output: y.len(),
+        });
+    }
+    if u.len() < 10 * (n + nb) + n.max(nb) {
+        return Err(IdentError::TooFewSamples {
+            n_samples: u.len(),
+            poles: n,
+            zeros: nb.saturating_sub(1),
+            needed: 10 * (n + nb) + n.max(nb),
+        });
+    }
+    let arx = ls::arx_ls(u, y, n, nb, 0)?;
+    Ok(arx.a[1..].iter().chain(arx.b.iter()).copied().collect())
 }
 
 /// Runs one estimator at a fixed delay (whole samples for `ls`/`iv`).

@@ -14,7 +14,8 @@
 //! this changes only the efficiency, not the consistency, of the estimate.
 //!
 //! Initialisation: the plain SVF least-squares estimate (instruments = regressors) with the
-//! fixed prefilter `(s + λ)^n`, tried for several λ; the run with the best simulation fit wins.
+//! fixed prefilter `(s + λ)^n`, tried for several λ; the one with the best simulation fit
+//! starts the iterations, and the iterate with the best simulation fit is returned.
 
 use super::filter::{Hold, Svf};
 use super::linalg::{poly_from_roots, solve_square, stabilize_continuous};
@@ -182,18 +183,9 @@ pub(crate) fn srivc(
     m: usize,
     delay_s: f64,
 ) -> Result<ContinuousModel, IdentError> {
-    let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
-    for lambda in lambdas(dt_s) {
-        let den_f = poly_from_roots(&vec![Complex64::new(-lambda, 0.0); n]);
-        let Some(start) = iv_step(u, y, dt_s, delay_s, m, &den_f, None) else {
-            continue;
-        };
-        if let Some(cand) = iterate(u, y, dt_s, delay_s, m, start) {
-            if best.as_ref().is_none_or(|b| cand.2 > b.2) {
-                best = Some(cand);
-            }
-        }
-    }
+    // iterate from the best-simulating SVF-LS start only (one IV chain keeps SRIVC < 100 ms)
+    let best = svf_ls_start(u, y, dt_s, n, m, delay_s)
+        .and_then(|start| iterate(u, y, dt_s, delay_s, m, start));
     match best {
         Some((num, den, _)) => Ok(ContinuousModel::new(num, den, delay_s)),
         None => Err(IdentError::SingularRegression {
