@@ -21,7 +21,6 @@ mod filter;
 mod iv;
 mod linalg;
 mod ls;
-mod lti_shim;
 mod metrics;
 mod oe;
 mod srivc;
@@ -31,7 +30,7 @@ mod tests;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-pub use lti_shim::{modes, Mode, TransferFunction};
+pub use crate::lti::{modes, Mode, TransferFunction};
 pub use metrics::{ise, CorrelationTest};
 
 /// Which estimator [`identify`] runs.

@@ -1,0 +1,91 @@
+//! Operations on sampled signals: measurement noise, resampling.
+
+use rand::{rngs::StdRng, SeedableRng};
+use rand_distr::{Distribution, Normal};
+
+/// `x` plus zero-mean Gaussian white noise of standard deviation `std`, reproducible from `seed`.
+///
+/// A non-positive or non-finite `std` returns `x` unchanged.
+pub fn add_white_noise(x: &[f64], std: f64, seed: u64) -> Vec<f64> {
+    let normal = match Normal::new(0.0, std) {
+        Ok(n) if std > 0.0 && std.is_finite() => n,
+        _ => return x.to_vec(),
+    };
+    let mut rng = StdRng::seed_from_u64(seed);
+    x.iter().map(|&v| v + normal.sample(&mut rng)).collect()
+}
+
+/// Linear interpolation of the samples `(t, x)` at the times `t_new`.
+///
+/// `t` must be increasing. Times before `t[0]` take `x[0]` and times after the last sample take the
+/// last value (hold, no extrapolation). Empty `t` gives zeros; extra samples of the longer of `t`, `x`
+/// are ignored.
+pub fn resample_linear(t: &[f64], x: &[f64], t_new: &[f64]) -> Vec<f64> {
+    let n = t.len().min(x.len());
+    if n == 0 {
+        return vec![0.0; t_new.len()];
+    }
+    let (t, x) = (&t[..n], &x[..n]);
+    t_new
+        .iter()
+        .map(|&tq| {
+            if tq <= t[0] || tq.is_nan() {
+                return x[0];
+            }
+            if tq >= t[n - 1] {
+                return x[n - 1];
+            }
+            // first index with t[i] > tq; 1 <= i <= n-1 here
+            let i = t.partition_point(|&ti| ti <= tq);
+            let (t0, t1, x0, x1) = (t[i - 1], t[i], x[i - 1], x[i]);
+            let span = t1 - t0;
+            if span <= 0.0 {
+                x1
+            } else {
+                x0 + (x1 - x0) * (tq - t0) / span
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn noise_with_same_seed_is_reproducible_and_has_requested_std() {
+        let x = vec![0.0; 20_000];
+        let a = add_white_noise(&x, 0.5, 42);
+        let b = add_white_noise(&x, 0.5, 42);
+        assert_eq!(a, b);
+        let mean = a.iter().sum::<f64>() / a.len() as f64;
+        let std = (a.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / a.len() as f64).sqrt();
+        // 20 000 samples: the sample std has a relative standard error of 1/sqrt(2N) = 0.5 %.
+        assert!((std - 0.5).abs() < 0.01, "std {std}");
+        assert!(mean.abs() < 0.02, "mean {mean}");
+        assert_ne!(a, add_white_noise(&x, 0.5, 43));
+    }
+
+    #[test]
+    fn zero_noise_returns_input() {
+        assert_eq!(add_white_noise(&[1.0, 2.0], 0.0, 1), vec![1.0, 2.0]);
+    }
+
+    #[test]
+    fn resample_interpolates_linearly_and_holds_ends() {
+        let t = [0.0, 1.0, 3.0];
+        let x = [0.0, 2.0, -2.0];
+        let y = resample_linear(&t, &x, &[-1.0, 0.0, 0.5, 1.0, 2.0, 2.5, 3.0, 4.0]);
+        assert_eq!(y, vec![0.0, 0.0, 1.0, 2.0, 0.0, -1.0, -2.0, -2.0]);
+    }
+
+    #[test]
+    fn resample_of_a_line_is_exact_on_a_finer_grid() {
+        let t: Vec<f64> = (0..11).map(|k| k as f64 * 0.1).collect();
+        let x: Vec<f64> = t.iter().map(|ti| 3.0 * ti - 1.0).collect();
+        let t_new: Vec<f64> = (0..101).map(|k| k as f64 * 0.01).collect();
+        for (tq, y) in t_new.iter().zip(resample_linear(&t, &x, &t_new)) {
+            assert!((y - (3.0 * tq - 1.0)).abs() < 1e-12);
+        }
+    }
+}
