@@ -22,19 +22,3 @@ pub(crate) mod many {
             .collect())
     }
 }
-
-/// One `Complex64` as `[re, im]`.
-pub(crate) mod one {
-    use super::*;
-
-    /// Serialises as `[re, im]`.
-    pub fn serialize<S: Serializer>(v: &Complex64, s: S) -> Result<S::Ok, S::Error> {
-        [v.re, v.im].serialize(s)
-    }
-
-    /// Reads `[re, im]`.
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Complex64, D::Error> {
-        let [re, im] = <[f64; 2]>::deserialize(d)?;
-        Ok(Complex64::new(re, im))
-    }
-}

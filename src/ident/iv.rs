@@ -2,7 +2,9 @@
 //! simulated output (Söderström & Stoica 1989, *System Identification*, §8.2 and the
 //! multistep IV4 idea of §8.4 / Ljung 1999 §15.3), then a ZOH conversion to continuous time.
 //!
-//! Start: the ARX least-squares fit of eq. 59 (see `ls.rs`). Each iteration with estimate
+//! Start: the ARX least-squares fit of eq. 59 (see `ls.rs`) and, because at fast sampling
+//! with noise that fit can be wild, also the SVF least-squares model (see `srivc.rs`)
+//! discretised by ZOH; the run whose final model simulates best is kept. Each iteration with estimate
 //! (Â, B̂): the auxiliary model `x̂(k) = B̂(q)/Â(q) u(k)` is simulated; every signal is
 //! prefiltered by `1/Â(q)` (the simplified refined IV of Young 1976, which makes the estimate
 //! approach the optimal-IV variance for white output noise); the instruments
@@ -18,10 +20,12 @@
 
 use faer::Mat;
 
-use super::filter::{Hold, Svf};
-use super::linalg::{lstsq_qr, poly_from_roots, solve_square, stabilize_discrete};
+use super::filter::{simulate, Hold, Svf};
+use super::linalg::{
+    lstsq_qr, poly_from_roots, roots, solve_square, stabilize_continuous, stabilize_discrete,
+};
 use super::ls::{arx_ls, continuous_poles};
-use super::{ContinuousModel, IdentError};
+use super::{nrmse_fit, ContinuousModel, IdentError};
 
 const MAX_ITER: usize = 20;
 
@@ -88,7 +92,72 @@ pub(crate) fn iv(
 ) -> Result<ContinuousModel, IdentError> {
     let nb = n;
     let arx = arx_ls(u, y, n, nb, d)?;
-    let (mut a, mut b) = (arx.a, arx.b);
+    let delay_s = d as f64 * dt_s;
+    let mut best: Option<(ContinuousModel, f64)> = None;
+    let mut last_err = None;
+    let mut starts = vec![(arx.a, arx.b)];
+    if let Some((num_c, den_c)) = super::srivc::svf_ls_start(u, y, dt_s, n, m, delay_s) {
+        let den_c = stabilize_continuous(&den_c);
+        let zd: Vec<_> = roots(&den_c).iter().map(|p| (p * dt_s).exp()).collect();
+        let a_d = poly_from_roots(&zd);
+        let b_d = c2d_numerator(&num_c, &den_c, &a_d, dt_s, nb);
+        starts.push((a_d, b_d));
+    }
+    for start in starts {
+        match iv_from(u, y, dt_s, n, m, d, start) {
+            Ok(model) => {
+                let y_sim = simulate(&model.num, &model.den, u, dt_s, delay_s);
+                let fit = nrmse_fit(y, &y_sim);
+                let fit = if fit.is_finite() {
+                    fit
+                } else {
+                    f64::NEG_INFINITY
+                };
+                if best.as_ref().is_none_or(|b| fit > b.1) {
+                    best = Some((model, fit));
+                }
+            }
+            Err(e) => last_err = Some(e),
+        }
+    }
+    match (best, last_err) {
+        (Some((model, _)), _) => Ok(model),
+        (None, Some(e)) => Err(e),
+        (None, None) => Err(IdentError::Failed {
+            method: "iv".into(),
+            reason: "no starting model".into(),
+        }),
+    }
+}
+
+/// ZOH discrete numerator (on u(k−1)…u(k−nb)) of the continuous `num/den`, given the discrete
+/// denominator `a_d` of the same poles: `b_i = Σ_{l<i} a_l h_{i−l}` from the Markov parameters.
+fn c2d_numerator(num: &[f64], den: &[f64], a_d: &[f64], dt_s: f64, nb: usize) -> Vec<f64> {
+    let svf = Svf::new(den, dt_s, Hold::Zoh { delay_s: 0.0 });
+    let mut impulse = vec![0.0; nb + 1];
+    impulse[0] = 1.0;
+    let h = super::filter::combine(&svf.run(&impulse), svf.n, num, nb + 1);
+    (1..=nb)
+        .map(|i| {
+            (0..i)
+                .map(|l| a_d.get(l).copied().unwrap_or(0.0) * h[i - l])
+                .sum()
+        })
+        .collect()
+}
+
+/// The IV iterations from a discrete starting model `(a, b)`, then the continuous conversion.
+fn iv_from(
+    u: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    n: usize,
+    m: usize,
+    d: usize,
+    start: (Vec<f64>, Vec<f64>),
+) -> Result<ContinuousModel, IdentError> {
+    let nb = n;
+    let (mut a, mut b) = start;
     let first = n.max(nb + d);
     let p = n + nb;
     for _ in 0..MAX_ITER {

@@ -162,7 +162,12 @@ pub(crate) fn build_result(
     let y_sim = simulate(&model.num, &model.den, u, dt_s, model.delay_s);
     let poles = roots(&model.den);
     let zeros = roots(&model.num);
-    let y_one = one_step(y, &y_sim, &poles, dt_s);
+    // ls/iv carry the ARX (equation-error) noise model, whose one-step predictor is the ARX
+    // predictor; srivc/oe assume white output noise, for which the predictor is the simulation.
+    let y_one = match method {
+        Method::Ls | Method::Iv => one_step(y, &y_sim, &poles, dt_s),
+        Method::Srivc | Method::Oe => y_sim.clone(),
+    };
     let e: Vec<f64> = y.iter().zip(&y_sim).map(|(a, b)| a - b).collect();
     let (nb, n) = (model.num.len(), model.den.len() - 1);
     let (num_std, den_std, p_std, delay_std_s) = match &model.cov {

@@ -21,7 +21,6 @@ mod filter;
 mod iv;
 mod linalg;
 mod ls;
-mod lti_shim;
 mod metrics;
 mod oe;
 mod srivc;
@@ -31,7 +30,7 @@ mod tests;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-pub use lti_shim::{modes, Mode, TransferFunction};
+pub use crate::lti::{modes, Mode, TransferFunction};
 pub use metrics::{ise, CorrelationTest};
 
 /// Which estimator [`identify`] runs.
@@ -57,6 +56,12 @@ impl Method {
             Method::Srivc => "srivc",
             Method::Oe => "oe",
         }
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -194,7 +199,8 @@ pub struct IdentResult {
     pub modes: Vec<Mode>,
     /// Simulation fit, NRMSE %: 100 (1 − ‖y − ŷ_sim‖ / ‖y − ȳ‖).
     pub fit_sim_percent: f64,
-    /// One-step-ahead (equation-error predictor of the ZOH model) fit, NRMSE %.
+    /// One-step-ahead fit, NRMSE %: the ARX predictor of the ZOH model for `ls`/`iv`, equal to
+    /// the simulation fit for the output-error noise model of `srivc`/`oe`.
     pub fit_one_step_percent: f64,
     /// Autocorrelation test of the simulation residuals (lags 1…25).
     pub residual_whiteness: CorrelationTest,
@@ -324,6 +330,38 @@ pub fn identify(
         u_offset,
         y_offset,
     ))
+}
+
+/// Simulated response of the continuous `num/den` (den monic, highest power first, degree of
+/// num below that of den) to a zero-order-hold input sampled every `dt_s`, from rest.
+pub fn simulate_tf(num: &[f64], den_monic: &[f64], u: &[f64], dt_s: f64) -> Vec<f64> {
+    filter::simulate(num, den_monic, u, dt_s, 0.0)
+}
+
+/// The paper's discrete ARX least squares alone (eq. 59–64): returns
+/// `[a₁ … a_n, b₁ … b_nb]` of `y(k) = −Σ a_i y(k−i) + Σ b_j u(k−j)`, solved by pivoted QR.
+pub fn arx_least_squares(
+    u: &[f64],
+    y: &[f64],
+    n: usize,
+    nb: usize,
+) -> Result<Vec<f64>, IdentError> {
+    if u.len() != y.len() {
+        return Err(IdentError::LengthMismatch {
+            input: u.len(),
+            output: y.len(),
+        });
+    }
+    if u.len() < 10 * (n + nb) + n.max(nb) {
+        return Err(IdentError::TooFewSamples {
+            n_samples: u.len(),
+            poles: n,
+            zeros: nb.saturating_sub(1),
+            needed: 10 * (n + nb) + n.max(nb),
+        });
+    }
+    let arx = ls::arx_ls(u, y, n, nb, 0)?;
+    Ok(arx.a[1..].iter().chain(arx.b.iter()).copied().collect())
 }
 
 /// Runs one estimator at a fixed delay (whole samples for `ls`/`iv`).

@@ -15,8 +15,8 @@
 //! Standard errors: the Cramér–Rao bound `Cov = σ² (SᵀS)⁻¹` assumes white residuals. Residuals of
 //! real models are coloured, which makes that bound optimistic; the correction of Morelli &
 //! Klein (NASA CR-194893, 1994; book §6.6) uses the residual autocorrelation `R_vv`:
-//! `Cov = M⁻¹ [Σ_i Σ_j s_i R_vv(i−j) s_jᵀ] M⁻¹`, `M = SᵀS`. The double sum is truncated at
-//! |i − j| ≤ N/10 lags, where the sample autocorrelation is still a usable estimate.
+//! `Cov = M⁻¹ [Σ_i Σ_j s_i R_vv(i−j) s_jᵀ] M⁻¹`, `M = SᵀS`, summed over the lags where the
+//! residuals are correlated (see [`coloured_covariance`]).
 
 use super::filter::{combine, simulate, Hold, Svf};
 use super::linalg::{inverse, matmul, poly_mul, solve_square};
@@ -84,6 +84,43 @@ fn sensitivities(
         let y_hi = sim(theta, m, u, dt_s, hi);
         for k in 0..len {
             s[k * p + p - 1] = (y_hi[k] - y_lo[k]) / (hi - lo);
+        }
+    }
+    s
+}
+
+/// Central-difference sensitivities of the exact simulation (N × p, row-major); used for the
+/// covariance, where the small-eigenvalue directions of `SᵀS` (the slow modes) need the
+/// sensitivities to full precision.
+fn fd_sensitivities(
+    theta: &[f64],
+    m: usize,
+    u: &[f64],
+    dt_s: f64,
+    delay_s: f64,
+    with_delay: bool,
+) -> Vec<f64> {
+    let np = theta.len();
+    let p = np + usize::from(with_delay);
+    let len = u.len();
+    let scale = theta.iter().fold(0.0_f64, |a, t| a.max(t.abs()));
+    let mut s = vec![0.0; len * p];
+    for j in 0..np {
+        let h = 1e-6 * theta[j].abs().max(1e-6 * scale).max(1e-12);
+        let mut tp = theta.to_vec();
+        let mut tm = theta.to_vec();
+        tp[j] += h;
+        tm[j] -= h;
+        let yp = sim(&tp, m, u, dt_s, delay_s);
+        let ym = sim(&tm, m, u, dt_s, delay_s);
+        for k in 0..len {
+            s[k * p + j] = (yp[k] - ym[k]) / (2.0 * h);
+        }
+    }
+    if with_delay {
+        let d = sensitivities(theta, m, u, dt_s, delay_s, true);
+        for k in 0..len {
+            s[k * p + p - 1] = d[k * p + p - 1];
         }
     }
     s
@@ -171,8 +208,8 @@ pub(crate) fn oe(
             break;
         }
     }
-    // covariance at the optimum
-    let s = sensitivities(&theta, m, u, dt_s, delay_s, with_delay);
+    // covariance at the optimum, from central-difference sensitivities of the exact simulation
+    let s = fd_sensitivities(&theta, m, u, dt_s, delay_s, with_delay);
     let y_hat = sim(&theta, m, u, dt_s, delay_s);
     let r: Vec<f64> = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
     let (mmat, _) = normal(&s, &r, p);
@@ -187,12 +224,29 @@ pub(crate) fn oe(
     })
 }
 
-/// `M⁻¹ [Σ_i Σ_j s_i R(i−j) s_jᵀ] M⁻¹` (Morelli & Klein 1994), lags truncated at N/10.
+/// `M⁻¹ [Σ_i Σ_j s_i w(i−j) R(i−j) s_jᵀ] M⁻¹` (Morelli & Klein 1994). The sum runs over the
+/// lags where the residuals are actually correlated: L = twice the first lag at which the
+/// sample autocorrelation falls inside the 99 % white-noise band (at most N/10), with Bartlett
+/// weights `w(k) = 1 − |k|/(L+1)` (Newey & West 1987) so the result stays positive
+/// semidefinite. Summing the sample autocorrelation over all lags instead would add noise of
+/// the order of the variance itself for slow-mode parameters, whose sensitivities are nearly
+/// constant over hundreds of lags.
 fn coloured_covariance(s: &[f64], r: &[f64], minv: &[f64], p: usize) -> Vec<f64> {
     let len = r.len();
-    let max_lag = (len / 10).max(1).min(len - 1);
+    let cap = (len / 10).max(1).min(len - 1);
+    let acf_at = |l: usize| (l..len).map(|k| r[k] * r[k - l]).sum::<f64>() / len as f64;
+    let r0 = acf_at(0).max(f64::MIN_POSITIVE);
+    let bound = 2.58 / (len as f64).sqrt();
+    let mut decay = cap;
+    for l in 1..=cap {
+        if (acf_at(l) / r0).abs() < bound {
+            decay = l;
+            break;
+        }
+    }
+    let max_lag = (2 * decay).min(cap);
     let acf: Vec<f64> = (0..=max_lag)
-        .map(|l| (l..len).map(|k| r[k] * r[k - l]).sum::<f64>() / len as f64)
+        .map(|l| acf_at(l) * (1.0 - l as f64 / (max_lag as f64 + 1.0)))
         .collect();
     // W = Σ_i s_i w_iᵀ with w_i = Σ_j R(|i−j|) s_j
     let mut w = vec![0.0; p * p];
