@@ -96,6 +96,23 @@ def knob_function(surface, reads):
 
 CMD_PROPERTY = {}
 
+# Aero-model inputs that can be perturbed for derivative evaluation: property -> (variable, factor per unit).
+DEG = 57.29577951308232
+PROBED = {
+    "aero/alpha-rad": ("alpha", 1.0), "aero/alpha-deg": ("alpha", DEG),
+    "aero/beta-rad": ("beta", 1.0), "aero/beta-deg": ("beta", DEG),
+    "aero/mag-beta-rad": ("beta-mag", 1.0), "aero/mag-beta-deg": ("beta-mag", DEG),
+    "velocities/p-aero-rad_sec": ("p", 1.0), "velocities/p-rad_sec": ("p", 1.0),
+    "velocities/q-aero-rad_sec": ("q", 1.0), "velocities/q-rad_sec": ("q", 1.0),
+    "velocities/r-aero-rad_sec": ("r", 1.0), "velocities/r-rad_sec": ("r", 1.0),
+    "aero/alphadot-rad_sec": ("alphadot", 1.0), "aero/alphadot-deg_sec": ("alphadot", DEG),
+    "aero/betadot-rad_sec": ("betadot", 1.0), "aero/betadot-deg_sec": ("betadot", DEG),
+}
+# Probe points of the private copy: original property -> (probe property, variable, factor).
+PROBES = {}
+# Coefficient function name -> the <axis> it belongs to (LIFT, DRAG, SIDE, ROLL, PITCH, YAW, ...).
+AXIS_OF = {}
+
 
 def make_private_aircraft(root_dir, aircraft, surfaces):
     """Writes root_dir/aircraft/<aircraft>/ with the rewritten XML; returns the list of coefficient knobs."""
@@ -136,7 +153,23 @@ def make_private_aircraft(root_dir, aircraft, surfaces):
         if el.tag in ("property", "independentVar") and el.text and el.text.strip() in replace:
             el.text = replace[el.text.strip()]
 
+    # Probe points: every state variable the aero model reads goes through flightid/probe/<name> = value +
+    # perturbation, so stability derivatives can be evaluated from the model's own functions (tables included).
+    probes = {}
+    for el in aero.iter():
+        if el.tag in ("property", "independentVar") and el.text and el.text.strip() in PROBED:
+            orig = el.text.strip()
+            var, factor = PROBED[orig]
+            name = "flightid/probe/" + orig.replace("/", "_")
+            probes[orig] = (name, var, factor)
+            el.text = name
+
     knobs = []
+    for axis in aero.iter("axis"):
+        for fn in axis.iter("function"):
+            name = fn.get("name", "")
+            if name.startswith("aero/coefficient/"):
+                AXIS_OF[name[len("aero/coefficient/"):]] = axis.get("name", "?").upper()
     for fn in aero.iter("function"):
         name = fn.get("name", "")
         if not name.startswith("aero/coefficient/"):
@@ -170,6 +203,26 @@ def make_private_aircraft(root_dir, aircraft, surfaces):
             head.append(ET.fromstring(
                 f'<function name="flightid/aero/{surface}-mag-rad"><abs>'
                 f'<property>flightid/aero/{surface}-rad</property></abs></function>'))
+    for var in sorted({v for v, _ in PROBED.values()}):
+        d = ET.Element("property", {"value": "0.0"})
+        d.text = f"flightid/probe/d-{var}"
+        head.append(d)
+    d = ET.Element("property", {"value": "0.0"})
+    d.text = "flightid/probe/freeze"
+    head.append(d)
+    for orig, (name, var, factor) in probes.items():
+        d = ET.Element("property", {"value": "0.0"})
+        d.text = f"{name}-frozen"
+        head.append(d)
+        # value = (1 - freeze) * live + freeze * frozen + factor * perturbation
+        head.append(ET.fromstring(
+            f'<function name="{name}"><sum>'
+            f'<product><property>{orig}</property><difference><value>1</value>'
+            f'<property>flightid/probe/freeze</property></difference></product>'
+            f'<product><property>flightid/probe/freeze</property><property>{name}-frozen</property></product>'
+            f'<product><value>{factor!r}</value><property>flightid/probe/d-{var}</property></product>'
+            f'</sum></function>'))
+    PROBES.update(probes)
     for i, el in enumerate(head):
         aero.insert(i, el)
     tree.write(os.path.join(dst_dir, aircraft + ".xml"), encoding="utf-8", xml_declaration=True)
@@ -246,6 +299,7 @@ class Sim:
             raise BridgeError("trim_failed",
                               f"{self.aircraft} cannot trim at {req['altitude_ft']} ft, {req['speed_kts']} kts: {e}")
         self.trimmed = True
+        self.trim_surface = {s: fdm[f"flightid/aero/{s}-rad"] for s in self.surfaces}
         out = {k: fdm[k] for k in req.get("report", [])}
         return out
 
@@ -278,6 +332,66 @@ class Sim:
             "outputs": list(lin.y_names), "output_units": list(lin.y_units),
             "A": a.tolist(), "B": b.tolist(), "C": c.tolist(), "D": d.tolist(),
         }
+
+    def probe(self, req):
+        """Aerodynamic forces and moments at the trim, with one aero input perturbed at a time (central differences).
+
+        Integration is suspended while probing (dt = 0), so fdm.run() re-evaluates the model without moving the
+        state. Returns, per perturbation name, the axis totals at +h and -h, plus the unperturbed values and the
+        flight condition, mass, inertia and geometry.
+        """
+        if not self.trimmed:
+            raise BridgeError("not_trimmed", "probe needs a successful trim first")
+        fdm = self.fdm
+        # Axis totals are sums of the aircraft's own coefficient functions (about the aero reference point, in the
+        # axes the model declares), so the derivatives are the model's, not the CG-transferred body forces.
+        axes = {}
+        for coef, axis in AXIS_OF.items():
+            axes.setdefault(axis, []).append(self.node("aero/coefficient/" + coef).get_double_value)
+        extra = {p: self.node(p).get_double_value for p in req.get("extra", [])}
+
+        def read():
+            vals = {axis: sum(g() for g in getters) for axis, getters in axes.items()}
+            vals.update({k: g() for k, g in extra.items()})
+            return vals
+
+        fdm.suspend_integration()
+        try:
+            fdm.run()
+            # Freeze every aero input at its trim value: otherwise a perturbed force changes the state derivatives,
+            # and the next evaluation sees a different alphadot (JSBSim computes it from the previous step).
+            for orig, (name, _var, _factor) in PROBES.items():
+                fdm[f"{name}-frozen"] = fdm[orig]
+            fdm["flightid/probe/freeze"] = 1.0
+            fdm.run()
+            base = read()
+            out = {}
+            for var, h in req["perturb"].items():
+                vals = []
+                for sign in (1.0, -1.0):
+                    if var.startswith("surface:"):
+                        s = var.split(":", 1)[1]
+                        ref = self.trim_surface[s]
+                        fdm[f"flightid/override/{s}-rad"] = ref + sign * h
+                        fdm[f"flightid/override/{s}"] = 1.0
+                    else:
+                        fdm[f"flightid/probe/d-{var}"] = sign * h
+                    fdm.run()
+                    vals.append(read())
+                    if var.startswith("surface:"):
+                        s = var.split(":", 1)[1]
+                        fdm[f"flightid/override/{s}"] = 0.0
+                    else:
+                        fdm[f"flightid/probe/d-{var}"] = 0.0
+                out[var] = {"plus": vals[0], "minus": vals[1], "h": h}
+            fdm["flightid/probe/freeze"] = 0.0
+            fdm.run()
+        finally:
+            fdm["flightid/probe/freeze"] = 0.0
+            fdm.resume_integration()
+            fdm.set_dt(self.dt_s)
+        cond = {k: fdm[k] for k in req.get("condition", [])}
+        return {"base": base, "perturbed": out, "condition": cond}
 
     def fly(self, req, payload):
         """Runs n_steps from the current (trimmed) state; returns the recorded properties, step-major."""
@@ -350,6 +464,8 @@ def main():
             elif cmd == "set":
                 sim.set_many(req["values"])
                 send({"ok": True})
+            elif cmd == "probe":
+                send(dict(ok=True, **sim.probe(req)))
             elif cmd == "linearize":
                 send(dict(ok=True, **sim.linearize(req)))
             elif cmd == "fly":

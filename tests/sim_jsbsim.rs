@@ -443,3 +443,44 @@ fn b737_run_writes_nothing_into_the_package_and_opens_no_socket() {
         "files appeared in the JSBSim package: {new:?}"
     );
 }
+
+/// Truth from JSBSim: the derivatives evaluated from the c172x's own coefficient functions equal the constants in
+/// its XML (c172x.xml: Cmalpha −1.8, Cmq −12.4, Cmadot −5.2, Cmde −1.28, Clp −0.47, Clda 0.23, Cndr −0.043,
+/// Cnr −0.099) to round-off, and a scale knob on a coefficient function moves exactly that derivative.
+#[test]
+fn c172x_truth_derivatives_are_the_models_own_constants() {
+    let mut sim = start("c172x");
+    sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
+    let truth = sim.aero_truth().unwrap();
+    let d = &truth.derivatives;
+    for (name, want) in [
+        ("Cm_alpha", -1.8),
+        ("Cm_q", -12.4),
+        ("Cm_alphadot", -5.2),
+        ("Cm_de", -1.28),
+        ("Cl_p", -0.47),
+        ("Cl_da", 0.23),
+        ("Cn_dr", -0.043),
+        ("Cn_r", -0.099),
+    ] {
+        // Central differences of functions linear in the variable: exact up to round-off.
+        assert!(
+            (d[name] / want - 1.0).abs() < 1e-9,
+            "{name}: {} vs {want}",
+            d[name]
+        );
+    }
+    assert!(
+        (truth.mass_kg - 1043.0).abs() < 100.0,
+        "c172x mass {} kg",
+        truth.mass_kg
+    );
+    assert!((truth.span_m - 36.0 * 0.3048).abs() < 1e-9);
+    // The knob scales exactly one derivative; the others do not move.
+    sim.set_coefficient_scale("Clp", 1.3).unwrap();
+    sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
+    let scaled = sim.aero_truth().unwrap();
+    assert!((scaled.derivatives["Cl_p"] / (-0.47 * 1.3) - 1.0).abs() < 1e-9);
+    assert!((scaled.derivatives["Cm_q"] / -12.4 - 1.0).abs() < 1e-9);
+    assert!(sim.set_coefficient_scale("NoSuchCoefficient", 1.0).is_err());
+}

@@ -366,3 +366,176 @@ impl Simulator for JsbsimSim {
         Ok(rec)
     }
 }
+
+/// Slug to kilogram.
+const SLUG_TO_KG: f64 = 14.593_902_937;
+/// Slug·ft² to kg·m².
+const SLUG_FT2_TO_KG_M2: f64 = 1.355_817_948;
+/// Pound-force per square foot to pascal.
+const PSF_TO_PA: f64 = 47.880_258_98;
+/// Slug per cubic foot to kg/m³.
+const SLUG_FT3_TO_KG_M3: f64 = 515.378_818;
+
+/// What the JSBSim model itself uses at a trim point: nondimensional stability and control derivatives
+/// (evaluated from its own coefficient functions, tables included, by central differences), flight condition,
+/// mass, inertia and geometry — SI units.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct AeroTruth {
+    /// Derivatives by the DESIGN.md section 7 names (`CL_alpha`, `Cm_q`, `Cn_beta`, …), per rad; rate derivatives
+    /// nondimensionalised with c̄/2V (pitch) and b/2V (roll, yaw).
+    pub derivatives: BTreeMap<String, f64>,
+    /// Coefficients at trim: `CL`, `CD`, `CY`, `Cl`, `Cm`, `Cn` (about the model's aero reference point).
+    pub coefficients: BTreeMap<String, f64>,
+    /// True airspeed, m/s.
+    pub airspeed_m_s: f64,
+    /// Dynamic pressure, Pa.
+    pub qbar_pa: f64,
+    /// Air density, kg/m³.
+    pub rho_kg_m3: f64,
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// Moments and product of inertia, kg·m² (JSBSim's sign convention for `ixz`).
+    pub ixx_kg_m2: f64,
+    /// Pitch inertia, kg·m².
+    pub iyy_kg_m2: f64,
+    /// Yaw inertia, kg·m².
+    pub izz_kg_m2: f64,
+    /// Product of inertia, kg·m².
+    pub ixz_kg_m2: f64,
+    /// Wing area, m².
+    pub wing_area_m2: f64,
+    /// Wing span, m.
+    pub span_m: f64,
+    /// Mean aerodynamic chord, m.
+    pub chord_m: f64,
+    /// Trim angle of attack, rad.
+    pub alpha_rad: f64,
+}
+
+impl JsbsimSim {
+    /// The derivatives, mass, inertia and geometry the model uses at the current trim (see [`AeroTruth`]).
+    ///
+    /// Each aero input (α, β, p, q, r, α̇, β̇, surface deflections) is perturbed by ±h through the probe
+    /// properties of the private copy with integration suspended, and the per-axis sums of the model's coefficient
+    /// functions are differenced: dC/dx ≈ (C(x+h) − C(x−h)) / 2h. CD_CL2 is (dCD/dα) / (2 CL CL_α), CD_0 = CD − CD_CL2 CL².
+    pub fn aero_truth(&mut self) -> Result<AeroTruth, SimError> {
+        let trim = self
+            .trim
+            .clone()
+            .ok_or_else(|| SimError::Usage("aero_truth needs a successful trim first".into()))?;
+        let perturb = json!({
+            "alpha": 1e-3, "beta": 1e-3, "p": 1e-2, "q": 1e-2, "r": 1e-2, "alphadot": 1e-2, "betadot": 1e-2,
+            "surface:elevator": 1e-3, "surface:aileron": 1e-3, "surface:rudder": 1e-3,
+        });
+        let condition = [
+            "aero/qbar-psf",
+            "velocities/vt-fps",
+            "atmosphere/rho-slugs_ft3",
+            "inertia/mass-slugs",
+            "inertia/ixx-slugs_ft2",
+            "inertia/iyy-slugs_ft2",
+            "inertia/izz-slugs_ft2",
+            "inertia/ixz-slugs_ft2",
+            "metrics/Sw-sqft",
+            "metrics/bw-ft",
+            "metrics/cbarw-ft",
+        ];
+        let resp = self.bridge.request(
+            json!({"cmd": "probe", "perturb": perturb, "condition": condition}),
+            &[],
+        )?;
+        let h = &resp.header;
+        let cond = values_map(&h["condition"]);
+        let c = |k: &str| cond.get(k).copied().unwrap_or(f64::NAN);
+        let qbar_psf = c("aero/qbar-psf");
+        let (s_ft2, b_ft, cbar_ft, v_fps) = (
+            c("metrics/Sw-sqft"),
+            c("metrics/bw-ft"),
+            c("metrics/cbarw-ft"),
+            c("velocities/vt-fps"),
+        );
+        let qs = qbar_psf * s_ft2;
+        // Normalisation per axis: forces by q̄S, pitch by q̄Sc̄, roll and yaw by q̄Sb.
+        let norm = |axis: &str| match axis {
+            "PITCH" => qs * cbar_ft,
+            "ROLL" | "YAW" => qs * b_ft,
+            _ => qs,
+        };
+        let base = values_map(&h["base"]);
+        let coef = |axis: &str| base.get(axis).copied().unwrap_or(0.0) / norm(axis);
+        let slope = |var: &str, axis: &str| -> f64 {
+            let p = &h["perturbed"][var];
+            let plus = p["plus"][axis].as_f64().unwrap_or(0.0);
+            let minus = p["minus"][axis].as_f64().unwrap_or(0.0);
+            let step = p["h"].as_f64().unwrap_or(1.0);
+            (plus - minus) / (2.0 * step) / norm(axis)
+        };
+        let pitch_rate = 2.0 * v_fps / cbar_ft;
+        let lat_rate = 2.0 * v_fps / b_ft;
+        let mut d = BTreeMap::new();
+        for (name, var, axis, scale) in [
+            ("CL_alpha", "alpha", "LIFT", 1.0),
+            ("CL_q", "q", "LIFT", pitch_rate),
+            ("CL_alphadot", "alphadot", "LIFT", pitch_rate),
+            ("CL_de", "surface:elevator", "LIFT", 1.0),
+            ("Cm_alpha", "alpha", "PITCH", 1.0),
+            ("Cm_q", "q", "PITCH", pitch_rate),
+            ("Cm_alphadot", "alphadot", "PITCH", pitch_rate),
+            ("Cm_de", "surface:elevator", "PITCH", 1.0),
+            ("CY_beta", "beta", "SIDE", 1.0),
+            ("CY_p", "p", "SIDE", lat_rate),
+            ("CY_r", "r", "SIDE", lat_rate),
+            ("CY_da", "surface:aileron", "SIDE", 1.0),
+            ("CY_dr", "surface:rudder", "SIDE", 1.0),
+            ("Cl_beta", "beta", "ROLL", 1.0),
+            ("Cl_p", "p", "ROLL", lat_rate),
+            ("Cl_r", "r", "ROLL", lat_rate),
+            ("Cl_da", "surface:aileron", "ROLL", 1.0),
+            ("Cl_dr", "surface:rudder", "ROLL", 1.0),
+            ("Cn_beta", "beta", "YAW", 1.0),
+            ("Cn_p", "p", "YAW", lat_rate),
+            ("Cn_r", "r", "YAW", lat_rate),
+            ("Cn_da", "surface:aileron", "YAW", 1.0),
+            ("Cn_dr", "surface:rudder", "YAW", 1.0),
+        ] {
+            d.insert(name.to_string(), slope(var, axis) * scale);
+        }
+        let cl = coef("LIFT");
+        let cd = coef("DRAG");
+        let cd_alpha = slope("alpha", "DRAG");
+        let k = if cl.abs() > 1e-6 && d["CL_alpha"].abs() > 1e-9 {
+            cd_alpha / (2.0 * cl * d["CL_alpha"])
+        } else {
+            f64::NAN
+        };
+        d.insert("CD_CL2".into(), k);
+        d.insert("CD_0".into(), cd - k * cl * cl);
+        let coefficients = [
+            ("CL", "LIFT"),
+            ("CD", "DRAG"),
+            ("CY", "SIDE"),
+            ("Cl", "ROLL"),
+            ("Cm", "PITCH"),
+            ("Cn", "YAW"),
+        ]
+        .iter()
+        .map(|(n, a)| (n.to_string(), coef(a)))
+        .collect();
+        Ok(AeroTruth {
+            derivatives: d,
+            coefficients,
+            airspeed_m_s: v_fps * FT_TO_M,
+            qbar_pa: qbar_psf * PSF_TO_PA,
+            rho_kg_m3: c("atmosphere/rho-slugs_ft3") * SLUG_FT3_TO_KG_M3,
+            mass_kg: c("inertia/mass-slugs") * SLUG_TO_KG,
+            ixx_kg_m2: c("inertia/ixx-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+            iyy_kg_m2: c("inertia/iyy-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+            izz_kg_m2: c("inertia/izz-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+            ixz_kg_m2: c("inertia/ixz-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+            wing_area_m2: s_ft2 * FT_TO_M * FT_TO_M,
+            span_m: b_ft * FT_TO_M,
+            chord_m: cbar_ft * FT_TO_M,
+            alpha_rad: trim.alpha_rad,
+        })
+    }
+}
