@@ -195,6 +195,24 @@ fn systems_are_separated_and_the_busiest_is_the_default() {
 }
 
 #[test]
+fn a_corrupt_timestamp_is_dropped_but_a_confirmed_logging_gap_is_kept() {
+    let mut records = simple_records();
+    // Record 30: high timestamp byte flipped (the frame itself stays valid).
+    records[30][2] ^= 0x40;
+    // Records 60..: the log resumes 120 s later (link lost and regained).
+    for r in records.iter_mut().skip(60) {
+        let t = u64::from_be_bytes(r[..8].try_into().unwrap()) + 120_000_000;
+        r[..8].copy_from_slice(&t.to_be_bytes());
+    }
+    let rep = parse_tlog_bytes(&records.concat(), "mem", None, &TlogOptions::default()).unwrap();
+    assert_eq!(rep.stats.bad_timestamps, 1);
+    assert_eq!(rep.stats.frames, 99);
+    // 100 samples at 20 ms plus a 120 s gap: the grid spans 121.98 s.
+    let t = &rep.record.time_s;
+    assert!((t[t.len() - 1] - 121.98).abs() < 1e-9, "{}", t[t.len() - 1]);
+}
+
+#[test]
 fn non_tlog_input_is_a_clear_error() {
     let err =
         parse_tlog_bytes(b"time_s,q\n0,1\n", "x.tlog", None, &TlogOptions::default()).unwrap_err();

@@ -32,8 +32,9 @@ const STX_V2: u8 = 0xFD;
 const IFLAG_SIGNED: u8 = 0x01;
 /// Length of the v2 signature trailer.
 const SIGNATURE_LEN: usize = 13;
-/// A timestamp further than this from its predecessor is treated as corrupt (µs): one day.
-const MAX_TIME_JUMP_US: u64 = 86_400_000_000;
+/// A timestamp further than this from its predecessor (µs) is a suspected corruption: accepted
+/// only if the next frame confirms the new time base (a genuine gap in logging), else dropped.
+const MAX_TIME_JUMP_US: u64 = 10_000_000;
 
 /// One frame found in a log.
 #[derive(Debug, Clone, Copy)]
@@ -79,10 +80,14 @@ struct CrcExtra {
 
 impl CrcExtra {
     fn new() -> Self {
-        let mut v1 = [None; 256];
-        for (id, slot) in v1.iter_mut().enumerate() {
-            *slot = Self::lookup(id as u32);
-        }
+        static V1: std::sync::OnceLock<[Option<u8>; 256]> = std::sync::OnceLock::new();
+        let v1 = *V1.get_or_init(|| {
+            let mut v1 = [None; 256];
+            for (id, slot) in v1.iter_mut().enumerate() {
+                *slot = Self::lookup(id as u32);
+            }
+            v1
+        });
         Self {
             v1,
             other: HashMap::new(),
@@ -190,7 +195,9 @@ fn try_frame<'a>(bytes: &'a [u8], pos: usize, crc_extra: &mut CrcExtra) -> Attem
 /// A position that does not hold a valid frame (bad start marker, unknown message id, CRC
 /// mismatch, unsupported incompatibility flags) is skipped one byte at a time until the next valid
 /// frame; an incomplete frame at the very end is dropped. A frame whose log timestamp jumps by
-/// more than a day from the previous frame's is dropped and counted as a bad timestamp.
+/// more than 10 s from the previous frame's (and the very first frame) is kept only if the frame
+/// after it confirms the new time (a logging gap); otherwise it is dropped and counted as a bad
+/// timestamp.
 pub fn scan_frames<'a>(bytes: &'a [u8], mut visit: impl FnMut(&Frame<'a>)) -> ScanStats {
     let mut stats = ScanStats::default();
     let mut crc_extra = CrcExtra::new();
@@ -198,26 +205,43 @@ pub fn scan_frames<'a>(bytes: &'a [u8], mut visit: impl FnMut(&Frame<'a>)) -> Sc
     let mut run_start: Option<usize> = None; // start of the current run of skipped bytes
     let mut tail_start: Option<usize> = None; // first truncated-looking position of that run
     let mut last_time_us: Option<u64> = None;
+    let mut pending: Option<Frame<'a>> = None; // a frame whose time jumped, awaiting confirmation
     while pos < bytes.len() {
         match try_frame(bytes, pos, &mut crc_extra) {
             Attempt::Frame(frame, len) => {
                 run_start = None;
                 tail_start = None;
-                let plausible =
-                    last_time_us.is_none_or(|t| frame.time_us.abs_diff(t) <= MAX_TIME_JUMP_US);
-                if plausible {
-                    last_time_us = Some(frame.time_us);
-                    stats.frames += 1;
-                    if frame.version == 1 {
-                        stats.frames_v1 += 1;
-                    } else {
-                        stats.frames_v2 += 1;
-                    }
-                    visit(&frame);
-                } else {
-                    stats.bad_timestamps += 1;
-                }
                 pos += len;
+                let near = |a: u64, b: u64| a.abs_diff(b) <= MAX_TIME_JUMP_US;
+                match (last_time_us, pending.take()) {
+                    // The first frame waits for the second to confirm its time.
+                    (None, None) => pending = Some(frame),
+                    (None, Some(p)) if near(frame.time_us, p.time_us) => {
+                        accept(&mut stats, &mut last_time_us, &p, &mut visit);
+                        accept(&mut stats, &mut last_time_us, &frame, &mut visit);
+                    }
+                    (None, Some(_)) => {
+                        stats.bad_timestamps += 1;
+                        pending = Some(frame);
+                    }
+                    (Some(last), None) if near(frame.time_us, last) => {
+                        accept(&mut stats, &mut last_time_us, &frame, &mut visit)
+                    }
+                    (Some(_), None) => pending = Some(frame),
+                    (Some(_), Some(p)) if near(frame.time_us, p.time_us) => {
+                        // Two frames agree on the new time: a real gap in the log.
+                        accept(&mut stats, &mut last_time_us, &p, &mut visit);
+                        accept(&mut stats, &mut last_time_us, &frame, &mut visit);
+                    }
+                    (Some(last), Some(_)) => {
+                        stats.bad_timestamps += 1;
+                        if near(frame.time_us, last) {
+                            accept(&mut stats, &mut last_time_us, &frame, &mut visit);
+                        } else {
+                            pending = Some(frame);
+                        }
+                    }
+                }
             }
             attempt => {
                 if run_start.is_none() {
@@ -232,6 +256,15 @@ pub fn scan_frames<'a>(bytes: &'a [u8], mut visit: impl FnMut(&Frame<'a>)) -> Sc
             }
         }
     }
+    if let Some(p) = pending {
+        if stats.frames == 0 {
+            // A lone frame: nothing contradicts its time.
+            accept(&mut stats, &mut last_time_us, &p, &mut visit);
+        } else {
+            // A jump at the very end cannot be confirmed.
+            stats.bad_timestamps += 1;
+        }
+    }
     // Bytes from an incomplete frame to the end are a truncated tail, not corruption.
     if let (Some(run), Some(tail)) = (run_start, tail_start) {
         let tail_len = bytes.len() - tail;
@@ -242,6 +275,23 @@ pub fn scan_frames<'a>(bytes: &'a [u8], mut visit: impl FnMut(&Frame<'a>)) -> Sc
         }
     }
     stats
+}
+
+/// Counts a frame and hands it to the visitor.
+fn accept<'a>(
+    stats: &mut ScanStats,
+    last_time_us: &mut Option<u64>,
+    frame: &Frame<'a>,
+    visit: &mut impl FnMut(&Frame<'a>),
+) {
+    *last_time_us = Some(frame.time_us);
+    stats.frames += 1;
+    if frame.version == 1 {
+        stats.frames_v1 += 1;
+    } else {
+        stats.frames_v2 += 1;
+    }
+    visit(frame);
 }
 
 /// Options of [`read_tlog`].
@@ -292,6 +342,9 @@ struct Series {
     aoa_ssa: Vec<(u64, [f64; 2])>,
     servo: Vec<(u64, [f64; 8])>,
 }
+
+/// Smallest default grid step, µs (1 kHz).
+const MIN_DEFAULT_STEP_US: f64 = 1000.0;
 
 /// Message ids this reader decodes (others are only counted).
 const ATTITUDE_ID: u32 = 30;
@@ -421,7 +474,7 @@ pub fn parse_tlog_bytes(
             kind: WarningKind::Other,
             column: None,
             message: format!(
-                "dropped {} frames whose log timestamp jumped by more than a day",
+                "dropped {} frames whose log timestamp jumped by more than 10 s without confirmation",
                 stats.bad_timestamps
             ),
         });
@@ -600,6 +653,15 @@ fn build_record(
     tidy(&mut series.aoa_ssa);
     tidy(&mut series.servo);
     let att = &mut series.attitude;
+    // Drop ATTITUDE duplicates (the same sample relayed twice, µs apart).
+    let mut last_kept: Option<u64> = None;
+    att.retain(|(t, _)| {
+        let keep = last_kept.is_none_or(|l| t - l >= MIN_DEFAULT_STEP_US as u64 / 2);
+        if keep {
+            last_kept = Some(*t);
+        }
+        keep
+    });
     if att.len() < 2 {
         return Err("fewer than 2 usable ATTITUDE messages".into());
     }
@@ -610,7 +672,11 @@ fn build_record(
         Some(r) => 1e6 / r,
         None => {
             let mut steps: Vec<f64> = att.windows(2).map(|w| (w[1].0 - w[0].0) as f64).collect();
-            super::record::median_in_place(&mut steps).round().max(1.0)
+            // Floor at 1 ms: no tlog carries ATTITUDE faster than 1 kHz; closer samples are
+            // duplicates relayed over a second link.
+            super::record::median_in_place(&mut steps)
+                .round()
+                .max(MIN_DEFAULT_STEP_US)
         }
     };
     let n = (span_us / dt_us + 1e-9).floor() as usize + 1;
