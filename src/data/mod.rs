@@ -20,3 +20,5 @@ pub mod tlog;
 
 pub use airframe::Airframe;
 pub use tlog::{parse_tlog_bytes, read_tlog, TlogOptions, TlogReport};
+pub mod segments;
+pub use segments::{find_segments, ManeuverKind, Segment, SegmentOptions};
