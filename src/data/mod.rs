@@ -22,3 +22,5 @@ pub use airframe::Airframe;
 pub use tlog::{parse_tlog_bytes, read_tlog, TlogOptions, TlogReport};
 pub mod segments;
 pub use segments::{find_segments, ManeuverKind, Segment, SegmentOptions};
+pub mod check;
+pub use check::{check_compatibility, CheckOptions, CheckReport, Estimate};
