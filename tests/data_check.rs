@@ -59,7 +59,9 @@ fn consistent_flight(q_bias_rad_s: f64, alpha_skew_s: f64, noise: bool) -> Fligh
         ]
     };
     let mut x = [51.94, 0.0, 2.5, 0.0, 0.048, 1.0];
-    let mut fine: Vec<(f64, [f64; 6], [f64; 3], [f64; 3])> = Vec::with_capacity(n_fine + 1);
+    // (time, state u v w φ θ ψ, rates p q r, specific force)
+    type Sample = (f64, [f64; 6], [f64; 3], [f64; 3]);
+    let mut fine: Vec<Sample> = Vec::with_capacity(n_fine + 1);
     for k in 0..=n_fine {
         let t = k as f64 * h;
         let w = rates(t);

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use flightid::data::tlog::{scan_frames, TlogOptions};
+use flightid::data::tlog::TlogOptions;
 use flightid::data::{
     parse_tlog_bytes, read_tlog, write_csv_atomic, Airframe, DataError, FlightRecord,
 };

@@ -281,7 +281,8 @@ pub fn check_compatibility(
         .map(|(k, p)| {
             let se = cov[k * np + k].sqrt();
             let (_, floor) = p.step_and_floor();
-            !(floor > 0.0 && !(se < 10.0 * floor))
+            // NaN standard errors (singular information) count as not identifiable.
+            floor <= 0.0 || se.partial_cmp(&(10.0 * floor)) == Some(std::cmp::Ordering::Less)
         })
         .collect();
     if keep.iter().any(|k| !k) {
