@@ -203,3 +203,89 @@ fn attitude_only_data_still_checks_the_gyros() {
         "{bq:?}"
     );
 }
+
+/// Python with jsbsim for the oracle flight.
+// The lead will swap this for `flightid::sim::env::python()` (the project's provisioning
+// function) once it lands; until then the development venv is used directly.
+fn python() -> std::path::PathBuf {
+    std::path::PathBuf::from("/tmp/jsbvenv/bin/python")
+}
+
+/// A 30 s JSBSim c172x flight with elevator, aileron and rudder doublets, 50 Hz
+/// (scripts/oracle_check_flight.py). The first sample (before the first `run()`) has zero rates and
+/// is dropped.
+fn jsbsim_flight() -> FlightRecord {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("jsbsim.csv");
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/oracle_check_flight.py");
+    let out = std::process::Command::new(python())
+        .arg(script)
+        .arg(&csv)
+        .output()
+        .expect("run oracle script");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rec = flightid::data::read_csv(&csv).unwrap();
+    rec.slice(1, rec.len())
+}
+
+/// Delays a column by `skew_s` (linear interpolation, held at the start).
+fn delay(rec: &mut FlightRecord, column: &str, skew_s: f64) {
+    let t = rec.time_s.clone();
+    let x = rec.column(column).unwrap().to_vec();
+    let delayed = t
+        .iter()
+        .map(|&ti| {
+            let tt = (ti - skew_s).max(t[0]);
+            let k = t
+                .partition_point(|&s| s <= tt)
+                .saturating_sub(1)
+                .min(t.len() - 2);
+            let w = (tt - t[k]) / (t[k + 1] - t[k]);
+            x[k] + w * (x[k + 1] - x[k])
+        })
+        .collect();
+    rec.push_column(column, delayed);
+}
+
+#[test]
+fn jsbsim_flight_with_q_bias_and_alpha_skew_is_diagnosed_and_clean_flight_is_not() {
+    let clean = jsbsim_flight();
+    let rep = check_compatibility(&clean, &CheckOptions::default()).unwrap();
+    assert!(rep.translational && rep.converged);
+    for e in &rep.instrument {
+        assert!(!e.significant, "clean JSBSim flight: spurious {e:?}");
+    }
+
+    // Issue 6 acceptance: +0.5 °/s on q and α delayed by 60 ms, both recovered within 20 %.
+    let q_bias = 0.5_f64.to_radians();
+    let mut bad = clean.clone();
+    let q: Vec<f64> = bad
+        .column("q_rad_s")
+        .unwrap()
+        .iter()
+        .map(|q| q + q_bias)
+        .collect();
+    bad.push_column("q_rad_s", q);
+    delay(&mut bad, "alpha_rad", 0.060);
+    let rep = check_compatibility(&bad, &CheckOptions::default()).unwrap();
+    let bq = get(&rep, "bias_q_rad_s");
+    assert!(
+        bq.significant && (bq.value - q_bias).abs() < 0.2 * q_bias,
+        "{bq:?}"
+    );
+    let skew = get(&rep, "skew_alpha_s");
+    assert!(
+        skew.significant && (skew.value - 0.060).abs() < 0.2 * 0.060,
+        "{skew:?}"
+    );
+    for e in &rep.instrument {
+        if e.name != "bias_q_rad_s" && e.name != "skew_alpha_s" {
+            assert!(!e.significant, "spurious {e:?}");
+        }
+    }
+}
