@@ -280,13 +280,12 @@ fn make_tlog(csv: &Path, tlog: &Path, extra: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
-#[test]
-fn csv_to_pymavlink_tlog_and_back_agrees_to_field_quantisation() {
+/// Writes `truth` as CSV, encodes it with pymavlink (with damage) and checks the read-back.
+fn round_trip_agrees_to_field_quantisation(truth: &FlightRecord) {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("flight.csv");
     let tlog = dir.path().join("flight.tlog");
-    let truth = synthetic_flight();
-    write_csv_atomic(&csv, &truth).unwrap();
+    write_csv_atomic(&csv, truth).unwrap();
     let summary = make_tlog(
         &csv,
         &tlog,
@@ -361,4 +360,30 @@ fn csv_to_pymavlink_tlog_and_back_agrees_to_field_quantisation() {
     for (g, w) in psi.iter().zip(truth.column("psi_rad").unwrap()) {
         assert!((g - w).abs() < 1e-6, "psi {g} vs {w}");
     }
+}
+
+#[test]
+fn synthetic_csv_to_pymavlink_tlog_and_back_agrees_to_field_quantisation() {
+    round_trip_agrees_to_field_quantisation(&synthetic_flight());
+}
+
+/// A JSBSim c172x flight (elevator, aileron, rudder doublets; scripts/oracle_check_flight.py).
+// The lead will swap the Python for `flightid::sim::env::python()` and the script for
+// `flightid fly` once they land.
+#[test]
+fn jsbsim_csv_to_pymavlink_tlog_and_back_agrees_to_field_quantisation() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("jsbsim.csv");
+    let out = Command::new(python())
+        .arg(repo_root().join("scripts/oracle_check_flight.py"))
+        .arg(&csv)
+        .output()
+        .expect("run scripts/oracle_check_flight.py");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rec = flightid::data::read_csv(&csv).unwrap();
+    round_trip_agrees_to_field_quantisation(&rec);
 }
