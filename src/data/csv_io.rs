@@ -68,26 +68,25 @@ pub fn parse_csv_bytes(bytes: &[u8], file: &str) -> Result<FlightRecord, DataErr
             })?;
     let body_start = (header_line.1 + 1).min(bytes.len());
     let body = &bytes[body_start..];
-    let chunks = split_chunks(body);
-    // First line number of each chunk.
-    let newline_counts: Vec<usize> = chunks
-        .par_iter()
-        .map(|c| c.iter().filter(|&&b| b == b'\n').count())
-        .collect();
-    let mut first_lines = Vec::with_capacity(chunks.len());
-    let mut next = header_lineno + 1;
-    for n in &newline_counts {
-        first_lines.push(next);
-        next += n;
-    }
+    let (chunks, quoted) = split_chunks(body);
+    // Chunks are parsed in parallel with chunk-relative line numbers (1 = the chunk's first
+    // line), then shifted by the lines of the chunks before them.
     let parsed: Vec<Result<Chunk, DataError>> = chunks
         .par_iter()
-        .zip(first_lines.par_iter())
-        .map(|(c, &first)| parse_chunk(c, first, &names, time_index, file))
+        .map(|c| parse_chunk(c, quoted, &names, time_index, file))
         .collect();
     let mut parts = Vec::with_capacity(parsed.len());
+    let mut base = header_lineno; // line number just before the chunk
     for p in parsed {
-        parts.push(p?);
+        match p {
+            Ok(mut chunk) => {
+                chunk.first_line += base;
+                chunk.last_line += base;
+                base += chunk.newlines;
+                parts.push(chunk);
+            }
+            Err(e) => return Err(shift_lines(e, base)),
+        }
     }
     let parts: Vec<Chunk> = parts.into_iter().filter(|c| c.rows > 0).collect();
     if parts.is_empty() {
@@ -187,11 +186,12 @@ fn parse_header(line_bytes: &[u8], file: &str, line: usize) -> Result<Vec<String
 
 /// Splits the body at line boundaries into roughly equal chunks for parallel parsing; one chunk if
 /// the body holds a quote (a quoted field may contain a newline).
-fn split_chunks(body: &[u8]) -> Vec<&[u8]> {
+fn split_chunks(body: &[u8]) -> (Vec<&[u8]>, bool) {
     const MIN_CHUNK: usize = 1 << 20;
     let n_chunks = (rayon::current_num_threads() * 4).max(1);
-    if body.len() < 2 * MIN_CHUNK || body.contains(&b'"') {
-        return vec![body];
+    let quoted = body.contains(&b'"');
+    if body.len() < 2 * MIN_CHUNK || quoted {
+        return (vec![body], quoted);
     }
     let target = (body.len() / n_chunks).max(MIN_CHUNK);
     let mut out = Vec::new();
@@ -206,20 +206,86 @@ fn split_chunks(body: &[u8]) -> Vec<&[u8]> {
         out.push(&body[start..end]);
         start = end;
     }
-    out
+    (out, false)
 }
 
-/// One parsed chunk: column-major values and its line span.
+/// Moves the line numbers of a chunk-relative error by `offset` lines.
+fn shift_lines(e: DataError, offset: usize) -> DataError {
+    match e {
+        DataError::Ragged {
+            file,
+            line,
+            expected,
+            found,
+        } => DataError::Ragged {
+            file,
+            line: line + offset,
+            expected,
+            found,
+        },
+        DataError::NonNumeric {
+            file,
+            line,
+            column,
+            cell,
+        } => DataError::NonNumeric {
+            file,
+            line: line + offset,
+            column,
+            cell,
+        },
+        DataError::NonFinite {
+            file,
+            line,
+            column,
+            cell,
+        } => DataError::NonFinite {
+            file,
+            line: line + offset,
+            column,
+            cell,
+        },
+        DataError::TimeNotIncreasing {
+            file,
+            line,
+            time_s,
+            previous_s,
+            previous_line,
+            relation,
+        } => DataError::TimeNotIncreasing {
+            file,
+            line: line + offset,
+            time_s,
+            previous_s,
+            previous_line: previous_line + offset,
+            relation,
+        },
+        DataError::Parse {
+            file,
+            line,
+            message,
+        } => DataError::Parse {
+            file,
+            line: line + offset,
+            message,
+        },
+        other => other,
+    }
+}
+
+/// One parsed chunk: column-major values, its line span and the line breaks it holds.
 struct Chunk {
     columns: Vec<Vec<f64>>,
     rows: usize,
     first_line: usize,
     last_line: usize,
+    newlines: usize,
 }
 
+/// Parses one chunk with chunk-relative line numbers (its first line is line 1).
 fn parse_chunk(
     bytes: &[u8],
-    first_line: usize,
+    quoted: bool,
     names: &[String],
     time_index: usize,
     file: &str,
@@ -235,16 +301,18 @@ fn parse_chunk(
         time_index,
         file,
     };
-    if bytes.contains(&b'"') {
-        parse_chunk_quoted(bytes, first_line, &mut sink)?;
+    let newlines = if quoted {
+        parse_chunk_quoted(bytes, 1, &mut sink)?;
+        bytes.iter().filter(|&&b| b == b'\n').count()
     } else {
-        parse_chunk_plain(bytes, first_line, &mut sink)?;
-    }
+        parse_chunk_plain(bytes, 1, &mut sink)?
+    };
     Ok(Chunk {
         columns: sink.columns,
         rows: sink.rows,
         first_line: sink.first_line,
         last_line: sink.last_line,
+        newlines,
     })
 }
 
@@ -342,10 +410,11 @@ fn parse_chunk_plain(
     bytes: &[u8],
     first_line: usize,
     sink: &mut ChunkSink,
-) -> Result<(), DataError> {
+) -> Result<usize, DataError> {
     let n = bytes.len();
     let ncols = sink.names.len();
     let mut line = first_line;
+    let mut newlines = 0usize;
     let mut p = 0usize;
     while p < n {
         let mut k = 0usize;
@@ -384,9 +453,10 @@ fn parse_chunk_plain(
             sink.finish_row(line)?;
         }
         line += 1;
+        newlines += usize::from(line_end < n);
         p = line_end + 1;
     }
-    Ok(())
+    Ok(newlines)
 }
 
 /// Scans one cell starting at `p`: its value (`None` if not a finite number) and the index of the
@@ -431,7 +501,42 @@ fn scan_cell(bytes: &[u8], p: usize) -> (Option<f64>, usize) {
         let v = mantissa as f64 / POW10[frac_digits];
         return (Some(if negative { -v } else { v }), i);
     }
+    if simple && n_digits > 0 && n_digits <= 19 && frac_digits < POW10.len() {
+        if let Some(v) = long_decimal(mantissa, frac_digits) {
+            return (Some(if negative { -v } else { v }), i);
+        }
+    }
     (parse_cell_std(&bytes[p..i]).ok(), i)
+}
+
+/// `w / 10^k` correctly rounded for a mantissa above 2^53 (16–19 digits, as round-trip output
+/// has), or `None` when this fast path cannot prove the rounding (then the caller falls back).
+///
+/// Method: `w = wh + wl` exactly (`wh` = w rounded to f64, |wl| ≤ 2^11); `q = RN(wh / P)`;
+/// the division remainder `r = wh − q·P` is exactly representable and exact by FMA (Boldo &
+/// Daumas, "Representable correcting terms for possibly underflowing floating point operations",
+/// ARITH 2003); the value is `q + (r + wl)/P`. The sum is rounded once more and accepted only if
+/// the exact value lies clearly (by 8× the bound on the correction's own error) inside the
+/// rounding interval of the result; near-midpoints go to the standard parser.
+#[inline]
+fn long_decimal(w: u64, k: usize) -> Option<f64> {
+    let p = *POW10.get(k)?;
+    let wh = w as f64;
+    if wh >= 18_446_744_073_709_551_616.0 {
+        return None; // rounding reached 2^64: `wh as u64` would saturate
+    }
+    // Exact, |wl| ≤ 2^11: the wrapping difference of two nearby u64 read as i64.
+    let wl = w.wrapping_sub(wh as u64) as i64 as f64;
+    let q = wh / p;
+    let r = (-q).mul_add(p, wh); // exact remainder
+    let c = (r + wl) / p;
+    let x = q + c;
+    // Distance of the exact value from x, in units of x's ulp: (q − x) is exact (Sterbenz).
+    // The smaller of the two neighbour gaps (they differ when x is a power of two).
+    let ulp = (f64::from_bits(x.to_bits() + 1) - x).min(x - f64::from_bits(x.to_bits() - 1));
+    let offset = (q - x) + c;
+    let err = 8.0 * (c.abs() * f64::EPSILON + (r.abs() + wl.abs()) * f64::EPSILON / p);
+    (x.is_normal() && x > 0.0 && offset.abs() + err < 0.5 * ulp).then_some(x)
 }
 
 /// General path (quoted fields) through the `csv` crate's `ByteRecord`.
@@ -654,5 +759,73 @@ mod tests {
             }
         }
         assert!(answered > 100_000, "fast path used for {answered} inputs");
+    }
+
+    #[test]
+    fn long_decimal_path_agrees_bit_for_bit_with_std_parse() {
+        // 300k shortest round-trip strings of random doubles (16–17 digits) and random 16–19
+        // digit decimals: whenever the long path answers it must equal std's correctly rounded
+        // result, and it must answer for the vast majority.
+        // Hard cases first: near powers of two and exact midpoints between doubles.
+        for s in [
+            "0.50000000000000001",
+            "0.49999999999999997",
+            "1.0000000000000001",
+            "0.99999999999999994",
+            "0.99999999999999989",
+            "9007199254740993",
+            "9007199254740995",
+            "2.2250738585072014",
+            "1844674407370955161",
+            "0.1000000000000000055511151231257827",
+            "7.3786976294838206464",
+        ] {
+            let (v, _) = scan_cell(s.as_bytes(), 0);
+            assert_eq!(
+                v.map(f64::to_bits),
+                s.parse::<f64>().ok().map(f64::to_bits),
+                "{s}"
+            );
+        }
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let (mut answered, mut total) = (0, 0);
+        for case in 0..300_000 {
+            let s = if case % 2 == 0 {
+                let x: f64 = rng.gen_range(-1e3..1e3) * 10f64.powi(rng.gen_range(-6..3));
+                format!("{x:?}")
+            } else {
+                let digits = rng.gen_range(16..=19);
+                let mut s = String::new();
+                let dot = rng.gen_range(0..digits);
+                for d in 0..digits {
+                    if d == dot {
+                        s.push('.');
+                    }
+                    s.push(char::from(b'0' + rng.gen_range(0..10u8)));
+                }
+                s
+            };
+            if s.contains('e') {
+                continue;
+            }
+            let (v, end) = scan_cell(s.as_bytes(), 0);
+            assert_eq!(end, s.len());
+            let std = s.parse::<f64>().unwrap();
+            assert_eq!(v.map(f64::to_bits), Some(std.to_bits()), "input {s}");
+            total += 1;
+            let digits: String = s.chars().filter(char::is_ascii_digit).collect();
+            let w: u64 = digits.parse().unwrap();
+            let k = s.len() - s.find('.').map_or(s.len(), |i| i + 1);
+            if w > (1u64 << 53) && k < 23 {
+                if let Some(x) = long_decimal(w, k) {
+                    answered += 1;
+                    assert_eq!(x.to_bits(), std.abs().to_bits(), "long path, input {s}");
+                }
+            }
+        }
+        assert!(
+            answered > total / 3,
+            "long path answered {answered} of {total}"
+        );
     }
 }
