@@ -236,3 +236,75 @@ fn irregular_sampling_is_detected_and_resampled_linearly() {
     assert!(u.metadata.last().unwrap().contains("linear interpolation"));
     assert!(resample_uniform(&rec, 0.0).is_err());
 }
+
+/// A body of `rows` data lines (about 20 bytes each) after a metadata line and the header, with
+/// one blank line at line 1000; big enough (> 2 MB) to be parsed in parallel chunks.
+fn big_csv(rows: usize, edit: impl Fn(usize, &mut String)) -> Vec<u8> {
+    let mut s = String::from("# big\ntime_s,a,b\n");
+    let mut line = 3;
+    for i in 0..rows {
+        if line == 1000 {
+            s.push('\n');
+            line += 1;
+        }
+        let mut row = format!("{},{},{}", i as f64 * 0.01, 0.5 + i as f64 * 1e-6, -2.25);
+        edit(line, &mut row);
+        s.push_str(&row);
+        s.push('\n');
+        line += 1;
+    }
+    s.into_bytes()
+}
+
+#[test]
+fn errors_deep_in_a_chunked_file_report_their_true_line() {
+    let ok = big_csv(200_000, |_, _| {});
+    assert!(
+        ok.len() > 3 << 20,
+        "the body must span several parallel chunks"
+    );
+    let rec = parse_csv_bytes(&ok, "big.csv").unwrap();
+    assert_eq!(rec.len(), 200_000);
+    assert_eq!(rec.column("a").unwrap()[199_999], 0.5 + 199_999.0 * 1e-6);
+
+    let bad = big_csv(200_000, |line, row| {
+        if line == 187_654 {
+            *row = row.replace("-2.25", "NaN");
+        }
+    });
+    let err = parse_csv_bytes(&bad, "big.csv").unwrap_err();
+    assert!(
+        matches!(err, DataError::NonFinite { line: 187_654, .. }),
+        "{err}"
+    );
+
+    let bad = big_csv(200_000, |line, row| {
+        if line == 123_456 {
+            *row = "0.5,1,1".into(); // time goes back
+        }
+    });
+    let err = parse_csv_bytes(&bad, "big.csv").unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DataError::TimeNotIncreasing {
+                line: 123_456,
+                previous_line: 123_455,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    // The same check across every chunk boundary: a repeated time at each of many lines.
+    for target in [50_001, 100_003, 150_007, 199_999] {
+        let bad = big_csv(200_000, |line, row| {
+            if line == target {
+                *row = "0,0,0".into();
+            }
+        });
+        match parse_csv_bytes(&bad, "big.csv").unwrap_err() {
+            DataError::TimeNotIncreasing { line, .. } => assert_eq!(line, target),
+            e => panic!("{e}"),
+        }
+    }
+}

@@ -5,10 +5,13 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod check;
 pub mod common;
 pub mod demo;
 pub mod fly;
+pub mod ingest;
 pub mod linearize;
+pub mod segments;
 pub mod trim;
 
 /// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
@@ -30,6 +33,12 @@ pub enum Command {
     Linearize(linearize::LinearizeCmd),
     /// Fly a maneuver (doublet, 3211, multisine, chirp) from trim and write the flight-data CSV.
     Fly(fly::FlyCmd),
+    /// Convert a MAVLink telemetry log (.tlog) into the flight-data CSV.
+    Ingest(ingest::IngestArgs),
+    /// List the maneuvers (doublet, 3-2-1-1, sweep) found in a long flight-data file.
+    Segments(segments::SegmentsArgs),
+    /// Data compatibility check: sensor biases, scale factors and time skews by flight-path reconstruction.
+    Check(check::CheckArgs),
 }
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
@@ -51,6 +60,9 @@ pub fn main() -> i32 {
         Command::Trim(a) => trim::run(a),
         Command::Linearize(a) => linearize::run(a),
         Command::Fly(a) => fly::run(a),
+        Command::Ingest(a) => ingest::run(a),
+        Command::Segments(a) => segments::run(a),
+        Command::Check(a) => check::run(a),
     };
     match result {
         Ok(()) => 0,
@@ -62,7 +74,11 @@ pub fn main() -> i32 {
 pub fn report_error(e: &anyhow::Error) -> i32 {
     let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
     eprintln!("error: {}", chain.join(": "));
-    if e.chain().any(|c| c.downcast_ref::<UsageError>().is_some()) {
+    if e.chain().any(|c| {
+        c.downcast_ref::<UsageError>().is_some()
+            || c.downcast_ref::<crate::data::DataError>().is_some()
+            || c.downcast_ref::<crate::aircraft::AircraftError>().is_some()
+    }) {
         2
     } else {
         1

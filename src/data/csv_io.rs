@@ -68,26 +68,25 @@ pub fn parse_csv_bytes(bytes: &[u8], file: &str) -> Result<FlightRecord, DataErr
             })?;
     let body_start = (header_line.1 + 1).min(bytes.len());
     let body = &bytes[body_start..];
-    let chunks = split_chunks(body);
-    // First line number of each chunk.
-    let newline_counts: Vec<usize> = chunks
-        .par_iter()
-        .map(|c| c.iter().filter(|&&b| b == b'\n').count())
-        .collect();
-    let mut first_lines = Vec::with_capacity(chunks.len());
-    let mut next = header_lineno + 1;
-    for n in &newline_counts {
-        first_lines.push(next);
-        next += n;
-    }
+    let (chunks, quoted) = split_chunks(body);
+    // Chunks are parsed in parallel with chunk-relative line numbers (1 = the chunk's first
+    // line), then shifted by the lines of the chunks before them.
     let parsed: Vec<Result<Chunk, DataError>> = chunks
         .par_iter()
-        .zip(first_lines.par_iter())
-        .map(|(c, &first)| parse_chunk(c, first, &names, time_index, file))
+        .map(|c| parse_chunk(c, quoted, &names, time_index, file))
         .collect();
     let mut parts = Vec::with_capacity(parsed.len());
+    let mut base = header_lineno; // line number just before the chunk
     for p in parsed {
-        parts.push(p?);
+        match p {
+            Ok(mut chunk) => {
+                chunk.first_line += base;
+                chunk.last_line += base;
+                base += chunk.newlines;
+                parts.push(chunk);
+            }
+            Err(e) => return Err(shift_lines(e, base)),
+        }
     }
     let parts: Vec<Chunk> = parts.into_iter().filter(|c| c.rows > 0).collect();
     if parts.is_empty() {
@@ -187,11 +186,12 @@ fn parse_header(line_bytes: &[u8], file: &str, line: usize) -> Result<Vec<String
 
 /// Splits the body at line boundaries into roughly equal chunks for parallel parsing; one chunk if
 /// the body holds a quote (a quoted field may contain a newline).
-fn split_chunks(body: &[u8]) -> Vec<&[u8]> {
+fn split_chunks(body: &[u8]) -> (Vec<&[u8]>, bool) {
     const MIN_CHUNK: usize = 1 << 20;
     let n_chunks = (rayon::current_num_threads() * 4).max(1);
-    if body.len() < 2 * MIN_CHUNK || body.contains(&b'"') {
-        return vec![body];
+    let quoted = body.contains(&b'"');
+    if body.len() < 2 * MIN_CHUNK || quoted {
+        return (vec![body], quoted);
     }
     let target = (body.len() / n_chunks).max(MIN_CHUNK);
     let mut out = Vec::new();
@@ -206,96 +206,187 @@ fn split_chunks(body: &[u8]) -> Vec<&[u8]> {
         out.push(&body[start..end]);
         start = end;
     }
-    out
+    (out, false)
 }
 
-/// One parsed chunk: column-major values and its line span.
+/// Moves the line numbers of a chunk-relative error by `offset` lines.
+fn shift_lines(e: DataError, offset: usize) -> DataError {
+    match e {
+        DataError::Ragged {
+            file,
+            line,
+            expected,
+            found,
+        } => DataError::Ragged {
+            file,
+            line: line + offset,
+            expected,
+            found,
+        },
+        DataError::NonNumeric {
+            file,
+            line,
+            column,
+            cell,
+        } => DataError::NonNumeric {
+            file,
+            line: line + offset,
+            column,
+            cell,
+        },
+        DataError::NonFinite {
+            file,
+            line,
+            column,
+            cell,
+        } => DataError::NonFinite {
+            file,
+            line: line + offset,
+            column,
+            cell,
+        },
+        DataError::TimeNotIncreasing {
+            file,
+            line,
+            time_s,
+            previous_s,
+            previous_line,
+            relation,
+        } => DataError::TimeNotIncreasing {
+            file,
+            line: line + offset,
+            time_s,
+            previous_s,
+            previous_line: previous_line + offset,
+            relation,
+        },
+        DataError::Parse {
+            file,
+            line,
+            message,
+        } => DataError::Parse {
+            file,
+            line: line + offset,
+            message,
+        },
+        other => other,
+    }
+}
+
+/// One parsed chunk: column-major values, its line span and the line breaks it holds.
 struct Chunk {
     columns: Vec<Vec<f64>>,
     rows: usize,
     first_line: usize,
     last_line: usize,
+    newlines: usize,
 }
 
+/// Parses one chunk with chunk-relative line numbers (its first line is line 1).
 fn parse_chunk(
     bytes: &[u8],
-    first_line: usize,
+    quoted: bool,
     names: &[String],
     time_index: usize,
     file: &str,
 ) -> Result<Chunk, DataError> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .from_reader(bytes);
     let ncols = names.len();
     let estimate = bytes.len() / (ncols * 8).max(1);
-    let mut columns: Vec<Vec<f64>> = (0..ncols).map(|_| Vec::with_capacity(estimate)).collect();
-    let mut rec = csv::ByteRecord::new();
-    let mut rows = 0usize;
-    let mut chunk_first = 0usize;
-    let mut last_line = 0usize;
-    loop {
-        match rdr.read_byte_record(&mut rec) {
-            Ok(true) => {}
-            Ok(false) => break,
-            Err(e) => {
-                let line = e
-                    .position()
-                    .map_or(first_line, |p| first_line + p.line() as usize - 1);
-                return Err(DataError::Parse {
-                    file: file.to_string(),
-                    line,
-                    message: e.to_string(),
-                });
+    let mut sink = ChunkSink {
+        columns: (0..ncols).map(|_| Vec::with_capacity(estimate)).collect(),
+        rows: 0,
+        first_line: 0,
+        last_line: 0,
+        names,
+        time_index,
+        file,
+    };
+    let newlines = if quoted {
+        parse_chunk_quoted(bytes, 1, &mut sink)?;
+        bytes.iter().filter(|&&b| b == b'\n').count()
+    } else {
+        parse_chunk_plain(bytes, 1, &mut sink)?
+    };
+    Ok(Chunk {
+        columns: sink.columns,
+        rows: sink.rows,
+        first_line: sink.first_line,
+        last_line: sink.last_line,
+        newlines,
+    })
+}
+
+/// Accumulates rows of one chunk, checking field count, numbers and time order.
+struct ChunkSink<'a> {
+    columns: Vec<Vec<f64>>,
+    rows: usize,
+    first_line: usize,
+    last_line: usize,
+    names: &'a [String],
+    time_index: usize,
+    file: &'a str,
+}
+
+impl ChunkSink<'_> {
+    /// The error for a cell that is not a finite number.
+    fn cell_error(&self, line: usize, k: usize, cell: &[u8]) -> DataError {
+        let file = self.file.to_string();
+        let column = self.names[k].clone();
+        let not_a_number = parse_cell(cell).err().unwrap_or(true);
+        let cell = String::from_utf8_lossy(cell).trim().to_string();
+        if not_a_number {
+            DataError::NonNumeric {
+                file,
+                line,
+                column,
+                cell,
+            }
+        } else {
+            DataError::NonFinite {
+                file,
+                line,
+                column,
+                cell,
             }
         }
-        let line = rec
-            .position()
-            .map_or(first_line, |p| first_line + p.line() as usize - 1);
-        // A line of only whitespace is not a row.
-        if rec.len() == 1 && rec[0].iter().all(u8::is_ascii_whitespace) {
-            continue;
-        }
-        if rec.len() != ncols {
+    }
+
+    /// Adds one row given as an iterator over its cells; `n_fields` is the row's field count.
+    fn push_row<'c>(
+        &mut self,
+        line: usize,
+        n_fields: usize,
+        cells: impl Iterator<Item = &'c [u8]>,
+    ) -> Result<(), DataError> {
+        let ncols = self.names.len();
+        if n_fields != ncols {
             return Err(DataError::Ragged {
-                file: file.to_string(),
+                file: self.file.to_string(),
                 line,
                 expected: ncols,
-                found: rec.len(),
+                found: n_fields,
             });
         }
-        for (k, cell) in rec.iter().enumerate() {
-            let v = parse_cell(cell).map_err(|finite_but_bad| {
-                let cell_text = String::from_utf8_lossy(cell).into_owned();
-                if finite_but_bad {
-                    DataError::NonNumeric {
-                        file: file.to_string(),
-                        line,
-                        column: names[k].clone(),
-                        cell: cell_text,
-                    }
-                } else {
-                    DataError::NonFinite {
-                        file: file.to_string(),
-                        line,
-                        column: names[k].clone(),
-                        cell: cell_text,
-                    }
-                }
-            })?;
-            columns[k].push(v);
+        for (k, cell) in cells.enumerate() {
+            let v = parse_cell(cell).map_err(|_| self.cell_error(line, k, cell))?;
+            self.columns[k].push(v);
         }
+        self.finish_row(line)
+    }
+
+    /// Checks the time order of the row just pushed and counts it.
+    fn finish_row(&mut self, line: usize) -> Result<(), DataError> {
+        let rows = self.rows;
         if rows > 0 {
-            let t = &columns[time_index];
+            let t = &self.columns[self.time_index];
             let (prev, cur) = (t[rows - 1], t[rows]);
             if cur <= prev {
                 return Err(DataError::TimeNotIncreasing {
-                    file: file.to_string(),
+                    file: self.file.to_string(),
                     line,
                     time_s: cur,
                     previous_s: prev,
-                    previous_line: last_line,
+                    previous_line: self.last_line,
                     relation: if cur == prev {
                         "repeats"
                     } else {
@@ -304,28 +395,243 @@ fn parse_chunk(
                 });
             }
         } else {
-            chunk_first = line;
+            self.first_line = line;
         }
-        last_line = line;
-        rows += 1;
+        self.last_line = line;
+        self.rows += 1;
+        Ok(())
     }
-    Ok(Chunk {
-        columns,
-        rows,
-        first_line: chunk_first,
-        last_line,
-    })
 }
+
+/// Fast path for bodies without quotes: one pass over the bytes that splits cells at `,`/`\n` and
+/// parses plain decimals on the fly; anything else (exponents, spaces, `\r`, text) goes through
+/// [`parse_cell`].
+fn parse_chunk_plain(
+    bytes: &[u8],
+    first_line: usize,
+    sink: &mut ChunkSink,
+) -> Result<usize, DataError> {
+    let n = bytes.len();
+    let ncols = sink.names.len();
+    let mut line = first_line;
+    let mut newlines = 0usize;
+    let mut p = 0usize;
+    while p < n {
+        let mut k = 0usize;
+        let line_end;
+        loop {
+            let (value, end) = scan_cell(bytes, p);
+            let at_line_end = end >= n || bytes[end] == b'\n';
+            if k == 0 && at_line_end && bytes[p..end].iter().all(u8::is_ascii_whitespace) {
+                // A blank line is not a row.
+                k = usize::MAX;
+                line_end = end;
+                break;
+            }
+            if k < ncols {
+                match value {
+                    Some(v) => sink.columns[k].push(v),
+                    None => return Err(sink.cell_error(line, k, &bytes[p..end])),
+                }
+            }
+            k += 1;
+            if at_line_end {
+                line_end = end;
+                break;
+            }
+            p = end + 1;
+        }
+        if k != usize::MAX {
+            if k != ncols {
+                return Err(DataError::Ragged {
+                    file: sink.file.to_string(),
+                    line,
+                    expected: ncols,
+                    found: k,
+                });
+            }
+            sink.finish_row(line)?;
+        }
+        line += 1;
+        newlines += usize::from(line_end < n);
+        p = line_end + 1;
+    }
+    Ok(newlines)
+}
+
+/// Scans one cell starting at `p`: its value (`None` if not a finite number) and the index of the
+/// delimiter (`,` or `\n`) or end of input that ends it. One pass: plain decimals of up to 15
+/// significant digits take Clinger's exact fast path (as in [`fast_decimal`]); the rest goes to
+/// the standard library's correctly rounded parser.
+#[inline]
+fn scan_cell(bytes: &[u8], p: usize) -> (Option<f64>, usize) {
+    let n = bytes.len();
+    let mut i = p;
+    let negative = i < n && bytes[i] == b'-';
+    if negative {
+        i += 1;
+    }
+    let mut mantissa: u64 = 0;
+    let mut n_digits = 0u32;
+    let mut frac_digits = 0usize;
+    let mut seen_dot = false;
+    let mut simple = true;
+    while i < n {
+        let c = bytes[i];
+        if c.is_ascii_digit() {
+            // Saturates harmlessly: past 19 digits the cell leaves the fast path anyway.
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+            n_digits += 1;
+            frac_digits += usize::from(seen_dot);
+        } else if c == b',' || c == b'\n' {
+            break;
+        } else if c == b'.' && !seen_dot {
+            seen_dot = true;
+        } else {
+            simple = false;
+        }
+        i += 1;
+    }
+    if simple
+        && n_digits > 0
+        && n_digits <= 19
+        && mantissa <= (1u64 << 53)
+        && frac_digits < POW10.len()
+    {
+        let v = mantissa as f64 / POW10[frac_digits];
+        return (Some(if negative { -v } else { v }), i);
+    }
+    if simple && n_digits > 0 && n_digits <= 19 && frac_digits < POW10.len() {
+        if let Some(v) = long_decimal(mantissa, frac_digits) {
+            return (Some(if negative { -v } else { v }), i);
+        }
+    }
+    (parse_cell_std(&bytes[p..i]).ok(), i)
+}
+
+/// `w / 10^k` correctly rounded for a mantissa above 2^53 (16–19 digits, as round-trip output
+/// has), or `None` when this fast path cannot prove the rounding (then the caller falls back).
+///
+/// Method: `w = wh + wl` exactly (`wh` = w rounded to f64, |wl| ≤ 2^11); `q = RN(wh / P)`;
+/// the division remainder `r = wh − q·P` is exactly representable and exact by FMA (Boldo &
+/// Daumas, "Representable correcting terms for possibly underflowing floating point operations",
+/// ARITH 2003); the value is `q + (r + wl)/P`. The sum is rounded once more and accepted only if
+/// the exact value lies clearly (by 8× the bound on the correction's own error) inside the
+/// rounding interval of the result; near-midpoints go to the standard parser.
+#[inline]
+fn long_decimal(w: u64, k: usize) -> Option<f64> {
+    let p = *POW10.get(k)?;
+    let wh = w as f64;
+    if wh >= 18_446_744_073_709_551_616.0 {
+        return None; // rounding reached 2^64: `wh as u64` would saturate
+    }
+    // Exact, |wl| ≤ 2^11: the wrapping difference of two nearby u64 read as i64.
+    let wl = w.wrapping_sub(wh as u64) as i64 as f64;
+    let q = wh / p;
+    let r = (-q).mul_add(p, wh); // exact remainder
+    let c = (r + wl) / p;
+    let x = q + c;
+    // Distance of the exact value from x, in units of x's ulp: (q − x) is exact (Sterbenz).
+    // The smaller of the two neighbour gaps (they differ when x is a power of two).
+    let ulp = (f64::from_bits(x.to_bits() + 1) - x).min(x - f64::from_bits(x.to_bits() - 1));
+    let offset = (q - x) + c;
+    let err = 8.0 * (c.abs() * f64::EPSILON + (r.abs() + wl.abs()) * f64::EPSILON / p);
+    (x.is_normal() && x > 0.0 && offset.abs() + err < 0.5 * ulp).then_some(x)
+}
+
+/// General path (quoted fields) through the `csv` crate's `ByteRecord`.
+fn parse_chunk_quoted(
+    bytes: &[u8],
+    first_line: usize,
+    sink: &mut ChunkSink,
+) -> Result<(), DataError> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(bytes);
+    let mut rec = csv::ByteRecord::new();
+    let line_of =
+        |p: Option<&csv::Position>| p.map_or(first_line, |p| first_line + p.line() as usize - 1);
+    loop {
+        match rdr.read_byte_record(&mut rec) {
+            Ok(true) => {}
+            Ok(false) => return Ok(()),
+            Err(e) => {
+                return Err(DataError::Parse {
+                    file: sink.file.to_string(),
+                    line: line_of(e.position()),
+                    message: e.to_string(),
+                })
+            }
+        }
+        let line = line_of(rec.position());
+        // A line of only whitespace is not a row.
+        if rec.len() == 1 && rec[0].iter().all(u8::is_ascii_whitespace) {
+            continue;
+        }
+        sink.push_row(line, rec.len(), rec.iter())?;
+    }
+}
+
+/// Exactly representable powers of ten (10^22 is the largest below 2^53·2^22).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
 
 /// Parses one numeric cell. `Err(true)`: not a number; `Err(false)`: a number but not finite.
 fn parse_cell(cell: &[u8]) -> Result<f64, bool> {
     let trimmed = cell.trim_ascii();
-    let s = std::str::from_utf8(trimmed).map_err(|_| true)?;
+    if let Some(v) = fast_decimal(trimmed) {
+        return Ok(v);
+    }
+    parse_cell_std(trimmed)
+}
+
+/// [`parse_cell`] through the standard library's parser only (trims ASCII whitespace).
+fn parse_cell_std(cell: &[u8]) -> Result<f64, bool> {
+    let s = std::str::from_utf8(cell.trim_ascii()).map_err(|_| true)?;
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(_) => Err(false),
         Err(_) => Err(true),
     }
+}
+
+/// Exact fast path for plain decimals (`-12.345`, no exponent): with an integer mantissa below 2^53
+/// and at most 22 fraction digits, `mantissa / 10^k` is one correctly rounded IEEE division
+/// (Clinger 1990, "How to read floating point numbers accurately", fast path). Else `None`.
+fn fast_decimal(b: &[u8]) -> Option<f64> {
+    let (negative, digits) = match b.first()? {
+        b'-' => (true, &b[1..]),
+        b'+' => (false, &b[1..]),
+        _ => (false, b),
+    };
+    if digits.is_empty() || digits.len() > 19 {
+        return None;
+    }
+    let mut mantissa: u64 = 0;
+    let mut n_digits = 0;
+    let mut frac_digits: Option<usize> = None;
+    for &c in digits {
+        match c {
+            b'0'..=b'9' => {
+                mantissa = mantissa * 10 + u64::from(c - b'0');
+                n_digits += 1;
+                if let Some(f) = frac_digits.as_mut() {
+                    *f += 1;
+                }
+            }
+            b'.' if frac_digits.is_none() => frac_digits = Some(0),
+            _ => return None,
+        }
+    }
+    if n_digits == 0 || mantissa > (1u64 << 53) {
+        return None;
+    }
+    let k = frac_digits.unwrap_or(0);
+    let v = mantissa as f64 / *POW10.get(k)?;
+    Some(if negative { -v } else { v })
 }
 
 /// Writes the record as CSV through a temporary file in the same directory, synced to disk and then
@@ -416,5 +722,110 @@ fn write_name<W: Write>(w: &mut W, name: &str) -> std::io::Result<()> {
         write!(w, "\"{}\"", name.replace('"', "\"\""))
     } else {
         w.write_all(name.as_bytes())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn fast_decimal_path_agrees_bit_for_bit_with_std_parse() {
+        // 200k random decimals of 1..19 characters: the fast path must give exactly std's result
+        // whenever it answers (Clinger's fast path is exact, so any difference is a bug).
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let mut answered = 0;
+        for _ in 0..200_000 {
+            let int_digits = rng.gen_range(0..10);
+            let frac_digits = rng.gen_range(0..12);
+            let mut s = String::new();
+            if rng.gen_bool(0.5) {
+                s.push('-');
+            }
+            for _ in 0..int_digits {
+                s.push(char::from(b'0' + rng.gen_range(0..10u8)));
+            }
+            if frac_digits > 0 || rng.gen_bool(0.3) {
+                s.push('.');
+            }
+            for _ in 0..frac_digits {
+                s.push(char::from(b'0' + rng.gen_range(0..10u8)));
+            }
+            let std = s.parse::<f64>().ok();
+            if let Some(v) = fast_decimal(s.as_bytes()) {
+                answered += 1;
+                assert_eq!(Some(v.to_bits()), std.map(f64::to_bits), "input {s}");
+            }
+        }
+        assert!(answered > 100_000, "fast path used for {answered} inputs");
+    }
+
+    #[test]
+    fn long_decimal_path_agrees_bit_for_bit_with_std_parse() {
+        // 300k shortest round-trip strings of random doubles (16–17 digits) and random 16–19
+        // digit decimals: whenever the long path answers it must equal std's correctly rounded
+        // result, and it must answer for the vast majority.
+        // Hard cases first: near powers of two and exact midpoints between doubles.
+        for s in [
+            "0.50000000000000001",
+            "0.49999999999999997",
+            "1.0000000000000001",
+            "0.99999999999999994",
+            "0.99999999999999989",
+            "9007199254740993",
+            "9007199254740995",
+            "2.2250738585072014",
+            "1844674407370955161",
+            "0.1000000000000000055511151231257827",
+            "7.3786976294838206464",
+        ] {
+            let (v, _) = scan_cell(s.as_bytes(), 0);
+            assert_eq!(
+                v.map(f64::to_bits),
+                s.parse::<f64>().ok().map(f64::to_bits),
+                "{s}"
+            );
+        }
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let (mut answered, mut total) = (0, 0);
+        for case in 0..300_000 {
+            let s = if case % 2 == 0 {
+                let x: f64 = rng.gen_range(-1e3..1e3) * 10f64.powi(rng.gen_range(-6..3));
+                format!("{x:?}")
+            } else {
+                let digits = rng.gen_range(16..=19);
+                let mut s = String::new();
+                let dot = rng.gen_range(0..digits);
+                for d in 0..digits {
+                    if d == dot {
+                        s.push('.');
+                    }
+                    s.push(char::from(b'0' + rng.gen_range(0..10u8)));
+                }
+                s
+            };
+            if s.contains('e') {
+                continue;
+            }
+            let (v, end) = scan_cell(s.as_bytes(), 0);
+            assert_eq!(end, s.len());
+            let std = s.parse::<f64>().unwrap();
+            assert_eq!(v.map(f64::to_bits), Some(std.to_bits()), "input {s}");
+            total += 1;
+            let digits: String = s.chars().filter(char::is_ascii_digit).collect();
+            let w: u64 = digits.parse().unwrap();
+            let k = s.len() - s.find('.').map_or(s.len(), |i| i + 1);
+            if w > (1u64 << 53) && k < 23 {
+                if let Some(x) = long_decimal(w, k) {
+                    answered += 1;
+                    assert_eq!(x.to_bits(), std.abs().to_bits(), "long path, input {s}");
+                }
+            }
+        }
+        assert!(
+            answered > total / 3,
+            "long path answered {answered} of {total}"
+        );
     }
 }

@@ -14,3 +14,13 @@ pub use csv_io::{
 pub use error::{DataError, Warning, WarningKind, IN_MEMORY};
 pub use record::{sampling_warning, unit_warnings, FlightRecord, G0_M_S2, SCHEMA_COLUMNS};
 pub use resample::{resample_uniform, RESAMPLE_METHOD};
+
+pub mod airframe;
+pub mod tlog;
+
+pub use airframe::Airframe;
+pub use tlog::{parse_tlog_bytes, read_tlog, TlogOptions, TlogReport};
+pub mod segments;
+pub use segments::{find_segments, ManeuverKind, Segment, SegmentOptions};
+pub mod check;
+pub use check::{check_compatibility, CheckOptions, CheckReport, Estimate};

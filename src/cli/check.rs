@@ -1,0 +1,87 @@
+//! `flightid check`: data compatibility by flight-path reconstruction (sensor biases, scale
+//! factors, time skews with uncertainties).
+
+use std::path::PathBuf;
+
+use super::UsageError;
+use crate::data::{self, CheckOptions};
+
+/// Check the kinematic consistency of a flight-data CSV.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CheckArgs {
+    /// Flight-data CSV (DESIGN.md §4); best a maneuver segment of some tens of seconds.
+    pub file: PathBuf,
+    /// Only use samples from this time on, s.
+    #[arg(long)]
+    pub from_s: Option<f64>,
+    /// Only use samples up to this time, s.
+    #[arg(long)]
+    pub to_s: Option<f64>,
+    /// Do not estimate scale factors on V, α, β.
+    #[arg(long)]
+    pub no_scale_factors: bool,
+    /// Do not estimate time skews on α, β.
+    #[arg(long)]
+    pub no_time_skews: bool,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `flightid check`.
+pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
+    let mut rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
+    let from = args.from_s.unwrap_or(f64::NEG_INFINITY);
+    let to = args.to_s.unwrap_or(f64::INFINITY);
+    if args.from_s.is_some() || args.to_s.is_some() {
+        let start = rec.time_s.partition_point(|&t| t < from);
+        let end = rec.time_s.partition_point(|&t| t <= to);
+        rec = rec.slice(start, end);
+    }
+    let opts = CheckOptions {
+        scale_factors: !args.no_scale_factors,
+        time_skews: !args.no_time_skews,
+        ..CheckOptions::default()
+    };
+    let report = data::check_compatibility(&rec, &opts).map_err(|e| UsageError(e.to_string()))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    println!(
+        "flight-path reconstruction of {} ({} samples, {}): {} iterations{}",
+        args.file.display(),
+        rec.len(),
+        if report.translational {
+            "attitude + translational"
+        } else {
+            "attitude only"
+        },
+        report.iterations,
+        if report.converged {
+            ""
+        } else {
+            " (not converged)"
+        }
+    );
+    println!(
+        "{:<22} {:>14} {:>14}  significant",
+        "instrument error", "value", "std error"
+    );
+    for e in &report.instrument {
+        println!(
+            "{:<22} {:>14.6} {:>14.6}  {}",
+            e.name,
+            e.value,
+            e.std_error,
+            if e.significant { "YES" } else { "no" }
+        );
+    }
+    for name in &report.not_identifiable {
+        println!("{name:<22} not identifiable from this data (fixed at 0)");
+    }
+    for (col, rms) in &report.residual_rms {
+        println!("residual rms {col:<16} {rms:.6}");
+    }
+    Ok(())
+}

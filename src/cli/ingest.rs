@@ -1,0 +1,85 @@
+//! `flightid ingest`: a MAVLink telemetry log → the flight-data CSV schema.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+
+use super::UsageError;
+use crate::data::{self, Airframe, TlogOptions};
+
+/// Convert a MAVLink `.tlog` into a flight-data CSV (DESIGN.md §4).
+#[derive(clap::Args, Debug, Clone)]
+pub struct IngestArgs {
+    /// The telemetry log ([8-byte µs timestamp][MAVLink frame] records).
+    #[arg(long)]
+    pub tlog: PathBuf,
+    /// Airframe servo mapping: a name under aircraft/airframes/ or a path to a .toml file.
+    /// Without it, surface columns are left out.
+    #[arg(long)]
+    pub airframe: Option<String>,
+    /// Output CSV (written atomically).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// System id to extract (default: the one with the most ATTITUDE messages).
+    #[arg(long)]
+    pub sysid: Option<u8>,
+    /// Output sample rate, Hz (default: the ATTITUDE rate). Linear interpolation.
+    #[arg(long = "resample-hz")]
+    pub resample_hz: Option<f64>,
+    /// Print the summary as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `flightid ingest`.
+pub fn run(args: &IngestArgs) -> anyhow::Result<()> {
+    let airframe = match &args.airframe {
+        Some(name) => Some(Airframe::resolve(name).map_err(|e| UsageError(e.to_string()))?),
+        None => None,
+    };
+    let options = TlogOptions {
+        sysid: args.sysid,
+        rate_hz: args.resample_hz,
+    };
+    let report = data::read_tlog(&args.tlog, airframe.as_ref(), &options)
+        .map_err(|e| UsageError(e.to_string()))?;
+    let unit_warnings = report.record.warnings();
+    data::write_csv_atomic(&args.out, &report.record)
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    let s = &report.stats;
+    if args.json {
+        let summary = serde_json::json!({
+            "out": args.out,
+            "sysid": report.sysid,
+            "rows": report.record.len(),
+            "columns": report.record.column_names(),
+            "frames": s.frames, "frames_v1": s.frames_v1, "frames_v2": s.frames_v2,
+            "skipped_bytes": s.skipped_bytes, "corrupt_regions": s.corrupt_regions,
+            "truncated_tail_bytes": s.truncated_tail_bytes, "bad_timestamps": s.bad_timestamps,
+            "systems": report.systems.iter().map(|x| serde_json::json!({
+                "sysid": x.sysid, "attitude_messages": x.attitude_messages, "messages": x.messages
+            })).collect::<Vec<_>>(),
+            "messages": report.messages_by_name,
+            "warnings": report.warnings.iter().chain(&unit_warnings).map(|w| w.to_string()).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+    } else {
+        eprintln!(
+            "{}: system {} → {} rows × {} columns in {} ({} frames: {} v1, {} v2; {} bytes skipped; {} truncated)",
+            args.tlog.display(),
+            report.sysid,
+            report.record.len(),
+            report.record.columns.len() + 1,
+            args.out.display(),
+            s.frames,
+            s.frames_v1,
+            s.frames_v2,
+            s.skipped_bytes,
+            s.truncated_tail_bytes
+        );
+        for w in report.warnings.iter().chain(&unit_warnings) {
+            eprintln!("warning: {w}");
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,55 @@
+//! `flightid segments`: list the maneuvers (doublet, 3-2-1-1, sweep) found in a flight log.
+
+use std::path::PathBuf;
+
+use super::UsageError;
+use crate::data::{self, SegmentOptions};
+
+/// Find maneuvers in a flight-data CSV.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SegmentsArgs {
+    /// Flight-data CSV (DESIGN.md §4).
+    pub file: PathBuf,
+    /// Smallest input that counts as a maneuver, degrees.
+    #[arg(long, default_value_t = 0.25)]
+    pub min_amplitude_deg: f64,
+    /// Print the segments as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `flightid segments`.
+pub fn run(args: &SegmentsArgs) -> anyhow::Result<()> {
+    let rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
+    let opts = SegmentOptions {
+        min_amplitude_rad: args.min_amplitude_deg.to_radians(),
+        ..SegmentOptions::default()
+    };
+    let segments = data::find_segments(&rec, &opts).map_err(|e| UsageError(e.to_string()))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&segments)?);
+        return Ok(());
+    }
+    if segments.is_empty() {
+        println!("no maneuvers found in {}", args.file.display());
+        return Ok(());
+    }
+    println!(
+        "{:>3}  {:<13} {:<8} {:>9} {:>9} {:>9} {:>9}  steady",
+        "#", "surface", "kind", "start_s", "end_s", "amp_deg", "trim_deg"
+    );
+    for s in &segments {
+        println!(
+            "{:>3}  {:<13} {:<8} {:>9.2} {:>9.2} {:>9.2} {:>9.2}  {}",
+            s.number,
+            s.surface,
+            s.kind.name(),
+            s.start_s,
+            s.end_s,
+            s.amplitude_rad.to_degrees(),
+            s.trim_rad.to_degrees(),
+            if s.steady_before { "yes" } else { "no" }
+        );
+    }
+    Ok(())
+}

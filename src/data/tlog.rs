@@ -1,0 +1,767 @@
+//! MAVLink telemetry log (`.tlog`) reader: frames → messages → the flight-data schema.
+//!
+//! A `.tlog` (as written by MAVProxy / Mission Planner / QGroundControl) is a sequence of
+//! `[8-byte big-endian µs Unix timestamp][MAVLink v1 or v2 frame]`. Framing, CRC (X.25 / MCRF4XX
+//! with the message's CRC_EXTRA, MAVLink serialization spec) and resynchronisation after corrupt
+//! bytes are done here; payloads are decoded by the `mavlink` crate (`Message::parse`).
+//!
+//! Mapping onto the schema (DESIGN.md §4), all onto one uniform grid:
+//! - ATTITUDE → `phi_rad theta_rad psi_rad` (yaw unwrapped), `p_rad_s q_rad_s r_rad_s`;
+//! - HIGHRES_IMU (m/s²) or else SCALED_IMU / RAW_IMU (milli-g) → `ax_m_s2 ay_m_s2 az_m_s2`
+//!   (body FRD specific force, 1-g level flight gives az ≈ −9.81);
+//! - VFR_HUD → `airspeed_m_s` (the autopilot's airspeed: usually indicated, not true), `altitude_m`
+//!   (MSL), and `throttle` (percent/100) when the airframe maps no throttle servo;
+//! - AOA_SSA (degrees) → `alpha_rad beta_rad`;
+//! - SERVO_OUTPUT_RAW (port 0) → `elevator_rad aileron_rad rudder_rad throttle` via [`Airframe`].
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use mavlink::dialects::ardupilotmega::MavMessage;
+use mavlink::{MavlinkVersion, Message};
+
+use super::airframe::Airframe;
+use super::error::{DataError, Warning, WarningKind};
+use super::record::{FlightRecord, G0_M_S2};
+
+/// Start-of-frame marker of MAVLink v1.
+const STX_V1: u8 = 0xFE;
+/// Start-of-frame marker of MAVLink v2.
+const STX_V2: u8 = 0xFD;
+/// MAVLink v2 incompatibility flag: the frame carries a 13-byte signature.
+const IFLAG_SIGNED: u8 = 0x01;
+/// Length of the v2 signature trailer.
+const SIGNATURE_LEN: usize = 13;
+/// A timestamp further than this from its predecessor (µs) is a suspected corruption: accepted
+/// only if the next frame confirms the new time base (a genuine gap in logging), else dropped.
+const MAX_TIME_JUMP_US: u64 = 10_000_000;
+
+/// One frame found in a log.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame<'a> {
+    /// Log timestamp, µs since the Unix epoch (as written by the ground station).
+    pub time_us: u64,
+    /// 1 or 2.
+    pub version: u8,
+    /// Sender system id.
+    pub sysid: u8,
+    /// Sender component id.
+    pub compid: u8,
+    /// Message id.
+    pub msgid: u32,
+    /// Payload bytes (v2: trailing zeros may be truncated).
+    pub payload: &'a [u8],
+}
+
+/// Counts from scanning a log.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ScanStats {
+    /// Frames with a valid CRC and a known message id.
+    pub frames: usize,
+    /// Of which MAVLink v1.
+    pub frames_v1: usize,
+    /// Of which MAVLink v2.
+    pub frames_v2: usize,
+    /// Bytes skipped while resynchronising (corrupt or unknown data).
+    pub skipped_bytes: usize,
+    /// Separate runs of skipped bytes.
+    pub corrupt_regions: usize,
+    /// Bytes of an incomplete frame at the end of the file (dropped).
+    pub truncated_tail_bytes: usize,
+    /// Frames whose CRC was valid but whose log timestamp jumped implausibly (dropped).
+    pub bad_timestamps: usize,
+}
+
+/// Per-message-id CRC_EXTRA lookup with caching (`None`: id not in the dialect).
+struct CrcExtra {
+    v1: [Option<u8>; 256],
+    other: HashMap<u32, Option<u8>>,
+}
+
+impl CrcExtra {
+    fn new() -> Self {
+        static V1: std::sync::OnceLock<[Option<u8>; 256]> = std::sync::OnceLock::new();
+        let v1 = *V1.get_or_init(|| {
+            let mut v1 = [None; 256];
+            for (id, slot) in v1.iter_mut().enumerate() {
+                *slot = Self::lookup(id as u32);
+            }
+            v1
+        });
+        Self {
+            v1,
+            other: HashMap::new(),
+        }
+    }
+
+    fn lookup(id: u32) -> Option<u8> {
+        MavMessage::default_message_from_id(id).map(|_| MavMessage::extra_crc(id))
+    }
+
+    fn get(&mut self, id: u32) -> Option<u8> {
+        if id < 256 {
+            self.v1[id as usize]
+        } else {
+            *self.other.entry(id).or_insert_with(|| Self::lookup(id))
+        }
+    }
+}
+
+/// MAVLink checksum: CRC-16/MCRF4XX (X.25), init 0xFFFF (MAVLink `crc_accumulate`).
+#[inline]
+fn crc_accumulate(crc: u16, byte: u8) -> u16 {
+    let mut tmp = byte ^ (crc & 0xFF) as u8;
+    tmp ^= tmp << 4;
+    let tmp = u16::from(tmp);
+    (crc >> 8) ^ (tmp << 8) ^ (tmp << 3) ^ (tmp >> 4)
+}
+
+fn crc_of(bytes: &[u8], extra: u8) -> u16 {
+    let crc = bytes.iter().fold(0xFFFF, |c, &b| crc_accumulate(c, b));
+    crc_accumulate(crc, extra)
+}
+
+/// Result of trying to read a frame at one position.
+enum Attempt<'a> {
+    /// A valid frame and the total bytes it occupies (timestamp included).
+    Frame(Frame<'a>, usize),
+    /// The header is plausible but the frame runs past the end of the input.
+    Truncated,
+    /// Not a frame.
+    Invalid,
+}
+
+fn try_frame<'a>(bytes: &'a [u8], pos: usize, crc_extra: &mut CrcExtra) -> Attempt<'a> {
+    let n = bytes.len();
+    let f = pos + 8;
+    if f >= n {
+        return Attempt::Truncated;
+    }
+    let (version, header_len) = match bytes[f] {
+        STX_V1 => (1u8, 6usize),
+        STX_V2 => (2u8, 10usize),
+        _ => return Attempt::Invalid,
+    };
+    if f + 2 > n {
+        return Attempt::Truncated;
+    }
+    let payload_len = usize::from(bytes[f + 1]);
+    let mut total = header_len + payload_len + 2;
+    if version == 2 {
+        if f + 3 > n {
+            return Attempt::Truncated;
+        }
+        let incompat = bytes[f + 2];
+        if incompat & !IFLAG_SIGNED != 0 {
+            return Attempt::Invalid;
+        }
+        if incompat & IFLAG_SIGNED != 0 {
+            total += SIGNATURE_LEN;
+        }
+    }
+    if f + total > n {
+        return Attempt::Truncated;
+    }
+    let (sysid, compid, msgid) = if version == 1 {
+        (bytes[f + 3], bytes[f + 4], u32::from(bytes[f + 5]))
+    } else {
+        let id = u32::from_le_bytes([bytes[f + 7], bytes[f + 8], bytes[f + 9], 0]);
+        (bytes[f + 5], bytes[f + 6], id)
+    };
+    let Some(extra) = crc_extra.get(msgid) else {
+        return Attempt::Invalid;
+    };
+    let crc_at = f + header_len + payload_len;
+    let crc = u16::from_le_bytes([bytes[crc_at], bytes[crc_at + 1]]);
+    if crc_of(&bytes[f + 1..crc_at], extra) != crc {
+        return Attempt::Invalid;
+    }
+    let time_us = u64::from_be_bytes(bytes[pos..f].try_into().unwrap_or([0; 8]));
+    Attempt::Frame(
+        Frame {
+            time_us,
+            version,
+            sysid,
+            compid,
+            msgid,
+            payload: &bytes[f + header_len..crc_at],
+        },
+        8 + total,
+    )
+}
+
+/// Walks every valid frame of a `.tlog` byte stream in order and returns the counts.
+///
+/// A position that does not hold a valid frame (bad start marker, unknown message id, CRC
+/// mismatch, unsupported incompatibility flags) is skipped one byte at a time until the next valid
+/// frame; an incomplete frame at the very end is dropped. A frame whose log timestamp jumps by
+/// more than 10 s from the previous frame's (and the very first frame) is kept only if the frame
+/// after it confirms the new time (a logging gap); otherwise it is dropped and counted as a bad
+/// timestamp.
+pub fn scan_frames<'a>(bytes: &'a [u8], mut visit: impl FnMut(&Frame<'a>)) -> ScanStats {
+    let mut stats = ScanStats::default();
+    let mut crc_extra = CrcExtra::new();
+    let mut pos = 0usize;
+    let mut run_start: Option<usize> = None; // start of the current run of skipped bytes
+    let mut tail_start: Option<usize> = None; // first truncated-looking position of that run
+    let mut last_time_us: Option<u64> = None;
+    let mut pending: Option<Frame<'a>> = None; // a frame whose time jumped, awaiting confirmation
+    while pos < bytes.len() {
+        match try_frame(bytes, pos, &mut crc_extra) {
+            Attempt::Frame(frame, len) => {
+                run_start = None;
+                tail_start = None;
+                pos += len;
+                let near = |a: u64, b: u64| a.abs_diff(b) <= MAX_TIME_JUMP_US;
+                match (last_time_us, pending.take()) {
+                    // The first frame waits for the second to confirm its time.
+                    (None, None) => pending = Some(frame),
+                    (None, Some(p)) if near(frame.time_us, p.time_us) => {
+                        accept(&mut stats, &mut last_time_us, &p, &mut visit);
+                        accept(&mut stats, &mut last_time_us, &frame, &mut visit);
+                    }
+                    (None, Some(_)) => {
+                        stats.bad_timestamps += 1;
+                        pending = Some(frame);
+                    }
+                    (Some(last), None) if near(frame.time_us, last) => {
+                        accept(&mut stats, &mut last_time_us, &frame, &mut visit)
+                    }
+                    (Some(_), None) => pending = Some(frame),
+                    (Some(_), Some(p)) if near(frame.time_us, p.time_us) => {
+                        // Two frames agree on the new time: a real gap in the log.
+                        accept(&mut stats, &mut last_time_us, &p, &mut visit);
+                        accept(&mut stats, &mut last_time_us, &frame, &mut visit);
+                    }
+                    (Some(last), Some(_)) => {
+                        stats.bad_timestamps += 1;
+                        if near(frame.time_us, last) {
+                            accept(&mut stats, &mut last_time_us, &frame, &mut visit);
+                        } else {
+                            pending = Some(frame);
+                        }
+                    }
+                }
+            }
+            attempt => {
+                if run_start.is_none() {
+                    run_start = Some(pos);
+                    stats.corrupt_regions += 1;
+                }
+                if matches!(attempt, Attempt::Truncated) && tail_start.is_none() {
+                    tail_start = Some(pos);
+                }
+                stats.skipped_bytes += 1;
+                pos += 1;
+            }
+        }
+    }
+    if let Some(p) = pending {
+        if stats.frames == 0 {
+            // A lone frame: nothing contradicts its time.
+            accept(&mut stats, &mut last_time_us, &p, &mut visit);
+        } else {
+            // A jump at the very end cannot be confirmed.
+            stats.bad_timestamps += 1;
+        }
+    }
+    // Bytes from an incomplete frame to the end are a truncated tail, not corruption.
+    if let (Some(run), Some(tail)) = (run_start, tail_start) {
+        let tail_len = bytes.len() - tail;
+        stats.truncated_tail_bytes = tail_len;
+        stats.skipped_bytes -= tail_len;
+        if run == tail {
+            stats.corrupt_regions -= 1;
+        }
+    }
+    stats
+}
+
+/// Counts a frame and hands it to the visitor.
+fn accept<'a>(
+    stats: &mut ScanStats,
+    last_time_us: &mut Option<u64>,
+    frame: &Frame<'a>,
+    visit: &mut impl FnMut(&Frame<'a>),
+) {
+    *last_time_us = Some(frame.time_us);
+    stats.frames += 1;
+    if frame.version == 1 {
+        stats.frames_v1 += 1;
+    } else {
+        stats.frames_v2 += 1;
+    }
+    visit(frame);
+}
+
+/// Options of [`read_tlog`].
+#[derive(Debug, Clone, Default)]
+pub struct TlogOptions {
+    /// System id to extract; default: the one with the most ATTITUDE messages.
+    pub sysid: Option<u8>,
+    /// Output grid rate, Hz; default: the ATTITUDE rate (1 / median ATTITUDE interval).
+    pub rate_hz: Option<f64>,
+}
+
+/// A system seen in the log.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SystemSummary {
+    /// System id.
+    pub sysid: u8,
+    /// ATTITUDE messages from it.
+    pub attitude_messages: usize,
+    /// All valid frames from it.
+    pub messages: usize,
+}
+
+/// What [`read_tlog`] produced.
+#[derive(Debug, Clone)]
+pub struct TlogReport {
+    /// The flight record on the uniform grid.
+    pub record: FlightRecord,
+    /// The system id extracted.
+    pub sysid: u8,
+    /// Every system seen, by id.
+    pub systems: Vec<SystemSummary>,
+    /// Frame counts.
+    pub stats: ScanStats,
+    /// Valid frames per message name (all systems).
+    pub messages_by_name: BTreeMap<String, usize>,
+    /// Soft problems (skipped bytes, missing message types).
+    pub warnings: Vec<Warning>,
+}
+
+/// Time series of one system, collected from its messages (times in µs).
+#[derive(Default)]
+struct Series {
+    attitude: Vec<(u64, [f64; 6])>,
+    highres_imu: Vec<(u64, [f64; 3])>,
+    scaled_imu: Vec<(u64, [f64; 3])>,
+    raw_imu: Vec<(u64, [f64; 3])>,
+    vfr_hud: Vec<(u64, [f64; 3])>,
+    aoa_ssa: Vec<(u64, [f64; 2])>,
+    servo: Vec<(u64, [f64; 8])>,
+}
+
+/// Smallest default grid step, µs (1 kHz).
+const MIN_DEFAULT_STEP_US: f64 = 1000.0;
+
+/// Message ids this reader decodes (others are only counted).
+const ATTITUDE_ID: u32 = 30;
+const SCALED_IMU_ID: u32 = 26;
+const RAW_IMU_ID: u32 = 27;
+const HIGHRES_IMU_ID: u32 = 105;
+const VFR_HUD_ID: u32 = 74;
+const SERVO_OUTPUT_RAW_ID: u32 = 36;
+const AOA_SSA_ID: u32 = 11020;
+
+/// Reads a `.tlog` file into the flight-data schema (see the module documentation).
+pub fn read_tlog(
+    path: &Path,
+    airframe: Option<&Airframe>,
+    options: &TlogOptions,
+) -> Result<TlogReport, DataError> {
+    let bytes = std::fs::read(path).map_err(|source| DataError::Io {
+        file: path.to_path_buf(),
+        action: "cannot read the telemetry log",
+        source,
+    })?;
+    parse_tlog_bytes(&bytes, &path.display().to_string(), airframe, options)
+}
+
+/// [`read_tlog`] on bytes in memory; `file` names the source in errors and metadata.
+pub fn parse_tlog_bytes(
+    bytes: &[u8],
+    file: &str,
+    airframe: Option<&Airframe>,
+    options: &TlogOptions,
+) -> Result<TlogReport, DataError> {
+    let err = |message: String| DataError::Tlog {
+        file: file.to_string(),
+        message,
+    };
+    if let Some(r) = options.rate_hz {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(DataError::InvalidArgument(format!(
+                "output rate must be a positive number of Hz, got {r}"
+            )));
+        }
+    }
+    let mut per_system: BTreeMap<u8, (Series, usize)> = BTreeMap::new();
+    let mut by_id: HashMap<u32, usize> = HashMap::new();
+    let stats = scan_frames(bytes, |frame| {
+        *by_id.entry(frame.msgid).or_insert(0) += 1;
+        let entry = per_system.entry(frame.sysid).or_default();
+        entry.1 += 1;
+        collect(&mut entry.0, frame);
+    });
+    let messages_by_name: BTreeMap<String, usize> = by_id
+        .iter()
+        .map(|(&id, &count)| {
+            let name = MavMessage::default_message_from_id(id)
+                .map_or_else(|| format!("#{id}"), |m| m.message_name().to_string());
+            (name, count)
+        })
+        .collect();
+    let systems: Vec<SystemSummary> = per_system
+        .iter()
+        .map(|(&sysid, (s, n))| SystemSummary {
+            sysid,
+            attitude_messages: s.attitude.len(),
+            messages: *n,
+        })
+        .collect();
+    if stats.frames == 0 {
+        return Err(err(format!(
+            "no valid MAVLink frame found in {} bytes (is this a .tlog: [8-byte timestamp][frame] …?)",
+            bytes.len()
+        )));
+    }
+    let sysid = match options.sysid {
+        Some(id) => id,
+        None => systems
+            .iter()
+            .max_by_key(|s| (s.attitude_messages, std::cmp::Reverse(s.sysid)))
+            .map(|s| s.sysid)
+            .unwrap_or(0),
+    };
+    let describe = || {
+        systems
+            .iter()
+            .map(|s| format!("{} ({} ATTITUDE)", s.sysid, s.attitude_messages))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let Some((series, _)) = per_system.get_mut(&sysid) else {
+        return Err(err(format!(
+            "system id {sysid} sent no valid message; systems present: {}",
+            describe()
+        )));
+    };
+    if series.attitude.len() < 2 {
+        return Err(err(format!(
+            "system id {sysid} sent {} ATTITUDE messages; at least 2 are needed for the time base \
+             (systems present: {})",
+            series.attitude.len(),
+            describe()
+        )));
+    }
+    let mut record = build_record(series, airframe, options.rate_hz)
+        .map_err(|m| err(format!("system id {sysid}: {m}")))?;
+    let mut warnings = Vec::new();
+    if stats.skipped_bytes > 0 {
+        warnings.push(Warning {
+            kind: WarningKind::Other,
+            column: None,
+            message: format!(
+                "skipped {} corrupt or unknown bytes in {} region(s)",
+                stats.skipped_bytes, stats.corrupt_regions
+            ),
+        });
+    }
+    if stats.truncated_tail_bytes > 0 {
+        warnings.push(Warning {
+            kind: WarningKind::Other,
+            column: None,
+            message: format!(
+                "dropped a truncated final frame ({} bytes)",
+                stats.truncated_tail_bytes
+            ),
+        });
+    }
+    if stats.bad_timestamps > 0 {
+        warnings.push(Warning {
+            kind: WarningKind::Other,
+            column: None,
+            message: format!(
+                "dropped {} frames whose log timestamp jumped by more than 10 s without confirmation",
+                stats.bad_timestamps
+            ),
+        });
+    }
+    for (needed, why) in [
+        ("ax_m_s2", "no HIGHRES_IMU/SCALED_IMU/RAW_IMU"),
+        ("airspeed_m_s", "no VFR_HUD"),
+        ("alpha_rad", "no AOA_SSA"),
+        ("elevator_rad", "no SERVO_OUTPUT_RAW or no airframe mapping"),
+    ] {
+        if record.column(needed).is_none() {
+            warnings.push(Warning {
+                kind: WarningKind::Other,
+                column: Some(needed.to_string()),
+                message: format!("not in the output: {why} from system {sysid}"),
+            });
+        }
+    }
+    record.metadata.insert(
+        0,
+        format!(
+            " source: {file} (MAVLink tlog), system id {sysid}; {} valid frames ({} v1, {} v2), \
+             {} bytes skipped, {} truncated tail bytes",
+            stats.frames,
+            stats.frames_v1,
+            stats.frames_v2,
+            stats.skipped_bytes,
+            stats.truncated_tail_bytes
+        ),
+    );
+    if let Some(af) = airframe {
+        record
+            .metadata
+            .insert(1, format!(" airframe servo mapping: {}", af.name));
+    }
+    Ok(TlogReport {
+        record,
+        sysid,
+        systems,
+        stats,
+        messages_by_name,
+        warnings,
+    })
+}
+
+/// Decodes the messages the schema needs and appends them to the system's series.
+fn collect(series: &mut Series, frame: &Frame) {
+    let wanted = matches!(
+        frame.msgid,
+        ATTITUDE_ID
+            | SCALED_IMU_ID
+            | RAW_IMU_ID
+            | HIGHRES_IMU_ID
+            | VFR_HUD_ID
+            | SERVO_OUTPUT_RAW_ID
+            | AOA_SSA_ID
+    );
+    if !wanted {
+        return;
+    }
+    let version = if frame.version == 1 {
+        MavlinkVersion::V1
+    } else {
+        MavlinkVersion::V2
+    };
+    let Ok(msg) = MavMessage::parse(version, frame.msgid, frame.payload) else {
+        return;
+    };
+    let t = frame.time_us;
+    let milli_g = |x: i16| f64::from(x) * 1e-3 * G0_M_S2;
+    match msg {
+        MavMessage::ATTITUDE(a) => series.attitude.push((
+            t,
+            [
+                a.roll,
+                a.pitch,
+                a.yaw,
+                a.rollspeed,
+                a.pitchspeed,
+                a.yawspeed,
+            ]
+            .map(f64::from),
+        )),
+        MavMessage::HIGHRES_IMU(m) => series
+            .highres_imu
+            .push((t, [m.xacc, m.yacc, m.zacc].map(f64::from))),
+        MavMessage::SCALED_IMU(m) => series
+            .scaled_imu
+            .push((t, [m.xacc, m.yacc, m.zacc].map(milli_g))),
+        MavMessage::RAW_IMU(m) => series
+            .raw_imu
+            .push((t, [m.xacc, m.yacc, m.zacc].map(milli_g))),
+        MavMessage::VFR_HUD(m) => series.vfr_hud.push((
+            t,
+            [
+                f64::from(m.airspeed),
+                f64::from(m.alt),
+                f64::from(m.throttle) / 100.0,
+            ],
+        )),
+        MavMessage::AOA_SSA(m) => series.aoa_ssa.push((
+            t,
+            [f64::from(m.AOA).to_radians(), f64::from(m.SSA).to_radians()],
+        )),
+        MavMessage::SERVO_OUTPUT_RAW(m) if m.port == 0 => series.servo.push((
+            t,
+            [
+                m.servo1_raw,
+                m.servo2_raw,
+                m.servo3_raw,
+                m.servo4_raw,
+                m.servo5_raw,
+                m.servo6_raw,
+                m.servo7_raw,
+                m.servo8_raw,
+            ]
+            .map(f64::from),
+        )),
+        _ => {}
+    }
+}
+
+/// Sorts a series by time and keeps the first sample of each repeated time.
+fn tidy<const N: usize>(s: &mut Vec<(u64, [f64; N])>) {
+    s.sort_by_key(|(t, _)| *t);
+    s.dedup_by_key(|(t, _)| *t);
+    s.retain(|(_, v)| v.iter().all(|x| x.is_finite()));
+}
+
+/// Linear interpolation of component `k` of a time-sorted series at grid times (held constant
+/// beyond its ends).
+fn interp<const N: usize>(s: &[(u64, [f64; N])], k: usize, grid_us: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(grid_us.len());
+    let mut j = 0usize;
+    for &tg in grid_us {
+        while j + 1 < s.len() && (s[j + 1].0 as f64) < tg {
+            j += 1;
+        }
+        let (t0, v0) = (s[j].0 as f64, s[j].1[k]);
+        let v = if j + 1 < s.len() && tg > t0 {
+            let (t1, v1) = (s[j + 1].0 as f64, s[j + 1].1[k]);
+            v0 + (v1 - v0) * ((tg - t0) / (t1 - t0)).min(1.0)
+        } else {
+            v0
+        };
+        out.push(v);
+    }
+    out
+}
+
+/// Unwraps an angle sequence (rad) so that consecutive samples differ by less than π.
+fn unwrap_angles(s: &mut [(u64, [f64; 6])], k: usize) {
+    let tau = std::f64::consts::TAU;
+    let Some(first) = s.first() else { return };
+    let mut prev_raw = first.1[k];
+    let mut offset = 0.0;
+    for sample in s.iter_mut().skip(1) {
+        let raw = sample.1[k];
+        offset -= tau * ((raw - prev_raw) / tau).round();
+        prev_raw = raw;
+        sample.1[k] = raw + offset;
+    }
+}
+
+/// Puts the collected series onto one uniform grid over the ATTITUDE time span.
+fn build_record(
+    series: &mut Series,
+    airframe: Option<&Airframe>,
+    rate_hz: Option<f64>,
+) -> Result<FlightRecord, String> {
+    tidy(&mut series.attitude);
+    tidy(&mut series.highres_imu);
+    tidy(&mut series.scaled_imu);
+    tidy(&mut series.raw_imu);
+    tidy(&mut series.vfr_hud);
+    tidy(&mut series.aoa_ssa);
+    tidy(&mut series.servo);
+    let att = &mut series.attitude;
+    // Drop ATTITUDE duplicates (the same sample relayed twice, µs apart).
+    let mut last_kept: Option<u64> = None;
+    att.retain(|(t, _)| {
+        let keep = last_kept.is_none_or(|l| t - l >= MIN_DEFAULT_STEP_US as u64 / 2);
+        if keep {
+            last_kept = Some(*t);
+        }
+        keep
+    });
+    if att.len() < 2 {
+        return Err("fewer than 2 usable ATTITUDE messages".into());
+    }
+    unwrap_angles(att, 2);
+    let t0_us = att[0].0;
+    let span_us = (att[att.len() - 1].0 - t0_us) as f64;
+    let dt_us = match rate_hz {
+        Some(r) => 1e6 / r,
+        None => {
+            let mut steps: Vec<f64> = att.windows(2).map(|w| (w[1].0 - w[0].0) as f64).collect();
+            // Floor at 1 ms: no tlog carries ATTITUDE faster than 1 kHz; closer samples are
+            // duplicates relayed over a second link.
+            super::record::median_in_place(&mut steps)
+                .round()
+                .max(MIN_DEFAULT_STEP_US)
+        }
+    };
+    let n = (span_us / dt_us + 1e-9).floor() as usize + 1;
+    if n > 100_000_000 {
+        return Err(format!(
+            "the output grid would hold {n} samples ({} s at {} Hz); give a lower rate",
+            span_us / 1e6,
+            1e6 / dt_us
+        ));
+    }
+    let grid_us: Vec<f64> = (0..n).map(|k| t0_us as f64 + k as f64 * dt_us).collect();
+    let mut rec = FlightRecord::new(grid_us.iter().map(|t| (t - t0_us as f64) * 1e-6).collect());
+    rec.metadata.push(format!(
+        " time_s = log timestamp - {t0_us} µs (Unix epoch); grid {} Hz; linear interpolation per message stream",
+        1e6 / dt_us
+    ));
+    if let Some(af) = airframe {
+        if !series.servo.is_empty() {
+            let surfaces = [
+                ("elevator_rad", af.elevator),
+                ("aileron_rad", af.aileron),
+                ("rudder_rad", af.rudder),
+            ];
+            for (name, map) in surfaces {
+                if let Some(m) = map {
+                    let pwm = interp(&series.servo, usize::from(m.channel - 1), &grid_us);
+                    rec.push_column(name, pwm.into_iter().map(|p| m.to_rad(p)).collect());
+                }
+            }
+            if let Some(t) = af.throttle {
+                let pwm = interp(&series.servo, usize::from(t.channel - 1), &grid_us);
+                rec.push_column(
+                    "throttle",
+                    pwm.into_iter().map(|p| t.to_fraction(p)).collect(),
+                );
+            }
+        }
+    }
+    if rec.column("throttle").is_none() && !series.vfr_hud.is_empty() {
+        rec.push_column("throttle", interp(&series.vfr_hud, 2, &grid_us));
+    }
+    for (k, name) in [
+        "phi_rad",
+        "theta_rad",
+        "psi_rad",
+        "p_rad_s",
+        "q_rad_s",
+        "r_rad_s",
+    ]
+    .iter()
+    .enumerate()
+    {
+        rec.push_column(name, interp(&series.attitude, k, &grid_us));
+    }
+    if !series.aoa_ssa.is_empty() {
+        rec.push_column("alpha_rad", interp(&series.aoa_ssa, 0, &grid_us));
+        rec.push_column("beta_rad", interp(&series.aoa_ssa, 1, &grid_us));
+    }
+    if !series.vfr_hud.is_empty() {
+        rec.push_column("airspeed_m_s", interp(&series.vfr_hud, 0, &grid_us));
+        rec.push_column("altitude_m", interp(&series.vfr_hud, 1, &grid_us));
+    }
+    let imu = [
+        (&series.highres_imu, "HIGHRES_IMU"),
+        (&series.scaled_imu, "SCALED_IMU"),
+        (
+            &series.raw_imu,
+            "RAW_IMU (assumed milli-g, as ArduPilot sends it)",
+        ),
+    ]
+    .into_iter()
+    .find(|(s, _)| !s.is_empty());
+    if let Some((s, source)) = imu {
+        for (k, name) in ["ax_m_s2", "ay_m_s2", "az_m_s2"].iter().enumerate() {
+            rec.push_column(name, interp(s, k, &grid_us));
+        }
+        rec.metadata.push(format!(" accelerations from {source}"));
+    }
+    // Schema order for readability.
+    let order = |n: &str| {
+        super::record::SCHEMA_COLUMNS
+            .iter()
+            .position(|c| *c == n)
+            .unwrap_or(usize::MAX)
+    };
+    rec.columns.sort_by_key(|(n, _)| order(n));
+    Ok(rec)
+}
