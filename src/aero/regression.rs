@@ -1,0 +1,565 @@
+//! Equation-error regression of aerodynamic coefficients on the full measured state (SIDPAC `lesq` style).
+//!
+//! Morelli & Klein, *Aircraft System Identification* (2nd ed.), §5.1–5.2 and §6.2: the aerodynamic force and
+//! moment coefficients are reconstructed from the measured motion through the rigid-body equations, and
+//! regressed on the measured states and controls by ordinary least squares,
+//!
+//! θ̂ = (XᵀX)⁻¹ Xᵀ z,   Cov(θ̂) = s² (XᵀX)⁻¹,   s² = vᵀv/(N − n_p),
+//!
+//! with the coloured-residual correction (Morelli & Klein eq. 5.73; Morelli, *J. Aircraft* 2005)
+//! Cov(θ̂) = D [Σ_i Σ_j x(i) R_vv(i − j) x(j)ᵀ] D, D = (XᵀX)⁻¹, R_vv the residual autocorrelation estimate,
+//! which is the honest uncertainty when the residuals are not white (they rarely are in flight data).
+//!
+//! Moment coefficients (body axes, Etkin & Reid eq. 4.7,5):
+//! C_l = [I_xx ṗ − I_xz (ṙ + p q) + (I_zz − I_yy) q r] / (q̄ S b),
+//! C_m = [I_yy q̇ + (I_xx − I_zz) p r + I_xz (p² − r²)] / (q̄ S c̄),
+//! C_n = [I_zz ṙ − I_xz (ṗ − q r) + (I_yy − I_xx) p q] / (q̄ S b).
+//! Force coefficients use the specific-force channels when present (Y/m = a_y, Z/m = a_z), otherwise the
+//! body velocities u = V cos α cos β, v = V sin β, w = V sin α cos β differentiated numerically:
+//! Y/m = v̇ + r u − p w − g cos θ sin φ, Z/m = ẇ + p v − q u − g cos θ cos φ. Lift is taken as
+//! C_L = −Z/(q̄ S cos α), neglecting D tan α (thrust along body x makes X unusable without a thrust model).
+//!
+//! Time derivatives come from [`savitzky_golay_derivative`], a local polynomial fit (Savitzky & Golay 1964).
+//! It lives here until `crate::signal` provides a differentiator; it assumes uniform sampling.
+
+use faer::prelude::Solve;
+use faer::Mat;
+
+use super::params::{Derivative, Geometry, MassProperties};
+use super::AeroError;
+
+/// Measured time histories in SI units (radians), all the same length as `time_s`; absent channels `None`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FlightRecord<'a> {
+    /// Time, uniformly sampled.
+    pub time_s: &'a [f64],
+    /// Angle of attack.
+    pub alpha_rad: Option<&'a [f64]>,
+    /// Sideslip.
+    pub beta_rad: Option<&'a [f64]>,
+    /// Body roll rate.
+    pub p_rad_s: Option<&'a [f64]>,
+    /// Body pitch rate.
+    pub q_rad_s: Option<&'a [f64]>,
+    /// Body yaw rate.
+    pub r_rad_s: Option<&'a [f64]>,
+    /// Bank angle.
+    pub phi_rad: Option<&'a [f64]>,
+    /// Pitch attitude.
+    pub theta_rad: Option<&'a [f64]>,
+    /// True airspeed.
+    pub airspeed_m_s: Option<&'a [f64]>,
+    /// Elevator deflection.
+    pub elevator_rad: Option<&'a [f64]>,
+    /// Aileron deflection.
+    pub aileron_rad: Option<&'a [f64]>,
+    /// Rudder deflection.
+    pub rudder_rad: Option<&'a [f64]>,
+    /// Body lateral specific force at the CG.
+    pub ay_m_s2: Option<&'a [f64]>,
+    /// Body normal specific force at the CG (≈ −g in level flight).
+    pub az_m_s2: Option<&'a [f64]>,
+}
+
+/// Tuning of the equation-error regression.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EquationErrorOptions {
+    /// Savitzky–Golay half window, samples (window = 2 h + 1).
+    pub half_window: usize,
+    /// Savitzky–Golay polynomial order.
+    pub poly_order: usize,
+    /// Add α̇ c̄/(2V) as a C_m regressor (separates C_mq from C_mα̇ only with rich, clean data).
+    pub include_alphadot: bool,
+    /// Residual autocorrelation lags used by the coloured-residual correction (`None`: all, O(N²)).
+    pub max_lag: Option<usize>,
+    /// Air density, assumed constant over the record.
+    pub air_density_kg_m3: f64,
+    /// Gravitational acceleration.
+    pub g_m_s2: f64,
+}
+
+impl Default for EquationErrorOptions {
+    fn default() -> Self {
+        Self {
+            half_window: 5,
+            poly_order: 2,
+            include_alphadot: false,
+            max_lag: None,
+            air_density_kg_m3: 1.225,
+            g_m_s2: 9.80665,
+        }
+    }
+}
+
+/// One estimated term of one coefficient equation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegressionTerm {
+    /// Term name, e.g. `Cm_alpha`, `Cm_0` for the bias.
+    pub name: String,
+    /// The model derivative it estimates, if the model has one.
+    pub derivative: Option<Derivative>,
+    /// Estimate.
+    pub value: f64,
+    /// Standard error s √((XᵀX)⁻¹)_kk, white residuals assumed.
+    pub std_error: f64,
+    /// Standard error with the coloured-residual correction.
+    pub std_error_colored: f64,
+}
+
+/// The regression of one coefficient (C_m, C_l, …).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegressionResult {
+    /// Which coefficient: `Cm`, `Cl`, `Cn`, `CY`, `CL`.
+    pub coefficient: &'static str,
+    /// The estimated terms.
+    pub terms: Vec<RegressionTerm>,
+    /// Coefficient of determination R².
+    pub r_squared: f64,
+    /// Fit error standard deviation s.
+    pub fit_error_std: f64,
+}
+
+impl RegressionResult {
+    /// The term estimating a given derivative.
+    pub fn term(&self, d: Derivative) -> Option<&RegressionTerm> {
+        self.terms.iter().find(|t| t.derivative == Some(d))
+    }
+}
+
+/// All coefficient regressions the record allows, and why the others were skipped.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EquationErrorResult {
+    /// One regression per coefficient that could be formed.
+    pub equations: Vec<RegressionResult>,
+    /// (coefficient, reason) for those that could not.
+    pub skipped: Vec<(&'static str, String)>,
+}
+
+impl EquationErrorResult {
+    /// The term estimating a derivative, from whichever equation has it.
+    pub fn term(&self, d: Derivative) -> Option<&RegressionTerm> {
+        self.equations.iter().find_map(|e| e.term(d))
+    }
+}
+
+/// First derivative of a uniformly sampled signal by a local polynomial least-squares fit of `order` over
+/// 2 `half_window` + 1 samples (Savitzky & Golay 1964); near the ends the window is shifted inside the record.
+pub fn savitzky_golay_derivative(
+    y: &[f64],
+    dt_s: f64,
+    half_window: usize,
+    order: usize,
+) -> Result<Vec<f64>, AeroError> {
+    let width = 2 * half_window + 1;
+    if !(dt_s.is_finite() && dt_s > 0.0) {
+        return Err(AeroError::BadRecord(format!(
+            "sample interval must be positive, got {dt_s}"
+        )));
+    }
+    if order == 0 || order >= width {
+        return Err(AeroError::BadRecord(format!(
+            "Savitzky–Golay order {order} needs 1 ≤ order < window {width}"
+        )));
+    }
+    if y.len() < width {
+        return Err(AeroError::BadRecord(format!(
+            "{} samples are fewer than the differentiation window of {width}",
+            y.len()
+        )));
+    }
+    let n = y.len();
+    let mut cache: Vec<Option<Vec<f64>>> = vec![None; width];
+    let mut out = vec![0.0; n];
+    for (i, o) in out.iter_mut().enumerate() {
+        let start = i.saturating_sub(half_window).min(n - width);
+        let pos = i - start; // position of sample i inside its window
+        if cache[pos].is_none() {
+            cache[pos] = Some(sg_weights(pos, width, order, half_window.max(1) as f64)?);
+        }
+        let w = cache[pos].as_deref().unwrap_or(&[]);
+        *o = w
+            .iter()
+            .zip(&y[start..start + width])
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            / dt_s;
+    }
+    Ok(out)
+}
+
+/// Weights giving the slope at window position `pos` of a polynomial LS fit (offsets scaled by `h`).
+fn sg_weights(pos: usize, width: usize, order: usize, h: f64) -> Result<Vec<f64>, AeroError> {
+    let m = order + 1;
+    let x: Vec<f64> = (0..width).map(|j| (j as f64 - pos as f64) / h).collect();
+    let vtv = Mat::from_fn(m, m, |a, b| {
+        x.iter().map(|t| t.powi((a + b) as i32)).sum::<f64>()
+    });
+    let vt = Mat::from_fn(m, width, |a, j| x[j].powi(a as i32));
+    let sol = vtv.partial_piv_lu().solve(&vt);
+    let w: Vec<f64> = (0..width).map(|j| sol[(1, j)] / h).collect();
+    if w.iter().any(|v| !v.is_finite()) {
+        return Err(AeroError::Numerical("Savitzky–Golay weights"));
+    }
+    Ok(w)
+}
+
+fn channel<'a>(
+    name: &str,
+    ch: Option<&'a [f64]>,
+    n: usize,
+    equation: &str,
+) -> Result<&'a [f64], String> {
+    match ch {
+        None => Err(format!("{equation} needs the `{name}` channel")),
+        Some(c) if c.len() != n => Err(format!(
+            "`{name}` has {} samples but `time_s` has {n}",
+            c.len()
+        )),
+        Some(c) => Ok(c),
+    }
+}
+
+/// Least squares with white and coloured-residual standard errors (module doc).
+fn lesq(
+    coefficient: &'static str,
+    names: &[String],
+    columns: &[Vec<f64>],
+    z: &[f64],
+    max_lag: Option<usize>,
+) -> Result<RegressionResult, AeroError> {
+    let n = z.len();
+    let p = columns.len();
+    if n <= p {
+        return Err(AeroError::BadRecord(format!(
+            "{coefficient}: {n} samples cannot determine {p} parameters"
+        )));
+    }
+    let x = Mat::from_fn(n, p, |i, j| columns[j][i]);
+    let svd = x
+        .thin_svd()
+        .map_err(|_| AeroError::Numerical("SVD of the regressor matrix"))?;
+    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    if s[p - 1] <= 1e-12 * s[0] {
+        return Err(AeroError::BadRecord(format!(
+            "{coefficient}: regressors are collinear (condition {:.1e}); the manoeuvre does not excite them \
+             independently",
+            s[0] / s[p - 1].max(f64::MIN_POSITIVE)
+        )));
+    }
+    let (u, v) = (svd.U(), svd.V());
+    let uz: Vec<f64> = (0..p)
+        .map(|k| (0..n).map(|i| u[(i, k)] * z[i]).sum())
+        .collect();
+    let theta: Vec<f64> = (0..p)
+        .map(|a| (0..p).map(|k| v[(a, k)] * uz[k] / s[k]).sum())
+        .collect();
+    let resid: Vec<f64> = (0..n)
+        .map(|i| z[i] - (0..p).map(|j| columns[j][i] * theta[j]).sum::<f64>())
+        .collect();
+    let sse: f64 = resid.iter().map(|r| r * r).sum();
+    let s2 = sse / (n - p) as f64;
+    let mean = z.iter().sum::<f64>() / n as f64;
+    let sst: f64 = z.iter().map(|v| (v - mean).powi(2)).sum();
+    // D = (XᵀX)⁻¹ = V Σ⁻² Vᵀ.
+    let d = Mat::from_fn(p, p, |a, b| {
+        (0..p)
+            .map(|k| v[(a, k)] * v[(b, k)] / (s[k] * s[k]))
+            .sum::<f64>()
+    });
+    // Coloured residuals: M = Σ_k R(k) Σ_i x(i) x(i+k)ᵀ (+ transpose for k > 0).
+    let lags = max_lag.unwrap_or(n - 1).min(n - 1);
+    let mut m = Mat::<f64>::zeros(p, p);
+    for k in 0..=lags {
+        let r_k: f64 = (0..n - k).map(|i| resid[i] * resid[i + k]).sum::<f64>() / n as f64;
+        for a in 0..p {
+            for b in 0..p {
+                let sab: f64 = (0..n - k).map(|i| columns[a][i] * columns[b][i + k]).sum();
+                m[(a, b)] += r_k * sab;
+                if k > 0 {
+                    m[(b, a)] += r_k * sab;
+                }
+            }
+        }
+    }
+    let cov_c = &d * &m * &d;
+    let terms = names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| RegressionTerm {
+            name: name.clone(),
+            derivative: name.parse().ok(),
+            value: theta[k],
+            std_error: (s2 * d[(k, k)]).sqrt(),
+            std_error_colored: cov_c[(k, k)].max(0.0).sqrt(),
+        })
+        .collect();
+    Ok(RegressionResult {
+        coefficient,
+        terms,
+        r_squared: if sst > 0.0 { 1.0 - sse / sst } else { f64::NAN },
+        fit_error_std: s2.sqrt(),
+    })
+}
+
+/// Estimate C_m, C_l, C_n, C_Y and C_L derivatives by equation-error regression (module doc).
+///
+/// Each equation is formed when its channels exist; the others are listed in `skipped` with the channel
+/// they lack. Errors only when no equation can be formed or the record itself is unusable.
+pub fn equation_error(
+    record: &FlightRecord<'_>,
+    mass: &MassProperties,
+    geometry: &Geometry,
+    options: &EquationErrorOptions,
+) -> Result<EquationErrorResult, AeroError> {
+    mass.validate()?;
+    geometry.validate()?;
+    let t = record.time_s;
+    let n = t.len();
+    if n < 2 * options.half_window + 2 {
+        return Err(AeroError::BadRecord(format!("only {n} samples")));
+    }
+    let dt = (t[n - 1] - t[0]) / (n - 1) as f64;
+    if !(dt > 0.0) || t.windows(2).any(|w| ((w[1] - w[0]) - dt).abs() > 0.01 * dt) {
+        return Err(AeroError::BadRecord(
+            "time_s must be strictly increasing and uniformly sampled (resample first)".into(),
+        ));
+    }
+    let diff =
+        |y: &[f64]| savitzky_golay_derivative(y, dt, options.half_window, options.poly_order);
+    let zeros = vec![0.0; n];
+    let ones = vec![1.0; n];
+    let rho = options.air_density_kg_m3;
+    let (s_ref, b, c) = (geometry.wing_area_m2, geometry.span_m, geometry.chord_m);
+    let (ixx, iyy, izz, ixz) = (
+        mass.ixx_kg_m2,
+        mass.iyy_kg_m2,
+        mass.izz_kg_m2,
+        mass.ixz_kg_m2,
+    );
+    let mut equations = Vec::new();
+    let mut skipped = Vec::new();
+
+    // Shared channels (missing ones are reported per equation).
+    let v_ch = record.airspeed_m_s;
+    let qbar = |v: &[f64]| -> Vec<f64> { v.iter().map(|v| 0.5 * rho * v * v).collect() };
+
+    // ---- C_m
+    let cm = (|| -> Result<Result<RegressionResult, AeroError>, String> {
+        let eq = "Cm";
+        let v = channel("airspeed_m_s", v_ch, n, eq)?;
+        let alpha = channel("alpha_rad", record.alpha_rad, n, eq)?;
+        let q = channel("q_rad_s", record.q_rad_s, n, eq)?;
+        let de = channel("elevator_rad", record.elevator_rad, n, eq)?;
+        let p = record.p_rad_s.filter(|x| x.len() == n).unwrap_or(&zeros);
+        let r = record.r_rad_s.filter(|x| x.len() == n).unwrap_or(&zeros);
+        Ok((|| {
+            let qdot = diff(q)?;
+            let qb = qbar(v);
+            let z: Vec<f64> = (0..n)
+                .map(|i| {
+                    (iyy * qdot[i] + (ixx - izz) * p[i] * r[i] + ixz * (p[i] * p[i] - r[i] * r[i]))
+                        / (qb[i] * s_ref * c)
+                })
+                .collect();
+            let qhat: Vec<f64> = (0..n).map(|i| q[i] * c / (2.0 * v[i])).collect();
+            let mut names = vec!["Cm_0", "Cm_alpha", "Cm_q", "Cm_de"];
+            let mut cols = vec![ones.clone(), alpha.to_vec(), qhat, de.to_vec()];
+            if options.include_alphadot {
+                let adot = diff(alpha)?;
+                names.push("Cm_alphadot");
+                cols.push((0..n).map(|i| adot[i] * c / (2.0 * v[i])).collect());
+            }
+            let names: Vec<String> = names.into_iter().map(String::from).collect();
+            lesq("Cm", &names, &cols, &z, options.max_lag)
+        })())
+    })();
+    match cm {
+        Ok(res) => equations.push(res?),
+        Err(why) => skipped.push(("Cm", why)),
+    }
+
+    // ---- C_l and C_n
+    for eq in ["Cl", "Cn"] {
+        let res = (|| -> Result<Result<RegressionResult, AeroError>, String> {
+            let v = channel("airspeed_m_s", v_ch, n, eq)?;
+            let beta = channel("beta_rad", record.beta_rad, n, eq)?;
+            let p = channel("p_rad_s", record.p_rad_s, n, eq)?;
+            let r = channel("r_rad_s", record.r_rad_s, n, eq)?;
+            let da = channel("aileron_rad", record.aileron_rad, n, eq)?;
+            let dr = channel("rudder_rad", record.rudder_rad, n, eq)?;
+            let q = record.q_rad_s.filter(|x| x.len() == n).unwrap_or(&zeros);
+            Ok((|| {
+                let pdot = diff(p)?;
+                let rdot = diff(r)?;
+                let qb = qbar(v);
+                let z: Vec<f64> = (0..n)
+                    .map(|i| {
+                        let moment = if eq == "Cl" {
+                            ixx * pdot[i] - ixz * (rdot[i] + p[i] * q[i])
+                                + (izz - iyy) * q[i] * r[i]
+                        } else {
+                            izz * rdot[i] - ixz * (pdot[i] - q[i] * r[i])
+                                + (iyy - ixx) * p[i] * q[i]
+                        };
+                        moment / (qb[i] * s_ref * b)
+                    })
+                    .collect();
+                lateral_regression(eq, v, beta, p, r, da, dr, b, &z, options.max_lag)
+            })())
+        })();
+        match res {
+            Ok(res) => equations.push(res?),
+            Err(why) => skipped.push((if eq == "Cl" { "Cl" } else { "Cn" }, why)),
+        }
+    }
+
+    // Body velocities for the force equations.
+    let body_velocities = |v: &[f64], alpha: &[f64], beta: &[f64]| {
+        let u: Vec<f64> = (0..n)
+            .map(|i| v[i] * alpha[i].cos() * beta[i].cos())
+            .collect();
+        let vv: Vec<f64> = (0..n).map(|i| v[i] * beta[i].sin()).collect();
+        let w: Vec<f64> = (0..n)
+            .map(|i| v[i] * alpha[i].sin() * beta[i].cos())
+            .collect();
+        (u, vv, w)
+    };
+    let g = options.g_m_s2;
+
+    // ---- C_Y
+    let cy = (|| -> Result<Result<RegressionResult, AeroError>, String> {
+        let eq = "CY";
+        let v = channel("airspeed_m_s", v_ch, n, eq)?;
+        let beta = channel("beta_rad", record.beta_rad, n, eq)?;
+        let p = channel("p_rad_s", record.p_rad_s, n, eq)?;
+        let r = channel("r_rad_s", record.r_rad_s, n, eq)?;
+        let da = channel("aileron_rad", record.aileron_rad, n, eq)?;
+        let dr = channel("rudder_rad", record.rudder_rad, n, eq)?;
+        let specific: Vec<f64> = match record.ay_m_s2.filter(|x| x.len() == n) {
+            Some(ay) => ay.to_vec(),
+            None => {
+                let alpha = channel("alpha_rad (or ay_m_s2)", record.alpha_rad, n, eq)?;
+                let phi = channel("phi_rad (or ay_m_s2)", record.phi_rad, n, eq)?;
+                let theta = channel("theta_rad (or ay_m_s2)", record.theta_rad, n, eq)?;
+                let (u, vv, w) = body_velocities(v, alpha, beta);
+                match diff(&vv) {
+                    Ok(vdot) => (0..n)
+                        .map(|i| {
+                            vdot[i] + r[i] * u[i] - p[i] * w[i] - g * theta[i].cos() * phi[i].sin()
+                        })
+                        .collect(),
+                    Err(e) => return Ok(Err(e)),
+                }
+            }
+        };
+        let qb = qbar(v);
+        let z: Vec<f64> = (0..n)
+            .map(|i| mass.mass_kg * specific[i] / (qb[i] * s_ref))
+            .collect();
+        Ok(lateral_regression(
+            "CY",
+            v,
+            beta,
+            p,
+            r,
+            da,
+            dr,
+            b,
+            &z,
+            options.max_lag,
+        ))
+    })();
+    match cy {
+        Ok(res) => equations.push(res?),
+        Err(why) => skipped.push(("CY", why)),
+    }
+
+    // ---- C_L
+    let cl = (|| -> Result<Result<RegressionResult, AeroError>, String> {
+        let eq = "CL";
+        let v = channel("airspeed_m_s", v_ch, n, eq)?;
+        let alpha = channel("alpha_rad", record.alpha_rad, n, eq)?;
+        let q = channel("q_rad_s", record.q_rad_s, n, eq)?;
+        let de = channel("elevator_rad", record.elevator_rad, n, eq)?;
+        let specific: Vec<f64> = match record.az_m_s2.filter(|x| x.len() == n) {
+            Some(az) => az.to_vec(),
+            None => {
+                let theta = channel("theta_rad (or az_m_s2)", record.theta_rad, n, eq)?;
+                let beta = record.beta_rad.filter(|x| x.len() == n).unwrap_or(&zeros);
+                let phi = record.phi_rad.filter(|x| x.len() == n).unwrap_or(&zeros);
+                let p = record.p_rad_s.filter(|x| x.len() == n).unwrap_or(&zeros);
+                let (u, vv, w) = body_velocities(v, alpha, beta);
+                match diff(&w) {
+                    Ok(wdot) => (0..n)
+                        .map(|i| {
+                            wdot[i] + p[i] * vv[i] - q[i] * u[i] - g * theta[i].cos() * phi[i].cos()
+                        })
+                        .collect(),
+                    Err(e) => return Ok(Err(e)),
+                }
+            }
+        };
+        let qb = qbar(v);
+        let z: Vec<f64> = (0..n)
+            .map(|i| -mass.mass_kg * specific[i] / (qb[i] * s_ref * alpha[i].cos()))
+            .collect();
+        let qhat: Vec<f64> = (0..n).map(|i| q[i] * c / (2.0 * v[i])).collect();
+        let names: Vec<String> = ["CL_0", "CL_alpha", "CL_q", "CL_de"]
+            .map(String::from)
+            .to_vec();
+        Ok(lesq(
+            "CL",
+            &names,
+            &[ones.clone(), alpha.to_vec(), qhat, de.to_vec()],
+            &z,
+            options.max_lag,
+        ))
+    })();
+    match cl {
+        Ok(res) => equations.push(res?),
+        Err(why) => skipped.push(("CL", why)),
+    }
+
+    if equations.is_empty() {
+        return Err(AeroError::BadRecord(format!(
+            "no coefficient equation can be formed: {}",
+            skipped
+                .iter()
+                .map(|(_, w)| w.as_str())
+                .collect::<Vec<_>>()
+                .join("; ")
+        )));
+    }
+    Ok(EquationErrorResult { equations, skipped })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn lateral_regression(
+    coefficient: &'static str,
+    v: &[f64],
+    beta: &[f64],
+    p: &[f64],
+    r: &[f64],
+    da: &[f64],
+    dr: &[f64],
+    span_m: f64,
+    z: &[f64],
+    max_lag: Option<usize>,
+) -> Result<RegressionResult, AeroError> {
+    let n = z.len();
+    let phat: Vec<f64> = (0..n).map(|i| p[i] * span_m / (2.0 * v[i])).collect();
+    let rhat: Vec<f64> = (0..n).map(|i| r[i] * span_m / (2.0 * v[i])).collect();
+    let names: Vec<String> = ["0", "beta", "p", "r", "da", "dr"]
+        .iter()
+        .map(|s| format!("{coefficient}_{s}"))
+        .collect();
+    let cols = vec![
+        vec![1.0; n],
+        beta.to_vec(),
+        phat,
+        rhat,
+        da.to_vec(),
+        dr.to_vec(),
+    ];
+    lesq(coefficient, &names, &cols, z, max_lag)
+}
