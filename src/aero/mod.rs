@@ -29,8 +29,8 @@ pub use params::{
     Assumptions, Derivative, Derivatives, FlightCondition, Geometry, MassProperties, ThrustModel,
 };
 pub use regression::{
-    equation_error, savitzky_golay_derivative, EquationErrorOptions, EquationErrorResult,
-    FlightRecord, RegressionResult, RegressionTerm,
+    equation_error, savitzky_golay_derivative, savitzky_golay_smooth, EquationErrorOptions,
+    EquationErrorResult, FlightRecord, RegressionResult, RegressionTerm,
 };
 
 /// Everything that can go wrong in the aero module, with the context a user needs to fix it.
