@@ -241,3 +241,7 @@ pr('lat full', lat_model()[0])
 pr('lat body axes', lat_model(stab=False)[0])
 pr('lat no Ixz', lat_model(ixz=False)[0])
 pr('lat no CYp CYr', lat_model(CY_pr=False)[0])
+# JSBSim's CYb is on the wind-axis SIDE force: the stability-axis side-force slope is C_Yb - C_D (the Rust
+# model's `side_force_in_wind_axes`); this is the configuration the Rust tests compare with.
+d['CY_beta'] -= CD0trim
+pr('lat full + drag in Y', lat_model()[0])

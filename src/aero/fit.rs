@@ -25,7 +25,7 @@ pub struct IdentifiedTf {
     pub num: Vec<f64>,
     /// Denominator coefficients, degree 4; normalised to monic if `den[0] ≠ 1` and no covariance is given.
     pub den: Vec<f64>,
-    /// Optional covariance of [den[1], …, den[4], num[0], …] (denominator first, as an ARX θ vector);
+    /// Optional covariance of `[den[1], …, den[4], num[0], …]` (denominator first, as an ARX θ vector);
     /// requires a monic denominator.
     pub covariance: Option<Mat<f64>>,
 }

@@ -13,6 +13,15 @@
 //! - [`identifiability`]: which derivatives a set of transfer functions determines, in plain words.
 //! - [`regression`]: equation-error estimates from flight-data channels (SIDPAC `lesq` style) and the
 //!   Savitzky–Golay differentiator it needs.
+//!
+//! Typical use: build an [`AeroModel`] (lateral derivatives and inertia in stability axes — convert body-axis
+//! values with [`Derivatives::body_to_stability`] and [`MassProperties::to_stability_axes`]), get
+//! `model.paper_transfer_functions()` or `model.longitudinal()?.modes()`, run
+//! [`analyse_identifiability`] to see what a manoeuvre can determine, then [`estimate_derivatives`] from
+//! identified transfer functions, or [`equation_error`] from flight-data channels.
+//!
+//! Transfer functions are computed by a private Faddeev–LeVerrier recursion (exact for these 4×4 systems);
+//! `crate::lti` offers the general `ss2tf`.
 
 pub mod fit;
 pub mod identifiability;

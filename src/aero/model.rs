@@ -1,6 +1,6 @@
 //! The parametric small-perturbation model in descriptor form `C ẋ = A x + B u` and its transfer functions.
 //!
-//! Longitudinal (paper eq. 21–33), stability axes, x = [u (m/s), α (rad), q (rad/s), θ (rad)], u = [δe]:
+//! Longitudinal (paper eq. 21–33), stability axes, x = (u m/s, α rad, q rad/s, θ rad), input δe:
 //!
 //! ```text
 //!  u̇                 = X_u u + X_α α − g cos γ0 θ + X_δe δe
@@ -14,7 +14,7 @@
 //! Z_δe = −q̄S C_Lδe/(mV), M_α = q̄Sc̄ C_mα/I_yy, M_q = q̄Sc̄² C_mq/(2V I_yy), M_α̇ = q̄Sc̄² C_mα̇/(2V I_yy),
 //! M_δe = q̄Sc̄ C_mδe/I_yy; C_D = C_D0 + K C_L0² is the trim drag coefficient.
 //!
-//! Lateral (paper eq. 38–53), stability axes, x = [β (rad), p, r (rad/s), φ (rad)], u = [δa, δr]:
+//! Lateral (paper eq. 38–53), stability axes, x = (β rad, p, r rad/s, φ rad), inputs (δa, δr):
 //!
 //! ```text
 //!  β̇                 = Y_β β + Y_p p + (Y_r − 1) r + (g/V) cos γ0 φ + Y_δa δa + Y_δr δr
@@ -364,6 +364,24 @@ impl AeroModel {
         self.submodel(which.axis)?
             .transfer_function(which.state, which.input)
     }
+
+    /// The paper's three transfer functions θ/δe, φ/δa, φ/δr (numerators of length 4, s³ coefficient 0).
+    pub fn paper_transfer_functions(&self) -> Result<[(TfOutput, TfCoefficients); 3], AeroError> {
+        Ok([
+            (
+                TfOutput::THETA_ELEVATOR,
+                self.transfer_function(TfOutput::THETA_ELEVATOR)?,
+            ),
+            (
+                TfOutput::PHI_AILERON,
+                self.transfer_function(TfOutput::PHI_AILERON)?,
+            ),
+            (
+                TfOutput::PHI_RUDDER,
+                self.transfer_function(TfOutput::PHI_RUDDER)?,
+            ),
+        ])
+    }
 }
 
 impl LinearModel {
@@ -689,9 +707,8 @@ pub(crate) mod tests {
         // Solve (sI − A) x = B by complex Gaussian elimination (4×4).
         let mut m: Vec<Vec<Complex<f64>>> = (0..4)
             .map(|i| {
-                let mut row: Vec<Complex<f64>> = (0..4)
-                    .map(|j| Complex::new(if i == j { 0.0 } else { 0.0 }, 0.0) - lin.a[(i, j)])
-                    .collect();
+                let mut row: Vec<Complex<f64>> =
+                    (0..4).map(|j| -Complex::new(lin.a[(i, j)], 0.0)).collect();
                 row[i] += s;
                 row.push(Complex::new(lin.b[(i, 0)], 0.0));
                 row
@@ -704,13 +721,13 @@ pub(crate) mod tests {
             m.swap(k, p);
             for i in k + 1..4 {
                 let f = m[i][k] / m[k][k];
-                for j in k..5 {
-                    let t = m[k][j];
-                    m[i][j] -= f * t;
+                let pivot_row = m[k].clone();
+                for (dst, src) in m[i].iter_mut().zip(&pivot_row).skip(k) {
+                    *dst -= f * src;
                 }
             }
         }
-        let mut x = vec![Complex::new(0.0, 0.0); 4];
+        let mut x = [Complex::new(0.0, 0.0); 4];
         for i in (0..4).rev() {
             let mut acc = m[i][4];
             for j in i + 1..4 {
@@ -731,6 +748,7 @@ pub(crate) mod tests {
             .modes()
             .unwrap()
             .into_iter()
+            .rev()
             .filter_map(|x| match x {
                 Mode::Oscillatory {
                     omega_n_rad_s,
@@ -738,7 +756,7 @@ pub(crate) mod tests {
                 } => Some((omega_n_rad_s, zeta)),
                 Mode::Real { .. } => None,
             })
-            .last()
+            .next()
             .unwrap();
         let dr = m.lateral().unwrap().fastest_oscillation().unwrap().unwrap();
         [

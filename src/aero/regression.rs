@@ -406,7 +406,7 @@ pub fn equation_error(
         return Err(AeroError::BadRecord(format!("only {n} samples")));
     }
     let dt = (t[n - 1] - t[0]) / (n - 1) as f64;
-    if !(dt > 0.0) || t.windows(2).any(|w| ((w[1] - w[0]) - dt).abs() > 0.01 * dt) {
+    if dt.is_nan() || dt <= 0.0 || t.windows(2).any(|w| ((w[1] - w[0]) - dt).abs() > 0.01 * dt) {
         return Err(AeroError::BadRecord(
             "time_s must be strictly increasing and uniformly sampled (resample first)".into(),
         ));
