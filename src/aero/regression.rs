@@ -819,6 +819,70 @@ mod tests {
     }
 
     #[test]
+    fn equation_error_with_sensor_noise_keeps_key_lateral_derivatives_within_15_percent() {
+        // Acceptance (issue 4) on simulated data: Gaussian noise of 0.1° on β and 0.3 °/s on p, r (a
+        // MEMS-grade IMU and vane). C_lp, C_lδa, C_nβ, C_nδr within 15 %, and the coloured-residual 3σ
+        // interval covers the truth for those four.
+        use rand::{rngs::StdRng, SeedableRng};
+        use rand_distr::{Distribution, Normal};
+        let model = c172x_model(Assumptions {
+            side_force_rate_terms: true,
+            ..Assumptions::paper()
+        });
+        let (t, x, u) = lateral_record();
+        let mut rng = StdRng::seed_from_u64(42);
+        let beta_noise = Normal::new(0.0, 0.1f64.to_radians()).unwrap();
+        let rate_noise = Normal::new(0.0, 0.3f64.to_radians()).unwrap();
+        let beta: Vec<f64> = x
+            .iter()
+            .map(|s| s[0] + beta_noise.sample(&mut rng))
+            .collect();
+        let p: Vec<f64> = x
+            .iter()
+            .map(|s| s[1] + rate_noise.sample(&mut rng))
+            .collect();
+        let r: Vec<f64> = x
+            .iter()
+            .map(|s| s[2] + rate_noise.sample(&mut rng))
+            .collect();
+        let da: Vec<f64> = u.iter().map(|v| v[0]).collect();
+        let dr: Vec<f64> = u.iter().map(|v| v[1]).collect();
+        let v = vec![V_M_S; t.len()];
+        let record = FlightRecord {
+            time_s: &t,
+            beta_rad: Some(&beta),
+            p_rad_s: Some(&p),
+            r_rad_s: Some(&r),
+            airspeed_m_s: Some(&v),
+            aileron_rad: Some(&da),
+            rudder_rad: Some(&dr),
+            ..Default::default()
+        };
+        let opts = EquationErrorOptions {
+            air_density_kg_m3: RHO_KG_M3,
+            half_window: 10,
+            ..Default::default()
+        };
+        let res = equation_error(&record, &model.mass, &model.geometry, &opts).unwrap();
+        for d in [D::Clp, D::Clda, D::Cnbeta, D::Cndr] {
+            let term = res.term(d).unwrap();
+            let truth = model.derivatives.get(d);
+            assert!(
+                rel(term.value, truth) < 0.15,
+                "{d}: {} vs {truth}",
+                term.value
+            );
+            assert!(
+                (term.value - truth).abs() < 3.0 * term.std_error_colored,
+                "{d}: {} ± {} (white {}) vs {truth}",
+                term.value,
+                term.std_error_colored,
+                term.std_error
+            );
+        }
+    }
+
+    #[test]
     fn equation_error_pitch_needs_alpha_dot_to_separate_cm_q_from_cm_alphadot() {
         // Longitudinal doublets on the paper-structure model. With α̇ as a regressor the pitch derivatives
         // come back (C_mα, C_mδe 2 %; see below for C_mq, C_mα̇). Without it, C_mq absorbs C_mα̇ (α̇ ≈ q + Z_α α): the estimate is C_mq + C_mα̇
