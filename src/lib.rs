@@ -3,6 +3,7 @@
 //! Data flows one way: `sim`/`data` produce records → `ident` estimates models (built on `lti`
 //! and `signal`) → comparison → `report`. The `cli` module only parses arguments and calls in.
 
+pub mod aero;
 pub mod aircraft;
 pub mod cli;
 pub mod data;

@@ -1,0 +1,650 @@
+//! Identifiability: which derivatives a set of transfer functions can determine, and what would help.
+//!
+//! The sensitivity of the transfer-function coefficients to the derivatives is the Jacobian J = ∂c/∂p at the
+//! trim point, with rows weighted (relative coefficient error, or the identified coefficient covariance) and
+//! columns scaled by each derivative's magnitude, so that J maps relative derivative changes to relative
+//! coefficient changes. Its singular value decomposition J = U Σ Vᵀ (Golub & Van Loan §2.4; the classic
+//! parameter-identifiability test, e.g. Jategaonkar, *Flight Vehicle System Identification*, §4.18) gives:
+//!
+//! - null directions: right singular vectors with σ ≈ 0 — derivative combinations the data cannot see;
+//! - for each derivative outside the null space, its relative standard deviation per unit relative
+//!   coefficient error, √(Σ_i v_ki²/σ_i²) — large means weakly determined.
+//!
+//! Each derivative gets a plain-words [`Verdict`]; for the undetermined ones the analysis repeats with each
+//! extra measurable output (α, u, q, β, p, r, or the other input) to say which measurement would separate them.
+
+use std::fmt::Write as _;
+
+use faer::Mat;
+
+use super::fit::{model_coefficients, relative_whitening, scales, with_values};
+use super::model::{AeroModel, Axis, TfOutput};
+use super::params::Derivative;
+use super::AeroError;
+
+/// Singular values below this fraction of the largest span the null space.
+const NULL_TOLERANCE: f64 = 1e-7;
+/// A derivative whose share of the null space exceeds this is not determined on its own.
+const NULL_SHARE: f64 = 1e-4;
+/// Relative standard deviation per unit relative coefficient error above which a derivative is "weak":
+/// a 1 % coefficient error (a good ARX fit on clean data) would move it by more than 5 %.
+const WEAK_RELATIVE_STD: f64 = 5.0;
+/// Estimate correlation above which the explanation names the partner (Morelli & Klein §5.4 call
+/// |ρ| > 0.9 high; 0.8 already doubles the variance through collinearity).
+const HIGH_CORRELATION: f64 = 0.8;
+
+/// What the transfer functions say about one derivative.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Verdict {
+    /// Determined on its own.
+    Determined {
+        /// Relative standard deviation per unit relative coefficient error.
+        relative_std: f64,
+    },
+    /// Determined only poorly.
+    Weak {
+        /// Relative standard deviation per unit relative coefficient error.
+        relative_std: f64,
+        /// The most correlated other derivative and the correlation, when |ρ| > 0.8.
+        correlated_with: Option<(Derivative, f64)>,
+    },
+    /// Only a combination with other derivatives is determined.
+    Combination {
+        /// The derivatives sharing its null direction(s).
+        partners: Vec<Derivative>,
+        /// The determined combination in words, e.g. `Cm_q + 1.0000·Cm_alphadot`.
+        combination: String,
+    },
+    /// It does not enter these transfer functions at all.
+    Absent,
+}
+
+/// The verdict for one derivative, with an explanation and the measurements that would determine it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DerivativeVerdict {
+    /// The derivative.
+    pub derivative: Derivative,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// One sentence a flight-test engineer can read.
+    pub explanation: String,
+    /// Extra measurements (output/input pairs) that would make it determined, in words.
+    pub separated_by: Vec<String>,
+}
+
+/// The identifiability analysis of a set of derivatives from a set of transfer functions.
+#[derive(Debug, Clone)]
+pub struct IdentifiabilityReport {
+    /// The analysed derivatives (columns of the Jacobian).
+    pub derivatives: Vec<Derivative>,
+    /// The transfer functions used (rows).
+    pub outputs: Vec<TfOutput>,
+    /// Singular values of the scaled Jacobian, descending.
+    pub singular_values: Vec<f64>,
+    /// Null directions in physical units (δ of each derivative, largest entry ±1).
+    pub null_space: Vec<Vec<f64>>,
+    /// One verdict per derivative, in `derivatives` order.
+    pub verdicts: Vec<DerivativeVerdict>,
+}
+
+impl IdentifiabilityReport {
+    /// True if the derivative is determined (strongly or weakly) on its own.
+    pub fn is_determined(&self, d: Derivative) -> bool {
+        self.verdicts.iter().any(|v| {
+            v.derivative == d
+                && matches!(v.verdict, Verdict::Determined { .. } | Verdict::Weak { .. })
+        })
+    }
+
+    /// The verdict of one derivative.
+    pub fn verdict(&self, d: Derivative) -> Option<&DerivativeVerdict> {
+        self.verdicts.iter().find(|v| v.derivative == d)
+    }
+
+    /// A plain-text table: one line per derivative.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "transfer functions: {}",
+            self.outputs
+                .iter()
+                .map(|o| o.label())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let _ = writeln!(
+            s,
+            "singular values (scaled): {}",
+            self.singular_values
+                .iter()
+                .map(|x| format!("{x:.3e}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+        for v in &self.verdicts {
+            let _ = write!(s, "{:<12} {}", v.derivative.name(), v.explanation);
+            if !v.separated_by.is_empty() {
+                let _ = write!(
+                    s,
+                    " Would be determined with: {}.",
+                    v.separated_by.join("; ")
+                );
+            }
+            s.push('\n');
+        }
+        s
+    }
+}
+
+/// Identifiability of `derivatives` from the model transfer functions `outputs` (full numerators), with
+/// relative coefficient weighting, at the point `model`.
+pub fn analyse_identifiability(
+    model: &AeroModel,
+    derivatives: &[Derivative],
+    outputs: &[TfOutput],
+) -> Result<IdentifiabilityReport, AeroError> {
+    let lengths: Vec<usize> = outputs.iter().map(|&o| natural_num_length(o)).collect();
+    analyse_with_weights(model, derivatives, outputs, &lengths, None)
+}
+
+struct Core {
+    singular_values: Vec<f64>,
+    v: Mat<f64>,
+    rank: usize,
+    column_norms: Vec<f64>,
+}
+
+fn core(
+    model: &AeroModel,
+    derivatives: &[Derivative],
+    outputs: &[TfOutput],
+    num_lengths: &[usize],
+    whitening: Option<&Mat<f64>>,
+) -> Result<Core, AeroError> {
+    let values: Vec<f64> = derivatives
+        .iter()
+        .map(|&d| model.derivatives.get(d))
+        .collect();
+    let scale = scales(model, derivatives);
+    let c0 = model_coefficients(model, outputs, num_lengths)?;
+    let w = match whitening {
+        Some(w) => w.clone(),
+        None => relative_whitening(&c0, num_lengths),
+    };
+    let n_res = c0.len();
+    let p = derivatives.len();
+    let h = 1e-6;
+    let mut jac = Mat::<f64>::zeros(n_res.max(p), p);
+    for k in 0..p {
+        let mut up = values.clone();
+        let mut dn = values.clone();
+        up[k] += h * scale[k];
+        dn[k] -= h * scale[k];
+        let cu = model_coefficients(&with_values(model, derivatives, &up), outputs, num_lengths)?;
+        let cd = model_coefficients(&with_values(model, derivatives, &dn), outputs, num_lengths)?;
+        let dc: Vec<f64> = cu
+            .iter()
+            .zip(&cd)
+            .map(|(a, b)| (a - b) / (2.0 * h))
+            .collect();
+        for i in 0..n_res {
+            jac[(i, k)] = (0..n_res).map(|j| w[(i, j)] * dc[j]).sum();
+        }
+    }
+    // Rows beyond n_res stay zero so that the full V exists even with fewer coefficients than derivatives.
+    let svd = jac
+        .svd()
+        .map_err(|_| AeroError::Numerical("SVD of the identifiability Jacobian"))?;
+    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    let s_max = s.first().copied().unwrap_or(0.0);
+    let rank = s
+        .iter()
+        .filter(|&&x| x > NULL_TOLERANCE * s_max && s_max > 0.0)
+        .count();
+    let column_norms = (0..p)
+        .map(|k| {
+            (0..n_res)
+                .map(|i| jac[(i, k)] * jac[(i, k)])
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    Ok(Core {
+        singular_values: s[..p.min(s.len())].to_vec(),
+        v: svd.V().to_owned(),
+        rank,
+        column_norms,
+    })
+}
+
+fn verdict_of(core: &Core, k: usize, derivatives: &[Derivative], scale: &[f64]) -> Verdict {
+    let p = derivatives.len();
+    let s_max = core.singular_values.first().copied().unwrap_or(0.0);
+    if core.column_norms[k] <= 1e-12 * s_max.max(1e-300) {
+        return Verdict::Absent;
+    }
+    let null_share: f64 = (core.rank..p)
+        .map(|i| core.v[(k, i)] * core.v[(k, i)])
+        .sum::<f64>()
+        .sqrt();
+    if null_share > NULL_SHARE {
+        // Partners: derivatives that move with this one along the null direction(s), largest first.
+        // share_j = relative change of j that accompanies +1 % of k along k's null-space projection.
+        let mut partners: Vec<(usize, f64)> = (0..p)
+            .filter(|&j| j != k)
+            .filter(|&j| (core.rank..p).any(|i| core.v[(j, i)].abs() > NULL_SHARE))
+            .map(|j| {
+                let dot: f64 = (core.rank..p)
+                    .map(|i| core.v[(j, i)] * core.v[(k, i)])
+                    .sum();
+                (j, dot / (null_share * null_share))
+            })
+            .collect();
+        partners.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        let combination = if p - core.rank == 1 && partners.len() == 1 {
+            // One null direction n (physical δp = s ⊙ v): p_k − (n_k/n_j) p_j is invariant.
+            let j = partners[0].0;
+            let nk = core.v[(k, core.rank)] * scale[k];
+            let nj = core.v[(j, core.rank)] * scale[j];
+            let c = -nk / nj;
+            format!(
+                "{} {} {:.4}·{}",
+                derivatives[k].name(),
+                if c >= 0.0 { "+" } else { "−" },
+                c.abs(),
+                derivatives[j].name()
+            )
+        } else {
+            let shown: Vec<String> = partners
+                .iter()
+                .filter(|(_, share)| share.abs() >= 0.01)
+                .take(5)
+                .map(|&(j, share)| format!("{} {:+.2} %", derivatives[j].name(), share))
+                .collect();
+            format!(
+                "a combination: +1 % on {} is invisible when accompanied by {}{}",
+                derivatives[k].name(),
+                if shown.is_empty() {
+                    "small changes".to_string()
+                } else {
+                    shown.join(", ")
+                },
+                if partners.len() > shown.len() {
+                    " and smaller changes of others"
+                } else {
+                    ""
+                }
+            )
+        };
+        let partners = partners.into_iter().map(|(j, _)| derivatives[j]).collect();
+        return Verdict::Combination {
+            partners,
+            combination,
+        };
+    }
+    let relative_std = (0..core.rank)
+        .map(|i| (core.v[(k, i)] / core.singular_values[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    if relative_std > WEAK_RELATIVE_STD {
+        // Correlation of the estimates from (JᵀJ)⁺ = V Σ⁻² Vᵀ over the determined subspace.
+        let cov = |a: usize, b: usize| -> f64 {
+            (0..core.rank)
+                .map(|i| core.v[(a, i)] * core.v[(b, i)] / core.singular_values[i].powi(2))
+                .sum()
+        };
+        let correlated_with = (0..p)
+            .filter(|&j| j != k)
+            .map(|j| (j, cov(k, j) / (cov(k, k) * cov(j, j)).sqrt()))
+            .filter(|(_, rho)| rho.is_finite())
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .filter(|(_, rho)| rho.abs() > HIGH_CORRELATION)
+            .map(|(j, rho)| (derivatives[j], rho));
+        Verdict::Weak {
+            relative_std,
+            correlated_with,
+        }
+    } else {
+        Verdict::Determined { relative_std }
+    }
+}
+
+/// Numerator length that covers the model: attitude outputs (θ, φ) have relative degree 2 (3 coefficients),
+/// every other state relative degree 1 (4 coefficients).
+fn natural_num_length(o: TfOutput) -> usize {
+    if o.state == 3 {
+        3
+    } else {
+        4
+    }
+}
+
+fn measurement_words(o: TfOutput) -> String {
+    let what = match (o.axis, o.state) {
+        (Axis::Longitudinal, 0) => "airspeed (u)",
+        (Axis::Longitudinal, 1) => "angle of attack (α)",
+        (Axis::Longitudinal, 2) => "pitch rate (q)",
+        (Axis::Longitudinal, _) => "pitch attitude (θ)",
+        (Axis::Lateral, 0) => "sideslip (β)",
+        (Axis::Lateral, 1) => "roll rate (p)",
+        (Axis::Lateral, 2) => "yaw rate (r)",
+        (Axis::Lateral, _) => "bank angle (φ)",
+    };
+    format!(
+        "{what} response to {} ({})",
+        o.axis.input_names()[o.input],
+        o.label()
+    )
+}
+
+/// The analysis with an explicit whitening matrix (used by the fit, whose weights come from the data).
+pub(crate) fn analyse_with_weights(
+    model: &AeroModel,
+    derivatives: &[Derivative],
+    outputs: &[TfOutput],
+    num_lengths: &[usize],
+    whitening: Option<&Mat<f64>>,
+) -> Result<IdentifiabilityReport, AeroError> {
+    if derivatives.is_empty() || outputs.is_empty() {
+        return Err(AeroError::NothingToFit(
+            "identifiability needs derivatives and transfer functions".into(),
+        ));
+    }
+    let scale = scales(model, derivatives);
+    let c = core(model, derivatives, outputs, num_lengths, whitening)?;
+    let p = derivatives.len();
+    let null_space = (c.rank..p)
+        .map(|i| {
+            let dp: Vec<f64> = (0..p).map(|k| c.v[(k, i)] * scale[k]).collect();
+            let m = dp
+                .iter()
+                .fold(0.0f64, |m, x| if x.abs() > m.abs() { *x } else { m });
+            dp.iter().map(|x| x / m).collect()
+        })
+        .collect();
+
+    // Candidate extra measurements: every output/input pair of the axes in play that is not used yet.
+    let axes: Vec<Axis> = {
+        let mut a: Vec<Axis> = outputs.iter().map(|o| o.axis).collect();
+        a.dedup();
+        a
+    };
+    let candidates: Vec<TfOutput> = axes
+        .iter()
+        .flat_map(|&axis| {
+            (0..4).flat_map(move |state| {
+                (0..axis.input_names().len()).map(move |input| TfOutput { axis, state, input })
+            })
+        })
+        .filter(|o| !outputs.contains(o))
+        .collect();
+
+    let mut verdicts = Vec::with_capacity(p);
+    for k in 0..p {
+        let verdict = verdict_of(&c, k, derivatives, &scale);
+        let name = derivatives[k].name();
+        let explanation = match &verdict {
+            Verdict::Determined { relative_std } => format!(
+                "determined (a 1 % coefficient error moves it by about {:.2} %).",
+                relative_std
+            ),
+            Verdict::Weak {
+                relative_std,
+                correlated_with,
+            } => {
+                let mut text = format!(
+                    "weakly determined: a 1 % coefficient error moves it by about {relative_std:.0} %."
+                );
+                if let Some((other, rho)) = correlated_with {
+                    let _ = write!(
+                        text,
+                        " Its estimate is correlated with {other} (ρ = {rho:+.3}): in practice only \
+                         their combination is reliable."
+                    );
+                }
+                text
+            }
+            Verdict::Combination { combination, .. } => {
+                if combination.starts_with("a combination") {
+                    format!("not determined alone; {combination}.")
+                } else {
+                    format!("not determined alone; only {combination} is determined.")
+                }
+            }
+            Verdict::Absent => format!("{name} does not enter these transfer functions."),
+        };
+        let mut separated_by = Vec::new();
+        if !matches!(verdict, Verdict::Determined { .. }) {
+            for &extra in &candidates {
+                let mut outs = outputs.to_vec();
+                outs.push(extra);
+                let mut lens = num_lengths.to_vec();
+                lens.push(natural_num_length(extra));
+                let ce = core(model, derivatives, &outs, &lens, None)?;
+                match verdict_of(&ce, k, derivatives, &scale) {
+                    Verdict::Determined { .. } => separated_by.push(measurement_words(extra)),
+                    Verdict::Weak { .. } => {
+                        separated_by.push(format!("{} (weakly)", measurement_words(extra)))
+                    }
+                    _ => {}
+                }
+            }
+            if separated_by.is_empty() && !candidates.is_empty() {
+                // No single extra measurement suffices: try them all together.
+                let mut outs = outputs.to_vec();
+                outs.extend(&candidates);
+                let mut lens = num_lengths.to_vec();
+                lens.extend(candidates.iter().map(|&o| natural_num_length(o)));
+                let ce = core(model, derivatives, &outs, &lens, None)?;
+                let all = candidates
+                    .iter()
+                    .map(|o| o.label())
+                    .collect::<Vec<_>>()
+                    .join(" + ");
+                match verdict_of(&ce, k, derivatives, &scale) {
+                    Verdict::Determined { .. } => separated_by.push(format!("all of {all}")),
+                    Verdict::Weak { .. } => separated_by.push(format!("all of {all} (weakly)")),
+                    _ => {}
+                }
+            }
+        }
+        verdicts.push(DerivativeVerdict {
+            derivative: derivatives[k],
+            verdict,
+            explanation,
+            separated_by,
+        });
+    }
+    Ok(IdentifiabilityReport {
+        derivatives: derivatives.to_vec(),
+        outputs: outputs.to_vec(),
+        singular_values: c.singular_values,
+        null_space,
+        verdicts,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aero::model::tests::c172x_model;
+    use crate::aero::params::{Assumptions, Derivative as D};
+
+    fn lon_paper() -> Vec<D> {
+        D::PAPER
+            .iter()
+            .copied()
+            .filter(|d| d.is_longitudinal())
+            .collect()
+    }
+
+    fn lat_paper() -> Vec<D> {
+        D::PAPER
+            .iter()
+            .copied()
+            .filter(|d| !d.is_longitudinal())
+            .collect()
+    }
+
+    fn lift_known() -> Vec<D> {
+        vec![D::CD0, D::CDCL2, D::Cmalpha, D::Cmalphadot, D::Cmq, D::Cmde]
+    }
+
+    #[test]
+    fn theta_elevator_alone_leaves_one_null_direction_and_determines_only_cm_alpha() {
+        // θ/δe has 7 coefficients (4 denominator, 3 numerator) for the paper's 8 longitudinal derivatives,
+        // so at least one direction is invisible; the analysis must find exactly one and keep Cm_alpha.
+        let m = c172x_model(Assumptions::paper());
+        let r = analyse_identifiability(&m, &lon_paper(), &[TfOutput::THETA_ELEVATOR]).unwrap();
+        assert_eq!(r.null_space.len(), 1, "{}", r.to_text());
+        let s = &r.singular_values;
+        assert!(s[7] < 1e-12 * s[0] && s[6] > 1e-2 * s[0], "{s:?}");
+        assert!(matches!(
+            r.verdict(D::Cmalpha).unwrap().verdict,
+            Verdict::Determined { .. }
+        ));
+        for d in [D::Cmq, D::Cmalphadot, D::CLalpha, D::CLde] {
+            let v = r.verdict(d).unwrap();
+            assert!(
+                matches!(v.verdict, Verdict::Combination { .. }),
+                "{d}: {}",
+                v.explanation
+            );
+            // An angle-of-attack measurement separates them (the paper's missing C_Mq explained).
+            assert!(
+                v.separated_by
+                    .iter()
+                    .any(|w| w.contains("alpha_rad/elevator_rad")),
+                "{d}: {v:?}"
+            );
+            assert!(
+                !v.separated_by.iter().any(|w| w.starts_with("pitch rate")),
+                "q = sθ adds nothing: {v:?}"
+            );
+        }
+        // The flagged direction really is invisible: moving 1e-4 along it changes the coefficients
+        // at second order only (< 1e-6 of the change along the weakest determined direction).
+        let n = &r.null_space[0];
+        let free = lon_paper();
+        let c0 =
+            crate::aero::fit::model_coefficients(&m, &[TfOutput::THETA_ELEVATOR], &[3]).unwrap();
+        let moved = |dir: &[f64]| {
+            let vals: Vec<f64> = free
+                .iter()
+                .zip(dir)
+                .map(|(&d, x)| m.derivatives.get(d) + 1e-4 * x)
+                .collect();
+            let mm = with_values(&m, &free, &vals);
+            let c = crate::aero::fit::model_coefficients(&mm, &[TfOutput::THETA_ELEVATOR], &[3])
+                .unwrap();
+            c.iter()
+                .zip(&c0)
+                .map(|(a, b)| ((a - b) / b.abs().max(1e-12)).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        let along_null = moved(n);
+        let along_cm_alpha = moved(
+            &free
+                .iter()
+                .map(|&d| if d == D::Cmalpha { 1.0 } else { 0.0 })
+                .collect::<Vec<_>>(),
+        );
+        assert!(
+            along_null < 1e-6 * along_cm_alpha.max(1e-3),
+            "{along_null} vs {along_cm_alpha}"
+        );
+    }
+
+    #[test]
+    fn with_lift_known_theta_elevator_determines_pitch_derivatives_and_cd_cl2_cm_alphadot_weakly() {
+        // C_Lα, C_Lδe from elsewhere (e.g. a lift-curve fit): the remaining 6 are all determined, but a 1 %
+        // coefficient error moves C_D_CL2 by ~8 % and C_mα̇ by ~11 %, the latter correlated with C_mq.
+        let m = c172x_model(Assumptions::paper());
+        let r = analyse_identifiability(&m, &lift_known(), &[TfOutput::THETA_ELEVATOR]).unwrap();
+        assert!(r.null_space.is_empty(), "{}", r.to_text());
+        for d in [D::Cmalpha, D::Cmde, D::CD0, D::Cmq] {
+            assert!(
+                matches!(r.verdict(d).unwrap().verdict, Verdict::Determined { .. }),
+                "{}",
+                r.to_text()
+            );
+        }
+        match &r.verdict(D::CDCL2).unwrap().verdict {
+            Verdict::Weak { relative_std, .. } => assert!((5.0..20.0).contains(relative_std)),
+            v => panic!("CD_CL2 should be weak: {v:?}"),
+        }
+        match &r.verdict(D::Cmalphadot).unwrap().verdict {
+            Verdict::Weak {
+                correlated_with: Some((other, rho)),
+                ..
+            } => {
+                assert_eq!(*other, D::Cmq);
+                assert!(rho.abs() > 0.8, "{rho}");
+            }
+            v => panic!(
+                "Cm_alphadot should be weak and correlated with Cm_q: {v:?} {}",
+                r.to_text()
+            ),
+        }
+    }
+
+    #[test]
+    fn roll_attitude_transfer_functions_leave_two_null_directions_that_sideslip_resolves() {
+        // φ/δa and φ/δr: 4 + 3 + 3 = 10 coefficients (the shared denominator counted twice adds no
+        // information) for 12 lateral derivatives: two invisible directions; only Cl_da stands alone.
+        let m = c172x_model(Assumptions::paper());
+        let r = analyse_identifiability(
+            &m,
+            &lat_paper(),
+            &[TfOutput::PHI_AILERON, TfOutput::PHI_RUDDER],
+        )
+        .unwrap();
+        assert_eq!(r.null_space.len(), 2, "{}", r.to_text());
+        assert!(matches!(
+            r.verdict(D::Clda).unwrap().verdict,
+            Verdict::Determined { .. }
+        ));
+        let cn_beta = r.verdict(D::Cnbeta).unwrap();
+        assert!(
+            cn_beta.separated_by.iter().any(|w| w.contains("sideslip")),
+            "{cn_beta:?}"
+        );
+        // Adding β and r responses to both inputs determines all twelve.
+        let mut outs = vec![TfOutput::PHI_AILERON, TfOutput::PHI_RUDDER];
+        for state in [0, 2] {
+            for input in [0, 1] {
+                outs.push(TfOutput {
+                    axis: Axis::Lateral,
+                    state,
+                    input,
+                });
+            }
+        }
+        let r = analyse_identifiability(&m, &lat_paper(), &outs).unwrap();
+        assert!(
+            r.verdicts
+                .iter()
+                .all(|v| matches!(v.verdict, Verdict::Determined { .. })),
+            "{}",
+            r.to_text()
+        );
+    }
+
+    #[test]
+    fn lateral_derivative_is_absent_from_the_pitch_transfer_function() {
+        let m = c172x_model(Assumptions::paper());
+        let r = analyse_identifiability(&m, &[D::Cmalpha, D::Clp], &[TfOutput::THETA_ELEVATOR])
+            .unwrap();
+        assert_eq!(r.verdict(D::Clp).unwrap().verdict, Verdict::Absent);
+        assert!(r.to_text().contains("Cl_p"));
+    }
+
+    #[test]
+    fn unknown_derivative_name_is_a_clear_error() {
+        let err = "Cm_beta_dot".parse::<D>().unwrap_err().to_string();
+        assert!(err.contains("Cm_beta_dot") && err.contains("Cm_q"), "{err}");
+        assert_eq!("Cn_dr".parse::<D>().unwrap(), D::Cndr);
+    }
+}

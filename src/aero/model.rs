@@ -1,0 +1,832 @@
+//! The parametric small-perturbation model in descriptor form `C ẋ = A x + B u` and its transfer functions.
+//!
+//! Longitudinal (paper eq. 21–33), stability axes, x = (u m/s, α rad, q rad/s, θ rad), input δe:
+//!
+//! ```text
+//!  u̇                 = X_u u + X_α α − g cos γ0 θ + X_δe δe
+//! (1 − Z_α̇) α̇        = Z_u u + Z_α α + (1 + Z_q) q − (g/V) sin γ0 θ + Z_δe δe
+//! −M_α̇ α̇ + q̇         = M_α α + M_q q + M_δe δe                   (c32 = −M_α̇)
+//!  θ̇                 = q
+//! ```
+//! with (Etkin & Reid §4.9, Nelson §3.6; α-equation terms divided by V):
+//! X_u = −2 q̄S C_D/(mV) (+ thrust), X_α = g cos γ0 − q̄S C_Dα/m, C_Dα = 2 K C_L0 C_Lα, X_δe = −q̄S C_Dδe/m,
+//! Z_u = −2 q̄S C_L0/(mV²), Z_α = −q̄S (C_Lα [+ C_D])/(mV), Z_q = −q̄S c̄ C_Lq/(2mV²), Z_α̇ = −q̄S c̄ C_Lα̇/(2mV²),
+//! Z_δe = −q̄S C_Lδe/(mV), M_α = q̄Sc̄ C_mα/I_yy, M_q = q̄Sc̄² C_mq/(2V I_yy), M_α̇ = q̄Sc̄² C_mα̇/(2V I_yy),
+//! M_δe = q̄Sc̄ C_mδe/I_yy; C_D = C_D0 + K C_L0² is the trim drag coefficient.
+//!
+//! Lateral (paper eq. 38–53), stability axes, x = (β rad, p, r rad/s, φ rad), inputs (δa, δr):
+//!
+//! ```text
+//!  β̇                 = Y_β β + Y_p p + (Y_r − 1) r + (g/V) cos γ0 φ + Y_δa δa + Y_δr δr
+//!  ṗ − (I_xz/I_xx) ṙ = L_β β + L_p p + L_r r + L_δa δa + L_δr δr      (c23 = −I_xz/I_xx)
+//! −(I_xz/I_zz) ṗ + ṙ = N_β β + N_p p + N_r r + N_δa δa + N_δr δr      (c32 = −I_xz/I_zz)
+//!  φ̇                 = p + tan γ0 r
+//! ```
+//! with Y_β = q̄S C_Yβ/(mV), Y_p = q̄Sb C_Yp/(2mV²), L_β = q̄Sb C_lβ/I_xx, L_p = q̄Sb² C_lp/(2V I_xx), etc.
+//!
+//! Transfer functions come from the state space by the Faddeev–LeVerrier recursion
+//! (Kailath, *Linear Systems*, §2.2): (sI − A)⁻¹ = Σ N_k s^{n−1−k} / det(sI − A). This is a private
+//! implementation; `crate::lti::ss2tf` does the same job for general systems.
+
+use faer::prelude::Solve;
+use faer::Mat;
+
+use super::params::{
+    Assumptions, Derivative as D, Derivatives, FlightCondition, Geometry, MassProperties,
+    ThrustModel,
+};
+use super::AeroError;
+
+/// The full parametric model: trim, mass, geometry, derivatives and assumptions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AeroModel {
+    /// Trim flight condition.
+    pub flight: FlightCondition,
+    /// Mass and inertia (stability axes).
+    pub mass: MassProperties,
+    /// Reference geometry.
+    pub geometry: Geometry,
+    /// Nondimensional derivatives (stability axes).
+    pub derivatives: Derivatives,
+    /// Simplifying assumptions.
+    pub assumptions: Assumptions,
+}
+
+/// Which decoupled submodel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Axis {
+    /// States u, α, q, θ; input δe.
+    Longitudinal,
+    /// States β, p, r, φ; inputs δa, δr.
+    Lateral,
+}
+
+impl Axis {
+    /// State names with units, in model order.
+    pub fn state_names(self) -> [&'static str; 4] {
+        match self {
+            Axis::Longitudinal => ["u_m_s", "alpha_rad", "q_rad_s", "theta_rad"],
+            Axis::Lateral => ["beta_rad", "p_rad_s", "r_rad_s", "phi_rad"],
+        }
+    }
+
+    /// Input names, in model order.
+    pub fn input_names(self) -> &'static [&'static str] {
+        match self {
+            Axis::Longitudinal => &["elevator_rad"],
+            Axis::Lateral => &["aileron_rad", "rudder_rad"],
+        }
+    }
+}
+
+/// One transfer function of the model: output state over input, by index into [`Axis::state_names`] and
+/// [`Axis::input_names`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TfOutput {
+    /// Submodel.
+    pub axis: Axis,
+    /// Output state index (0..4).
+    pub state: usize,
+    /// Input index.
+    pub input: usize,
+}
+
+impl TfOutput {
+    /// θ/δe, the paper's longitudinal transfer function.
+    pub const THETA_ELEVATOR: TfOutput = TfOutput {
+        axis: Axis::Longitudinal,
+        state: 3,
+        input: 0,
+    };
+    /// φ/δa, the paper's roll transfer function to aileron.
+    pub const PHI_AILERON: TfOutput = TfOutput {
+        axis: Axis::Lateral,
+        state: 3,
+        input: 0,
+    };
+    /// φ/δr, the paper's roll transfer function to rudder.
+    pub const PHI_RUDDER: TfOutput = TfOutput {
+        axis: Axis::Lateral,
+        state: 3,
+        input: 1,
+    };
+
+    /// A readable label such as `theta_rad/elevator_rad`.
+    pub fn label(self) -> String {
+        let s = self
+            .axis
+            .state_names()
+            .get(self.state)
+            .copied()
+            .unwrap_or("?");
+        let i = self
+            .axis
+            .input_names()
+            .get(self.input)
+            .copied()
+            .unwrap_or("?");
+        format!("{s}/{i}")
+    }
+}
+
+/// Continuous-time transfer-function coefficients in descending powers of s; `den[0] == 1`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TfCoefficients {
+    /// Numerator, length n (degree ≤ n − 1).
+    pub num: Vec<f64>,
+    /// Monic denominator, length n + 1.
+    pub den: Vec<f64>,
+}
+
+/// A mode of a linear model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mode {
+    /// A complex pair: natural frequency and damping ratio.
+    Oscillatory {
+        /// Natural frequency ωn.
+        omega_n_rad_s: f64,
+        /// Damping ratio ζ.
+        zeta: f64,
+    },
+    /// A real pole.
+    Real {
+        /// The pole, 1/s (negative is stable).
+        pole_1_s: f64,
+    },
+}
+
+/// A decoupled linear submodel in descriptor and in explicit form.
+#[derive(Debug, Clone)]
+pub struct LinearModel {
+    /// Submodel.
+    pub axis: Axis,
+    /// Descriptor matrix C of `C ẋ = A x + B u` (paper eq. 22 and 39).
+    pub c_desc: Mat<f64>,
+    /// A of the descriptor form.
+    pub a_desc: Mat<f64>,
+    /// B of the descriptor form.
+    pub b_desc: Mat<f64>,
+    /// Explicit ẋ = A x + B u: A = C⁻¹ A_desc.
+    pub a: Mat<f64>,
+    /// Explicit B = C⁻¹ B_desc.
+    pub b: Mat<f64>,
+}
+
+impl AeroModel {
+    /// Validate the physical parameters (the derivatives may take any finite value).
+    pub fn validate(&self) -> Result<(), AeroError> {
+        self.flight.validate()?;
+        self.mass.validate()?;
+        self.geometry.validate()?;
+        for &d in super::params::Derivative::ALL {
+            let v = self.derivatives.get(d);
+            if !v.is_finite() {
+                return Err(AeroError::BadParameter {
+                    name: d.name(),
+                    value: v,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn gamma0(&self) -> f64 {
+        if self.assumptions.level_flight {
+            0.0
+        } else {
+            self.flight.flight_path_angle_rad
+        }
+    }
+
+    /// Trim drag coefficient C_D = C_D0 + K C_L0².
+    pub fn cd_trim(&self) -> f64 {
+        let d = &self.derivatives;
+        d.get(D::CD0) + d.get(D::CDCL2) * self.flight.cl_trim * self.flight.cl_trim
+    }
+
+    /// The longitudinal submodel (states u, α, q, θ; input δe).
+    pub fn longitudinal(&self) -> Result<LinearModel, AeroError> {
+        self.validate()?;
+        let (f, m, g, d, a) = (
+            &self.flight,
+            &self.mass,
+            &self.geometry,
+            &self.derivatives,
+            &self.assumptions,
+        );
+        let v = f.airspeed_m_s;
+        let qs = f.dynamic_pressure_pa() * g.wing_area_m2;
+        let kc = g.chord_m / (2.0 * v);
+        let cl0 = f.cl_trim;
+        let k_ind = d.get(D::CDCL2);
+        let cd = self.cd_trim();
+        let cd_alpha = 2.0 * k_ind * cl0 * d.get(D::CLalpha);
+        let cd_de = if a.elevator_drag_from_polar {
+            2.0 * k_ind * cl0 * d.get(D::CLde)
+        } else {
+            0.0
+        };
+        let gamma0 = self.gamma0();
+        let mass = m.mass_kg;
+
+        let thrust_u = match a.thrust {
+            ThrustModel::Constant => 0.0,
+            ThrustModel::ConstantPower => {
+                let t0 = qs * cd + mass * f.g_m_s2 * gamma0.sin();
+                -t0 / (mass * v)
+            }
+        };
+        let x_u = -2.0 * qs * cd / (mass * v) + thrust_u;
+        let x_alpha = f.g_m_s2 * gamma0.cos() - qs * cd_alpha / mass;
+        let x_de = -qs * cd_de / mass;
+
+        let (cl_q, cl_ad) = if a.lift_rate_terms {
+            (d.get(D::CLq), d.get(D::CLalphadot))
+        } else {
+            (0.0, 0.0)
+        };
+        let drag_z = if a.drag_in_z_alpha { cd } else { 0.0 };
+        let z_u = -2.0 * qs * cl0 / (mass * v * v);
+        let z_alpha = -qs * (d.get(D::CLalpha) + drag_z) / (mass * v);
+        let z_q = -qs * kc * cl_q / (mass * v);
+        let z_ad = -qs * kc * cl_ad / (mass * v);
+        let z_de = -qs * d.get(D::CLde) / (mass * v);
+
+        let qsc_i = qs * g.chord_m / m.iyy_kg_m2;
+        let m_alpha = qsc_i * d.get(D::Cmalpha);
+        let m_q = qsc_i * kc * d.get(D::Cmq);
+        let m_ad = qsc_i * kc * d.get(D::Cmalphadot);
+        let m_de = qsc_i * d.get(D::Cmde);
+
+        let gg = f.g_m_s2;
+        let mut c = Mat::<f64>::identity(4, 4);
+        c[(1, 1)] = 1.0 - z_ad;
+        c[(2, 1)] = -m_ad;
+        let rows = [
+            [x_u, x_alpha, 0.0, -gg * gamma0.cos()],
+            [z_u, z_alpha, 1.0 + z_q, -(gg / v) * gamma0.sin()],
+            [0.0, m_alpha, m_q, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        let a_desc = Mat::from_fn(4, 4, |i, j| rows[i][j]);
+        let bv = [x_de, z_de, m_de, 0.0];
+        let b_desc = Mat::from_fn(4, 1, |i, _| bv[i]);
+        Ok(LinearModel::from_descriptor(
+            Axis::Longitudinal,
+            c,
+            a_desc,
+            b_desc,
+        ))
+    }
+
+    /// The lateral-directional submodel (states β, p, r, φ; inputs δa, δr).
+    pub fn lateral(&self) -> Result<LinearModel, AeroError> {
+        self.validate()?;
+        let (f, m, g, d, a) = (
+            &self.flight,
+            &self.mass,
+            &self.geometry,
+            &self.derivatives,
+            &self.assumptions,
+        );
+        let v = f.airspeed_m_s;
+        let qs = f.dynamic_pressure_pa() * g.wing_area_m2;
+        let kb = g.span_m / (2.0 * v);
+        let gamma0 = self.gamma0();
+        let mass = m.mass_kg;
+
+        let cy_beta = d.get(D::CYbeta)
+            - if a.side_force_in_wind_axes {
+                self.cd_trim()
+            } else {
+                0.0
+            };
+        let (cy_p, cy_r, cy_da) = if a.side_force_rate_terms {
+            (d.get(D::CYp), d.get(D::CYr), d.get(D::CYda))
+        } else {
+            (0.0, 0.0, 0.0)
+        };
+        let y = qs / (mass * v);
+        let l = qs * g.span_m / m.ixx_kg_m2;
+        let n = qs * g.span_m / m.izz_kg_m2;
+        let ixz = if a.ixz_coupling { m.ixz_kg_m2 } else { 0.0 };
+
+        let mut c = Mat::<f64>::identity(4, 4);
+        c[(1, 2)] = -ixz / m.ixx_kg_m2;
+        c[(2, 1)] = -ixz / m.izz_kg_m2;
+        let rows = [
+            [
+                y * cy_beta,
+                y * kb * cy_p,
+                y * kb * cy_r - 1.0,
+                f.g_m_s2 * gamma0.cos() / v,
+            ],
+            [
+                l * d.get(D::Clbeta),
+                l * kb * d.get(D::Clp),
+                l * kb * d.get(D::Clr),
+                0.0,
+            ],
+            [
+                n * d.get(D::Cnbeta),
+                n * kb * d.get(D::Cnp),
+                n * kb * d.get(D::Cnr),
+                0.0,
+            ],
+            [0.0, 1.0, gamma0.tan(), 0.0],
+        ];
+        let a_desc = Mat::from_fn(4, 4, |i, j| rows[i][j]);
+        let brows = [
+            [y * cy_da, y * d.get(D::CYdr)],
+            [l * d.get(D::Clda), l * d.get(D::Cldr)],
+            [n * d.get(D::Cnda), n * d.get(D::Cndr)],
+            [0.0, 0.0],
+        ];
+        let b_desc = Mat::from_fn(4, 2, |i, j| brows[i][j]);
+        Ok(LinearModel::from_descriptor(
+            Axis::Lateral,
+            c,
+            a_desc,
+            b_desc,
+        ))
+    }
+
+    /// The submodel for an axis.
+    pub fn submodel(&self, axis: Axis) -> Result<LinearModel, AeroError> {
+        match axis {
+            Axis::Longitudinal => self.longitudinal(),
+            Axis::Lateral => self.lateral(),
+        }
+    }
+
+    /// One transfer function of the model.
+    pub fn transfer_function(&self, which: TfOutput) -> Result<TfCoefficients, AeroError> {
+        self.submodel(which.axis)?
+            .transfer_function(which.state, which.input)
+    }
+
+    /// The paper's three transfer functions θ/δe, φ/δa, φ/δr (numerators of length 4, s³ coefficient 0).
+    pub fn paper_transfer_functions(&self) -> Result<[(TfOutput, TfCoefficients); 3], AeroError> {
+        Ok([
+            (
+                TfOutput::THETA_ELEVATOR,
+                self.transfer_function(TfOutput::THETA_ELEVATOR)?,
+            ),
+            (
+                TfOutput::PHI_AILERON,
+                self.transfer_function(TfOutput::PHI_AILERON)?,
+            ),
+            (
+                TfOutput::PHI_RUDDER,
+                self.transfer_function(TfOutput::PHI_RUDDER)?,
+            ),
+        ])
+    }
+}
+
+impl LinearModel {
+    fn from_descriptor(axis: Axis, c: Mat<f64>, a_desc: Mat<f64>, b_desc: Mat<f64>) -> Self {
+        let lu = c.partial_piv_lu();
+        let a = lu.solve(&a_desc);
+        let b = lu.solve(&b_desc);
+        Self {
+            axis,
+            c_desc: c,
+            a_desc,
+            b_desc,
+            a,
+            b,
+        }
+    }
+
+    /// Output `state` over input `input`, by Faddeev–LeVerrier (see the module doc).
+    pub fn transfer_function(
+        &self,
+        state: usize,
+        input: usize,
+    ) -> Result<TfCoefficients, AeroError> {
+        let n = self.a.nrows();
+        if state >= n || input >= self.b.ncols() {
+            return Err(AeroError::WrongTfOrder {
+                tf: format!("state {state} / input {input}"),
+                problem: format!(
+                    "the {:?} model has {n} states and {} inputs",
+                    self.axis,
+                    self.b.ncols()
+                ),
+            });
+        }
+        let (den, adj) = faddeev_leverrier(&self.a);
+        let num = adj
+            .iter()
+            .map(|nk| (0..n).map(|j| nk[(state, j)] * self.b[(j, input)]).sum())
+            .collect();
+        Ok(TfCoefficients { num, den })
+    }
+
+    /// Eigenvalues of A as (re, im) pairs.
+    pub fn poles(&self) -> Result<Vec<(f64, f64)>, AeroError> {
+        let ev = self
+            .a
+            .eigenvalues()
+            .map_err(|_| AeroError::Numerical("eigenvalues of A"))?;
+        Ok(ev.iter().map(|z| (z.re, z.im)).collect())
+    }
+
+    /// Modes (complex pairs once, real poles), sorted by decreasing |pole|.
+    pub fn modes(&self) -> Result<Vec<Mode>, AeroError> {
+        let mut poles = self.poles()?;
+        poles.sort_by(|x, y| (y.0.hypot(y.1)).total_cmp(&x.0.hypot(x.1)));
+        let mut out = Vec::new();
+        for (re, im) in poles {
+            let mag = re.hypot(im);
+            if im.abs() <= 1e-9 * mag.max(1e-12) {
+                out.push(Mode::Real { pole_1_s: re });
+            } else if im > 0.0 {
+                out.push(Mode::Oscillatory {
+                    omega_n_rad_s: mag,
+                    zeta: -re / mag,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// The fastest oscillatory mode (short period, Dutch roll), if any.
+    pub fn fastest_oscillation(&self) -> Result<Option<(f64, f64)>, AeroError> {
+        Ok(self.modes()?.into_iter().find_map(|m| match m {
+            Mode::Oscillatory {
+                omega_n_rad_s,
+                zeta,
+            } => Some((omega_n_rad_s, zeta)),
+            Mode::Real { .. } => None,
+        }))
+    }
+}
+
+/// Characteristic polynomial (monic, descending) and the adjugate coefficients N_0..N_{n−1} of (sI − A).
+fn faddeev_leverrier(a: &Mat<f64>) -> (Vec<f64>, Vec<Mat<f64>>) {
+    let n = a.nrows();
+    let mut den = vec![1.0];
+    let mut adj = vec![Mat::<f64>::identity(n, n)];
+    for k in 1..=n {
+        let an = a * &adj[k - 1];
+        let trace: f64 = (0..n).map(|i| an[(i, i)]).sum();
+        let ck = -trace / k as f64;
+        den.push(ck);
+        if k < n {
+            let mut next = an;
+            for i in 0..n {
+                next[(i, i)] += ck;
+            }
+            adj.push(next);
+        }
+    }
+    (den, adj)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::aero::params::Derivative;
+
+    /// c172x at 4000 ft, 100 KTAS, trimmed by JSBSim 1.3.3 (`scripts/oracle_aero.py`, "flight condition" block:
+    /// `aero/qbar-psf`, `velocities/vt-fps`, `aero/alpha-rad`, `inertia/*` with the point masses, `metrics/*`).
+    pub(crate) const V_M_S: f64 = 51.44444444;
+    pub(crate) const RHO_KG_M3: f64 = 1.087939275;
+    pub(crate) const ALPHA0_RAD: f64 = 0.01935271377;
+    pub(crate) const CL_TRIM: f64 = 0.4716539073;
+    pub(crate) const CD_TRIM: f64 = 0.04761057874;
+    pub(crate) const G_M_S2: f64 = 9.810440323;
+
+    /// Body-axis mass properties (JSBSim `inertia/*-slugs_ft2` after trim, converted to SI).
+    pub(crate) fn c172x_mass_body() -> MassProperties {
+        MassProperties {
+            mass_kg: 1124.909062,
+            ixx_kg_m2: 2841.434964,
+            iyy_kg_m2: 2040.522117,
+            izz_kg_m2: 4271.422149,
+            ixz_kg_m2: 18.37788633,
+        }
+    }
+
+    /// `metrics/Sw-sqft`, `metrics/bw-ft`, `metrics/cbarw-ft` (174 ft², 36 ft, 4.9 ft).
+    pub(crate) fn c172x_geometry() -> Geometry {
+        Geometry {
+            wing_area_m2: 16.16512896,
+            span_m: 10.9728,
+            chord_m: 1.49352,
+        }
+    }
+
+    /// c172x derivatives about the CG at the trim above (`scripts/oracle_aero.py`): α, β, p, q, r slopes by
+    /// central differences of JSBSim's own forces and moments (tables included: CLwbh + CLalpha give
+    /// C_Lα = 9.93, Clr(α) gives 0.114), surfaces and α̇ from the XML constants (Cmde −1.28, Cmadot −5.2,
+    /// Clda 0.23, …) moved from the AERORP to the CG. Lateral values in body axes; C_Y on the wind-axis
+    /// side force. The polar is the local equivalent: K = C_Dα/(2 C_L0 C_Lα), C_D0 = C_D − K C_L0².
+    pub(crate) fn c172x_derivatives_body() -> Derivatives {
+        let cd_alpha = 0.359842;
+        let cl_alpha = 9.93169;
+        let k = cd_alpha / (2.0 * CL_TRIM * cl_alpha);
+        Derivatives::from_pairs(&[
+            (Derivative::CD0, CD_TRIM - k * CL_TRIM * CL_TRIM),
+            (Derivative::CDCL2, k),
+            (Derivative::CLalpha, cl_alpha),
+            (Derivative::CLde, 0.347),
+            (Derivative::CLq, 3.9),
+            (Derivative::CLalphadot, 1.7),
+            (Derivative::Cmalpha, -1.53513),
+            (Derivative::Cmalphadot, -5.14723),
+            (Derivative::Cmq, -12.2921),
+            (Derivative::Cmde, -1.24473),
+            (Derivative::CYbeta, -0.309456),
+            (Derivative::CYp, -0.037),
+            (Derivative::CYr, 0.21),
+            (Derivative::CYda, -0.05),
+            (Derivative::CYdr, 0.098),
+            (Derivative::Clbeta, -0.108936),
+            (Derivative::Clp, -0.472053),
+            (Derivative::Clr, 0.1143),
+            (Derivative::Clda, 0.227225),
+            (Derivative::Cldr, 0.0201383),
+            (Derivative::Cnbeta, 0.0631497),
+            (Derivative::Cnp, -0.0301961),
+            (Derivative::Cnr, -0.097887),
+            (Derivative::Cnda, 0.00503501),
+            (Derivative::Cndr, -0.0424806),
+        ])
+    }
+
+    /// The c172x model in stability axes with the given assumptions.
+    pub(crate) fn c172x_model(assumptions: Assumptions) -> AeroModel {
+        let mass = c172x_mass_body().to_stability_axes(ALPHA0_RAD);
+        AeroModel {
+            flight: FlightCondition {
+                airspeed_m_s: V_M_S,
+                air_density_kg_m3: RHO_KG_M3,
+                cl_trim: CL_TRIM,
+                flight_path_angle_rad: 0.0,
+                g_m_s2: G_M_S2,
+            },
+            mass,
+            geometry: c172x_geometry(),
+            derivatives: c172x_derivatives_body().body_to_stability(ALPHA0_RAD),
+            assumptions,
+        }
+    }
+
+    /// JSBSim's own linearization at the same trim (`jsbsim.FGLinearization`, decoupled 4-state submodels,
+    /// `scripts/oracle_aero.py`): short period and Dutch roll (ωn rad/s, ζ).
+    const JSBSIM_SHORT_PERIOD: (f64, f64) = (6.1115747, 0.6748321);
+    const JSBSIM_DUTCH_ROLL: (f64, f64) = (2.1343978, 0.1573628);
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a - b).abs() / b.abs()
+    }
+
+    fn short_period(a: Assumptions) -> (f64, f64) {
+        c172x_model(a)
+            .longitudinal()
+            .unwrap()
+            .fastest_oscillation()
+            .unwrap()
+            .unwrap()
+    }
+
+    fn dutch_roll(a: Assumptions) -> (f64, f64) {
+        c172x_model(a)
+            .lateral()
+            .unwrap()
+            .fastest_oscillation()
+            .unwrap()
+            .unwrap()
+    }
+
+    fn jsbsim_assumptions() -> Assumptions {
+        Assumptions {
+            side_force_in_wind_axes: true,
+            ..Assumptions::textbook()
+        }
+    }
+
+    #[test]
+    fn c172x_short_period_matches_jsbsim_linearization_within_5_percent() {
+        // Acceptance (issue 4): the paper-structure model from the truth derivatives within 5 % of JSBSim.
+        for (label, a) in [
+            ("textbook", jsbsim_assumptions()),
+            ("paper", Assumptions::paper()),
+        ] {
+            let (wn, zeta) = short_period(a);
+            assert!(rel(wn, JSBSIM_SHORT_PERIOD.0) < 0.05, "{label}: wn {wn}");
+            assert!(
+                rel(zeta, JSBSIM_SHORT_PERIOD.1) < 0.05,
+                "{label}: zeta {zeta}"
+            );
+        }
+        // With every term the model knows the match is at round-off of the finite differences (< 0.3 %).
+        let (wn, zeta) = short_period(jsbsim_assumptions());
+        assert!(rel(wn, JSBSIM_SHORT_PERIOD.0) < 3e-3 && rel(zeta, JSBSIM_SHORT_PERIOD.1) < 3e-3);
+    }
+
+    #[test]
+    fn c172x_dutch_roll_matches_jsbsim_linearization_within_5_percent() {
+        let (wn, zeta) = dutch_roll(jsbsim_assumptions());
+        assert!(rel(wn, JSBSIM_DUTCH_ROLL.0) < 0.05, "wn {wn}");
+        assert!(rel(zeta, JSBSIM_DUTCH_ROLL.1) < 0.05, "zeta {zeta}");
+    }
+
+    #[test]
+    fn c172x_paper_assumptions_cost_dutch_roll_damping() {
+        // The paper's side-force equation (no wind-axis drag term, no C_Yp, C_Yr) loses about 5 % of the
+        // Dutch-roll damping against JSBSim: the price of its simplifications, reported, not hidden.
+        let (wn, zeta) = dutch_roll(Assumptions::paper());
+        assert!(rel(wn, JSBSIM_DUTCH_ROLL.0) < 0.05, "wn {wn}");
+        assert!(rel(zeta, JSBSIM_DUTCH_ROLL.1) < 0.10, "zeta {zeta}");
+    }
+
+    #[test]
+    fn c172x_oracle_model_modes_are_reproduced() {
+        // The numpy prototype in scripts/oracle_aero.py ("lon full", "lat full + drag in Y") gives
+        // short period (6.116, 0.6746) and Dutch roll (2.1321, 0.1535); same equations, so 1e-3.
+        let (wn, zeta) = short_period(jsbsim_assumptions());
+        assert!(
+            rel(wn, 6.116) < 1e-3 && rel(zeta, 0.6746) < 1e-3,
+            "{wn} {zeta}"
+        );
+        let (wn, zeta) = dutch_roll(jsbsim_assumptions());
+        assert!(
+            rel(wn, 2.1321) < 1e-3 && rel(zeta, 0.1535) < 1e-3,
+            "{wn} {zeta}"
+        );
+    }
+
+    #[test]
+    fn transfer_function_poles_are_the_state_space_eigenvalues() {
+        // Faddeev–LeVerrier denominator evaluated at each eigenvalue of A must vanish (relative 1e-9).
+        let model = c172x_model(jsbsim_assumptions()).lateral().unwrap();
+        let tf = model.transfer_function(3, 0).unwrap();
+        for (re, im) in model.poles().unwrap() {
+            let z = num_complex::Complex::new(re, im);
+            let val = tf
+                .den
+                .iter()
+                .fold(num_complex::Complex::new(0.0, 0.0), |acc, &c| acc * z + c);
+            let scale = tf
+                .den
+                .iter()
+                .enumerate()
+                .map(|(k, c)| c.abs() * z.norm().powi((4 - k) as i32))
+                .sum::<f64>();
+            assert!(val.norm() < 1e-9 * scale, "den({z}) = {val}");
+        }
+    }
+
+    #[test]
+    fn theta_over_elevator_has_relative_degree_two() {
+        // δe acts on q̇; θ = ∫q, so the s³ numerator coefficient is exactly 0 and the s² one is M_δe + …
+        let tf = c172x_model(Assumptions::paper())
+            .transfer_function(TfOutput::THETA_ELEVATOR)
+            .unwrap();
+        assert_eq!(tf.num.len(), 4);
+        assert_eq!(tf.num[0], 0.0);
+        assert!(
+            tf.num[1] < 0.0,
+            "nose-down pitch for trailing-edge-down elevator: {:?}",
+            tf.num
+        );
+    }
+
+    #[test]
+    fn transfer_function_matches_direct_evaluation_of_state_space() {
+        // G(jω) = e_θᵀ (jωI − A)⁻¹ B from a complex linear solve must equal num(jω)/den(jω), 1e-10 relative.
+        use num_complex::Complex;
+        let lin = c172x_model(jsbsim_assumptions()).longitudinal().unwrap();
+        let tf = lin.transfer_function(3, 0).unwrap();
+        let w = 1.7;
+        let s = Complex::new(0.0, w);
+        // Solve (sI − A) x = B by complex Gaussian elimination (4×4).
+        let mut m: Vec<Vec<Complex<f64>>> = (0..4)
+            .map(|i| {
+                let mut row: Vec<Complex<f64>> =
+                    (0..4).map(|j| -Complex::new(lin.a[(i, j)], 0.0)).collect();
+                row[i] += s;
+                row.push(Complex::new(lin.b[(i, 0)], 0.0));
+                row
+            })
+            .collect();
+        for k in 0..4 {
+            let p = (k..4)
+                .max_by(|&x, &y| m[x][k].norm().total_cmp(&m[y][k].norm()))
+                .unwrap();
+            m.swap(k, p);
+            for i in k + 1..4 {
+                let f = m[i][k] / m[k][k];
+                let pivot_row = m[k].clone();
+                for (dst, src) in m[i].iter_mut().zip(&pivot_row).skip(k) {
+                    *dst -= f * src;
+                }
+            }
+        }
+        let mut x = [Complex::new(0.0, 0.0); 4];
+        for i in (0..4).rev() {
+            let mut acc = m[i][4];
+            for j in i + 1..4 {
+                acc -= m[i][j] * x[j];
+            }
+            x[i] = acc / m[i][i];
+        }
+        let poly = |c: &[f64]| c.iter().fold(Complex::new(0.0, 0.0), |acc, &v| acc * s + v);
+        let g = poly(&tf.num) / poly(&tf.den);
+        assert!((g - x[3]).norm() < 1e-10 * x[3].norm(), "{g} vs {}", x[3]);
+    }
+
+    /// Relative change of (short period, Dutch roll, phugoid) ωn and ζ against JSBSim's linearization.
+    fn modal_errors(m: &AeroModel) -> [f64; 6] {
+        let lon = m.longitudinal().unwrap();
+        let sp = lon.fastest_oscillation().unwrap().unwrap();
+        let ph = lon
+            .modes()
+            .unwrap()
+            .into_iter()
+            .rev()
+            .filter_map(|x| match x {
+                Mode::Oscillatory {
+                    omega_n_rad_s,
+                    zeta,
+                } => Some((omega_n_rad_s, zeta)),
+                Mode::Real { .. } => None,
+            })
+            .next()
+            .unwrap();
+        let dr = m.lateral().unwrap().fastest_oscillation().unwrap().unwrap();
+        [
+            sp.0 / JSBSIM_SHORT_PERIOD.0 - 1.0,
+            sp.1 / JSBSIM_SHORT_PERIOD.1 - 1.0,
+            dr.0 / JSBSIM_DUTCH_ROLL.0 - 1.0,
+            dr.1 / JSBSIM_DUTCH_ROLL.1 - 1.0,
+            ph.0 / JSBSIM_PHUGOID.0 - 1.0,
+            ph.1 / JSBSIM_PHUGOID.1 - 1.0,
+        ]
+    }
+
+    /// JSBSim phugoid at the same trim (`scripts/oracle_aero.py`).
+    const JSBSIM_PHUGOID: (f64, f64) = (0.2081529, 0.1380020);
+
+    #[test]
+    fn c172x_cost_of_each_simplifying_assumption() {
+        // What each of the paper's simplifications costs on the c172x modal check (documented on
+        // `Assumptions`); numbers are relative errors against JSBSim's linearization.
+        let base = jsbsim_assumptions();
+        let all = modal_errors(&c172x_model(base));
+        // Dropping C_Lq, C_Lα̇ from the lift equation: short-period ωn +1.4 % (from +0.1 %).
+        let no_lift_rates = modal_errors(&c172x_model(Assumptions {
+            lift_rate_terms: false,
+            ..base
+        }));
+        assert!(
+            (0.01..0.02).contains(&(no_lift_rates[0] - all[0])),
+            "{no_lift_rates:?}"
+        );
+        // Treating JSBSim's wind-axis C_Yβ as stability-axis (no −C_D): Dutch-roll ζ −5 % instead of −2.5 %.
+        let cy_stab = modal_errors(&c172x_model(Assumptions {
+            side_force_in_wind_axes: false,
+            ..base
+        }));
+        assert!(
+            (-0.035..-0.02).contains(&(cy_stab[3] - all[3])),
+            "{cy_stab:?}"
+        );
+        // Body-axis lateral derivatives and inertia used as if stability-axis (α0 = 1.1°): Dutch-roll ζ −8 %.
+        let mut body = c172x_model(base);
+        body.mass = c172x_mass_body();
+        body.derivatives = c172x_derivatives_body();
+        let body = modal_errors(&body);
+        assert!(body[3] < -0.06, "{body:?}");
+        // Neglecting thrust derivatives (constant thrust) halves the phugoid damping; a constant-power
+        // propeller model brings it to −19 %. The phugoid is outside the acceptance, but θ/δe's low-order
+        // coefficients carry it, so C_D0 backed out of θ/δe absorbs the missing thrust term.
+        assert!(all[5] < -0.4, "{all:?}");
+        let power = modal_errors(&c172x_model(Assumptions {
+            thrust: ThrustModel::ConstantPower,
+            ..base
+        }));
+        assert!((-0.25..-0.1).contains(&power[5]), "{power:?}");
+        // I_xz coupling (stability-axis I_xz = −9 kg·m²) is worth 0.6 % of Dutch-roll ζ here.
+        let no_ixz = modal_errors(&c172x_model(Assumptions {
+            ixz_coupling: false,
+            ..base
+        }));
+        assert!((no_ixz[3] - all[3]).abs() < 0.01, "{no_ixz:?}");
+    }
+
+    #[test]
+    fn bad_mass_is_a_clear_error() {
+        let mut model = c172x_model(Assumptions::paper());
+        model.mass.mass_kg = 0.0;
+        let err = model.longitudinal().unwrap_err().to_string();
+        assert!(err.contains("mass_kg"), "{err}");
+        model = c172x_model(Assumptions::paper());
+        model.geometry.span_m = f64::NAN;
+        assert!(model.lateral().unwrap_err().to_string().contains("span_m"));
+    }
+}
