@@ -240,6 +240,7 @@ class Sim:
         self.surfaces = req["surfaces"]
         self.engine_running = req.get("engine_running", True)
         self.gear_up = req.get("gear_up", False)
+        self.engines = int(req.get("engines", 1))
         self.root = tempfile.mkdtemp(prefix="flightid-jsbsim-")
         os.makedirs(os.path.join(self.root, "output"))
         self.knobs = make_private_aircraft(self.root, self.aircraft, self.surfaces)
@@ -270,6 +271,14 @@ class Sim:
     def trim(self, req):
         fdm = self.fdm
         self.trimmed = False
+        # Every trim starts from the same state whatever ran before: reset all models (engines, actuators, FCS
+        # commands) without running the ICs yet (mode bit 2), so results do not depend on the previous case.
+        fdm.reset_to_initial_conditions(2)
+        for i in range(self.engines):
+            fdm[f"fcs/throttle-cmd-norm[{i}]"] = 0.0
+        for p in ("fcs/pitch-trim-cmd-norm", "fcs/roll-trim-cmd-norm", "fcs/yaw-trim-cmd-norm"):
+            if self.pm.hasNode(p):
+                fdm[p] = 0.0
         for s in self.surfaces:
             fdm[f"flightid/override/{s}"] = 0.0
             fdm[f"flightid/lin/{s}"] = 0.0

@@ -64,7 +64,7 @@ impl JsbsimSim {
             .collect();
         let req = json!({
             "cmd": "load", "aircraft": config.model, "dt_s": 1.0 / rate_hz, "surfaces": surfaces,
-            "engine_running": config.engine_running, "gear_up": config.gear_up,
+            "engine_running": config.engine_running, "gear_up": config.gear_up, "engines": config.engines,
         });
         let resp = bridge.request(req, &[]).map_err(|e| match e {
             SimError::Bridge { kind, message } if kind == "unknown_aircraft" => {
