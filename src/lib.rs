@@ -4,7 +4,9 @@
 //! and `signal`) → comparison → `report`. The `cli` module only parses arguments and calls in.
 
 pub mod aircraft;
+pub mod campaign;
 pub mod cli;
+pub mod compare;
 pub mod data;
 pub mod ident;
 pub mod lti;

@@ -5,10 +5,13 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod campaign;
 pub mod common;
+pub mod compare;
 pub mod demo;
 pub mod fly;
 pub mod linearize;
+pub mod regress;
 pub mod trim;
 
 /// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
@@ -30,6 +33,12 @@ pub enum Command {
     Linearize(linearize::LinearizeCmd),
     /// Fly a maneuver (doublet, 3211, multisine, chirp) from trim and write the flight-data CSV.
     Fly(fly::FlyCmd),
+    /// Identified linear models vs JSBSim's linearization and nonlinear flight, as a report.
+    Compare(compare::CompareCmd),
+    /// Maneuver campaigns: run (parallel, resumable) and report.
+    Campaign(campaign::CampaignCmd),
+    /// Compare a campaign's identified modal parameters with a stored baseline (exit 1 when any moved).
+    Regress(regress::RegressCmd),
 }
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
@@ -51,6 +60,9 @@ pub fn main() -> i32 {
         Command::Trim(a) => trim::run(a),
         Command::Linearize(a) => linearize::run(a),
         Command::Fly(a) => fly::run(a),
+        Command::Compare(a) => compare::run(a),
+        Command::Campaign(a) => campaign::run(a),
+        Command::Regress(a) => regress::run(a),
     };
     match result {
         Ok(()) => 0,
