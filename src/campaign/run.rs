@@ -259,8 +259,10 @@ pub fn run_campaign(
                     let result = match worker.sim_for(case, spec.rate_hz) {
                         Ok(sim) => {
                             let r = run_case(sim, spec, &methods, case);
-                            if r.error.as_deref().is_some_and(|e| e.contains("died")) {
-                                worker.sim = None; // restart a crashed bridge for the next case
+                            if spec.fresh_process_per_case
+                                || r.error.as_deref().is_some_and(|e| e.contains("died"))
+                            {
+                                worker.sim = None; // a fresh (or, after a crash, working) bridge next
                             }
                             r
                         }
