@@ -146,6 +146,7 @@ pub fn run(args: &RegressCmd) -> anyhow::Result<()> {
 
 fn tempdir() -> anyhow::Result<PathBuf> {
     let d = std::env::temp_dir().join(format!("flightid-regress-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d); // a leftover of an earlier process with the same id
     std::fs::create_dir_all(&d)?;
     Ok(d)
 }
