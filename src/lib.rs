@@ -5,7 +5,9 @@
 
 pub mod aero;
 pub mod aircraft;
+pub mod campaign;
 pub mod cli;
+pub mod compare;
 pub mod data;
 pub mod ident;
 pub mod lti;

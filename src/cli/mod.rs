@@ -6,12 +6,15 @@
 use clap::{Parser, Subcommand};
 
 pub mod check;
+pub mod campaign;
 pub mod common;
+pub mod compare;
 pub mod demo;
 pub mod fly;
 pub mod ingest;
 pub mod linearize;
 pub mod segments;
+pub mod regress;
 pub mod trim;
 
 /// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
@@ -39,6 +42,12 @@ pub enum Command {
     Segments(segments::SegmentsArgs),
     /// Data compatibility check: sensor biases, scale factors and time skews by flight-path reconstruction.
     Check(check::CheckArgs),
+    /// Identified linear models vs JSBSim's linearization and nonlinear flight, as a report.
+    Compare(compare::CompareCmd),
+    /// Maneuver campaigns: run (parallel, resumable) and report.
+    Campaign(campaign::CampaignCmd),
+    /// Compare a campaign's identified modal parameters with a stored baseline (exit 1 when any moved).
+    Regress(regress::RegressCmd),
 }
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
@@ -63,6 +72,9 @@ pub fn main() -> i32 {
         Command::Ingest(a) => ingest::run(a),
         Command::Segments(a) => segments::run(a),
         Command::Check(a) => check::run(a),
+        Command::Compare(a) => compare::run(a),
+        Command::Campaign(a) => campaign::run(a),
+        Command::Regress(a) => regress::run(a),
     };
     match result {
         Ok(()) => 0,

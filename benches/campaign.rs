@@ -1,0 +1,90 @@
+//! Campaign throughput: `campaigns/c172x_737.toml` (24 cases) with 1 and 2 jobs, against the bare JSBSim
+//! stepping time of the same flights (one process, trim + fly only, no identification, no process starts).
+//!
+//! Run: `cargo bench --bench campaign`. Prints wall-clock seconds; a plain `main` (harness = false) because
+//! each measurement takes seconds and runs once.
+
+use flightid::campaign::{run_campaign, CampaignSpec, RunOptions};
+use flightid::compare::single_surface_plan;
+use flightid::sim::{JsbsimSim, Simulator, TrimPoint};
+use std::path::Path;
+use std::time::Instant;
+
+fn main() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("campaigns/c172x_737.toml");
+    let spec = CampaignSpec::load(&path).expect("example campaign");
+    let cases = spec.cases();
+
+    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded).
+    let mut fly_s = 0.0;
+    let mut trim_s = 0.0;
+    let mut current: Option<(String, JsbsimSim)> = None;
+    for c in &cases {
+        if current
+            .as_ref()
+            .map(|(a, _)| a != &c.aircraft)
+            .unwrap_or(true)
+        {
+            let cfg = flightid::aircraft::load(&c.aircraft).unwrap();
+            current = Some((
+                c.aircraft.clone(),
+                JsbsimSim::start(&cfg, spec.rate_hz).unwrap(),
+            ));
+        }
+        let sim = &mut current.as_mut().unwrap().1;
+        let t = Instant::now();
+        sim.trim(&TrimPoint::level(c.altitude_ft, c.speed_kts))
+            .unwrap();
+        trim_s += t.elapsed().as_secs_f64();
+        let plan = single_surface_plan(
+            &c.surface,
+            &c.maneuver,
+            c.amplitude_deg,
+            spec.start_s,
+            spec.duration_s,
+            spec.rate_hz,
+        );
+        let t = Instant::now();
+        sim.fly(&plan).unwrap();
+        fly_s += t.elapsed().as_secs_f64();
+    }
+    println!(
+        "bare JSBSim for {} cases: fly {:.3} s total (trim {:.3} s)",
+        cases.len(),
+        fly_s,
+        trim_s
+    );
+
+    let mut wall = Vec::new();
+    for (jobs, fresh) in [(1, true), (2, true), (1, false), (2, false)] {
+        let dir = tempfile::tempdir().unwrap();
+        let spec = CampaignSpec {
+            fresh_process_per_case: fresh,
+            ..spec.clone()
+        };
+        let t = Instant::now();
+        let s = run_campaign(
+            &spec,
+            dir.path(),
+            &RunOptions {
+                jobs,
+                progress: false,
+            },
+        )
+        .unwrap();
+        let el = t.elapsed().as_secs_f64();
+        assert_eq!(s.failed, 0);
+        println!(
+            "campaign, {jobs} job(s), fresh process per case = {fresh}: {el:.2} s ({:.2} cases/s)",
+            cases.len() as f64 / el
+        );
+        wall.push(el);
+    }
+    println!(
+        "scaling 1 -> 2 jobs: {:.2}x (fresh processes), {:.2}x (reused); 2-job wall / (bare fly / 2): {:.1}x, {:.1}x",
+        wall[0] / wall[1],
+        wall[2] / wall[3],
+        wall[1] / (fly_s / 2.0),
+        wall[3] / (fly_s / 2.0)
+    );
+}

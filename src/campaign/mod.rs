@@ -1,0 +1,49 @@
+//! Campaigns: TOML files of aircraft configurations × conditions × maneuvers × methods × noise, parallel
+//! execution over a pool of JSBSim processes with resumable per-case results, summary reports, and
+//! regression baselines of identified modal parameters per aircraft configuration.
+
+pub mod baseline;
+pub mod run;
+pub mod spec;
+pub mod summary;
+
+pub use baseline::{compare_baseline, quantities, Baseline, BaselineEntry, Deviation};
+pub use run::{
+    load_results, run_campaign, run_case, CaseResult, Identification, RunOptions, RunSummary,
+};
+pub use spec::{CampaignSpec, CaseSpec};
+pub use summary::campaign_report;
+
+use std::path::PathBuf;
+
+/// Campaign failures, with the file they concern.
+#[derive(Debug, thiserror::Error)]
+pub enum CampaignError {
+    /// File system.
+    #[error("{path}: {source}")]
+    Io {
+        /// File or directory.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// Malformed TOML or JSON.
+    #[error("{path}: malformed file: {message}")]
+    Parse {
+        /// File.
+        path: PathBuf,
+        /// Parser message (with line and column).
+        message: String,
+    },
+    /// Well-formed but meaningless content (unknown aircraft, maneuver, method...).
+    #[error("{path}: {message}")]
+    Invalid {
+        /// File.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The run itself failed (cannot write results...).
+    #[error("campaign run: {0}")]
+    Run(String),
+}

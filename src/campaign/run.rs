@@ -1,0 +1,339 @@
+//! Campaign execution: a pool of JSBSim processes (one per worker thread), one atomic JSON result per case,
+//! resume by skipping cases whose result file exists.
+
+use super::spec::{CampaignSpec, CaseSpec};
+use super::CampaignError;
+use crate::compare::{modal_summary, paper_options, perturbations, single_surface_plan};
+use crate::ident::{self, Method};
+use crate::sim::{JsbsimSim, Simulator, TrimPoint};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// One identification of a case's record.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Identification {
+    /// Estimator.
+    pub method: String,
+    /// Output noise, deg (1 σ).
+    pub noise_std_deg: f64,
+    /// Noise seed (0 when noise-free).
+    pub seed: u64,
+    /// Named modal parameters (see [`crate::compare::modal_summary`]).
+    pub modal: BTreeMap<String, f64>,
+    /// Identified numerator, highest power first.
+    pub num: Vec<f64>,
+    /// Identified monic denominator.
+    pub den: Vec<f64>,
+    /// Leading numerator coefficient: the high-frequency gain, a control-derivative proxy
+    /// (≈ Mδe for θ/δe, Lδa for φ/δa; Morelli & Klein 2016 §3.6), rad/s² per rad.
+    pub leading_num: Option<f64>,
+    /// Simulation fit on the (noisy) record, NRMSE %.
+    pub fit_sim_percent: Option<f64>,
+    /// Why the estimator failed (then the other fields are empty).
+    pub error: Option<String>,
+}
+
+/// The result file of one case: the case itself, the trim, the identifications — or the error.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CaseResult {
+    /// The case.
+    pub case: CaseSpec,
+    /// `ok` or `failed`.
+    pub status: String,
+    /// Why the case failed (trim, simulator).
+    pub error: Option<String>,
+    /// Trim angle of attack, rad.
+    pub trim_alpha_rad: Option<f64>,
+    /// Trim true airspeed, m/s.
+    pub trim_airspeed_m_s: Option<f64>,
+    /// Identifications (method × noise × seed).
+    pub identifications: Vec<Identification>,
+}
+
+/// Options of a run.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Worker threads, each with its own JSBSim process.
+    pub jobs: usize,
+    /// Show a progress bar (only drawn on a terminal).
+    pub progress: bool,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunSummary {
+    /// Cases in the campaign.
+    pub total: usize,
+    /// Cases already done before this run (resumed).
+    pub skipped: usize,
+    /// Cases run now.
+    pub ran: usize,
+    /// Cases (of all) whose result is `failed`.
+    pub failed: usize,
+    /// Wall-clock time of this run, s.
+    pub elapsed_s: f64,
+}
+
+/// `DIR/cases/<id>.json`.
+pub fn case_path(out: &Path, id: &str) -> PathBuf {
+    out.join("cases").join(format!("{id}.json"))
+}
+
+struct Worker {
+    key: Option<(String, BTreeMap<String, String>)>,
+    sim: Option<JsbsimSim>,
+}
+
+impl Worker {
+    fn sim_for(&mut self, case: &CaseSpec, rate_hz: f64) -> Result<&mut JsbsimSim, String> {
+        let key = (
+            case.aircraft.clone(),
+            case.coefficient_scales
+                .iter()
+                .map(|(k, v)| (k.clone(), format!("{v:e}")))
+                .collect(),
+        );
+        if self.key.as_ref() != Some(&key) || self.sim.is_none() {
+            self.sim = None;
+            self.key = None;
+            let cfg = crate::aircraft::load(&case.aircraft).map_err(|e| e.to_string())?;
+            let mut sim = JsbsimSim::start(&cfg, rate_hz).map_err(|e| e.to_string())?;
+            for (name, factor) in &case.coefficient_scales {
+                sim.set_coefficient_scale(name, *factor)
+                    .map_err(|e| e.to_string())?;
+            }
+            self.sim = Some(sim);
+            self.key = Some(key);
+        }
+        self.sim.as_mut().ok_or_else(|| "no simulator".to_string())
+    }
+}
+
+/// Runs one case on a simulator; a failure (trim, flight) becomes a `failed` result, never an `Err`.
+pub fn run_case<S: Simulator>(
+    sim: &mut S,
+    spec: &CampaignSpec,
+    methods: &[Method],
+    case: &CaseSpec,
+) -> CaseResult {
+    let mut result = CaseResult {
+        case: case.clone(),
+        status: "failed".into(),
+        error: None,
+        trim_alpha_rad: None,
+        trim_airspeed_m_s: None,
+        identifications: Vec::new(),
+    };
+    let trim = match sim.trim(&TrimPoint::level(case.altitude_ft, case.speed_kts)) {
+        Ok(t) => t,
+        Err(e) => {
+            result.error = Some(format!("trim: {e}"));
+            return result;
+        }
+    };
+    result.trim_alpha_rad = Some(trim.alpha_rad);
+    result.trim_airspeed_m_s = Some(trim.airspeed_m_s);
+    let plan = single_surface_plan(
+        &case.surface,
+        &case.maneuver,
+        case.amplitude_deg,
+        spec.start_s,
+        spec.duration_s,
+        spec.rate_hz,
+    );
+    let rec = match sim.fly(&plan) {
+        Ok(r) => r,
+        Err(e) => {
+            result.error = Some(format!("fly: {e}"));
+            return result;
+        }
+    };
+    let (du, dy) = match perturbations(&rec, &case.surface, &case.tf_key) {
+        Ok(p) => p,
+        Err(e) => {
+            result.error = Some(e.to_string());
+            return result;
+        }
+    };
+    let dt_s = 1.0 / spec.rate_hz;
+    for &noise in &spec.noise_std_deg {
+        let seeds: &[u64] = if noise > 0.0 { &spec.seeds } else { &[0] };
+        for &seed in seeds {
+            let y = crate::signal::add_white_noise(&dy, noise.to_radians(), seed);
+            for &method in methods {
+                result
+                    .identifications
+                    .push(identify_one(&du, &y, dt_s, method, noise, seed));
+            }
+        }
+    }
+    result.status = "ok".into();
+    result
+}
+
+fn identify_one(
+    du: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    method: Method,
+    noise_std_deg: f64,
+    seed: u64,
+) -> Identification {
+    match ident::identify(du, y, dt_s, &paper_options(method)) {
+        Ok(r) => Identification {
+            method: method.name().into(),
+            noise_std_deg,
+            seed,
+            modal: modal_summary(&r.modes),
+            leading_num: r.tf.num.first().copied().filter(|v| v.is_finite()),
+            num: r.tf.num,
+            den: r.tf.den,
+            fit_sim_percent: Some(r.fit_sim_percent).filter(|v| v.is_finite()),
+            error: None,
+        },
+        Err(e) => Identification {
+            method: method.name().into(),
+            noise_std_deg,
+            seed,
+            modal: BTreeMap::new(),
+            num: vec![],
+            den: vec![],
+            leading_num: None,
+            fit_sim_percent: None,
+            error: Some(e.to_string()),
+        },
+    }
+}
+
+/// Runs every case of `spec` that has no result file in `out/cases` yet, over `opts.jobs` JSBSim processes.
+pub fn run_campaign(
+    spec: &CampaignSpec,
+    out: &Path,
+    opts: &RunOptions,
+) -> Result<RunSummary, CampaignError> {
+    let t0 = std::time::Instant::now();
+    let methods = spec.parsed_methods().map_err(CampaignError::Run)?;
+    let cases_dir = out.join("cases");
+    std::fs::create_dir_all(&cases_dir).map_err(|source| CampaignError::Io {
+        path: cases_dir.clone(),
+        source,
+    })?;
+    let spec_text = toml::to_string(spec).map_err(|e| CampaignError::Run(e.to_string()))?;
+    crate::report::write_atomic(&out.join("campaign.toml"), spec_text.as_bytes())
+        .map_err(|e| CampaignError::Run(e.to_string()))?;
+    let all = spec.cases();
+    let pending: Vec<&CaseSpec> = all
+        .iter()
+        .filter(|c| !case_path(out, &c.id).exists())
+        .collect();
+    let skipped = all.len() - pending.len();
+    let bar = if opts.progress && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        let b = indicatif::ProgressBar::new(all.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} cases  {elapsed} elapsed, ~{eta} left  {msg}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b.set_position(skipped as u64);
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let next = AtomicUsize::new(0);
+    let first_error: Mutex<Option<CampaignError>> = Mutex::new(None);
+    let jobs = opts.jobs.max(1).min(pending.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..jobs {
+            scope.spawn(|| {
+                let mut worker = Worker {
+                    key: None,
+                    sim: None,
+                };
+                loop {
+                    let k = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(case) = pending.get(k) else { break };
+                    let result = match worker.sim_for(case, spec.rate_hz) {
+                        Ok(sim) => {
+                            let r = run_case(sim, spec, &methods, case);
+                            if spec.fresh_process_per_case
+                                || r.error.as_deref().is_some_and(|e| e.contains("died"))
+                            {
+                                worker.sim = None; // a fresh (or, after a crash, working) bridge next
+                            }
+                            r
+                        }
+                        Err(e) => CaseResult {
+                            case: (*case).clone(),
+                            status: "failed".into(),
+                            error: Some(format!("simulator: {e}")),
+                            trim_alpha_rad: None,
+                            trim_airspeed_m_s: None,
+                            identifications: vec![],
+                        },
+                    };
+                    if let Err(e) = write_result(out, &result) {
+                        if let Ok(mut slot) = first_error.lock() {
+                            slot.get_or_insert(e);
+                        }
+                        break;
+                    }
+                    bar.set_message(case.id.clone());
+                    bar.inc(1);
+                }
+            });
+        }
+    });
+    bar.finish_and_clear();
+    if let Some(e) = first_error.into_inner().ok().flatten() {
+        return Err(e);
+    }
+    let results = load_results(out)?;
+    Ok(RunSummary {
+        total: all.len(),
+        skipped,
+        ran: pending.len(),
+        failed: results.iter().filter(|r| r.status != "ok").count(),
+        elapsed_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+fn write_result(out: &Path, result: &CaseResult) -> Result<(), CampaignError> {
+    let mut text =
+        serde_json::to_string_pretty(result).map_err(|e| CampaignError::Run(e.to_string()))?;
+    text.push('\n');
+    let path = case_path(out, &result.case.id);
+    crate::report::write_atomic(&path, text.as_bytes())
+        .map_err(|e| CampaignError::Run(e.to_string()))
+}
+
+/// Reads every `DIR/cases/*.json` (temporary files are ignored), sorted by case id.
+pub fn load_results(out: &Path) -> Result<Vec<CaseResult>, CampaignError> {
+    let dir = out.join("cases");
+    let entries = std::fs::read_dir(&dir).map_err(|source| CampaignError::Io {
+        path: dir.clone(),
+        source,
+    })?;
+    let mut results = Vec::new();
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let name = entry.file_name().to_string_lossy().to_string();
+        if name.starts_with('.') || !name.ends_with(".json") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).map_err(|source| CampaignError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        let r: CaseResult = serde_json::from_str(&text).map_err(|e| CampaignError::Parse {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        results.push(r);
+    }
+    results.sort_by(|a, b| a.case.id.cmp(&b.case.id));
+    Ok(results)
+}

@@ -1,0 +1,336 @@
+//! Campaign files (TOML): aircraft configurations × flight conditions × maneuvers × methods × noise/seeds.
+//!
+//! ```toml
+//! name = "c172x_737"
+//! rate_hz = 60.0          # simulation and sampling rate, Hz
+//! duration_s = 20.0       # record length per case, s
+//! start_s = 1.0           # maneuver start, s
+//! methods = ["ls", "srivc"]
+//! noise_std_deg = [0.0]   # white noise added to the output, deg (1 sigma)
+//! seeds = [1]
+//! fresh_process_per_case = true   # reproducible results whatever the scheduling (see the field)
+//!
+//! [[configurations]]
+//! name = "c172x"                           # the configuration's id (baselines are keyed by it)
+//! aircraft = "c172x"
+//! coefficient_scales = { Cmalpha = 1.0 }   # optional: factors on JSBSim aero coefficients
+//! conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
+//!
+//! [[maneuvers]]
+//! surface = "elevator"
+//! shape = "doublet"       # doublet | 3211
+//! pulse_s = 1.0
+//! amplitudes_deg = [1.0, 3.0]
+//! ```
+//!
+//! One case = one flight (configuration, condition, maneuver, amplitude); every method, noise level and
+//! seed is applied to that flight's record.
+
+use super::CampaignError;
+use crate::ident::Method;
+use crate::signal::Maneuver;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// A whole campaign file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampaignSpec {
+    /// Campaign name.
+    pub name: String,
+    /// Simulation and sampling rate, Hz.
+    #[serde(default = "default_rate")]
+    pub rate_hz: f64,
+    /// Record length per case, s.
+    #[serde(default = "default_duration")]
+    pub duration_s: f64,
+    /// Maneuver start time, s.
+    #[serde(default = "default_start")]
+    pub start_s: f64,
+    /// Estimators (`ls`, `iv`, `srivc`, `oe`).
+    pub methods: Vec<String>,
+    /// Output noise levels, deg (1 σ); 0 for noise-free.
+    #[serde(default = "default_noise")]
+    pub noise_std_deg: Vec<f64>,
+    /// Noise seeds (each noise level > 0 is run once per seed).
+    #[serde(default = "default_seeds")]
+    pub seeds: Vec<u64>,
+    /// Start a fresh JSBSim process for every case (default). JSBSim's trim starts from the controls and
+    /// engine state the previous case left behind and converges only to its tolerance, so reusing a process
+    /// makes results depend (at the 0.1–1 % level) on which cases ran before; a fresh process per case makes
+    /// every result independent of scheduling, `--jobs` and resumption. `false` is faster.
+    #[serde(default = "default_fresh")]
+    pub fresh_process_per_case: bool,
+    /// Aircraft configurations.
+    pub configurations: Vec<ConfigurationSpec>,
+    /// Maneuvers.
+    pub maneuvers: Vec<ManeuverSpec>,
+}
+
+fn default_rate() -> f64 {
+    60.0
+}
+fn default_duration() -> f64 {
+    20.0
+}
+fn default_start() -> f64 {
+    1.0
+}
+fn default_fresh() -> bool {
+    true
+}
+fn default_noise() -> Vec<f64> {
+    vec![0.0]
+}
+fn default_seeds() -> Vec<u64> {
+    vec![1]
+}
+
+/// An aircraft configuration and the conditions it is flown at.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConfigurationSpec {
+    /// Configuration id (unique in the campaign; baselines are keyed by it).
+    pub name: String,
+    /// Aircraft name from aircraft/ (or a path to an aircraft .toml).
+    pub aircraft: String,
+    /// Factors on aerodynamic coefficient functions (`Cmalpha = 1.3`).
+    #[serde(default)]
+    pub coefficient_scales: BTreeMap<String, f64>,
+    /// Trim points.
+    pub conditions: Vec<ConditionSpec>,
+}
+
+/// A level-flight trim point.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConditionSpec {
+    /// Altitude, ft.
+    pub altitude_ft: f64,
+    /// True airspeed, kts.
+    pub speed_kts: f64,
+}
+
+/// A maneuver family: one surface, one shape, several amplitudes.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ManeuverSpec {
+    /// `elevator`, `aileron` or `rudder`.
+    pub surface: String,
+    /// `doublet` or `3211`.
+    pub shape: String,
+    /// Pulse width T, s.
+    #[serde(default = "default_pulse")]
+    pub pulse_s: f64,
+    /// Peak deflections, deg.
+    pub amplitudes_deg: Vec<f64>,
+}
+
+fn default_pulse() -> f64 {
+    1.0
+}
+
+/// One flight of the campaign, fully specified.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CaseSpec {
+    /// File-name-safe id, unique in the campaign.
+    pub id: String,
+    /// Configuration id.
+    pub configuration: String,
+    /// Aircraft name or path.
+    pub aircraft: String,
+    /// Coefficient factors.
+    pub coefficient_scales: BTreeMap<String, f64>,
+    /// Altitude, ft.
+    pub altitude_ft: f64,
+    /// True airspeed, kts.
+    pub speed_kts: f64,
+    /// Surface.
+    pub surface: String,
+    /// Transfer function identified (`theta/elevator`, ...).
+    pub tf_key: String,
+    /// Input shape.
+    pub maneuver: Maneuver,
+    /// Peak deflection, deg.
+    pub amplitude_deg: f64,
+}
+
+fn num_id(x: f64) -> String {
+    let s = format!("{x}");
+    s.replace('.', "p").replace('-', "m")
+}
+
+impl CampaignSpec {
+    /// Reads and validates a campaign file.
+    pub fn load(path: &Path) -> Result<CampaignSpec, CampaignError> {
+        let text = std::fs::read_to_string(path).map_err(|source| CampaignError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let spec: CampaignSpec = toml::from_str(&text).map_err(|e| CampaignError::Parse {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        spec.validate().map_err(|message| CampaignError::Invalid {
+            path: path.to_path_buf(),
+            message,
+        })?;
+        Ok(spec)
+    }
+
+    /// The estimators, parsed.
+    pub fn parsed_methods(&self) -> Result<Vec<Method>, String> {
+        self.methods
+            .iter()
+            .map(|m| m.parse::<Method>().map_err(|e| e.to_string()))
+            .collect()
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        if !(self.rate_hz.is_finite() && (10.0..=2000.0).contains(&self.rate_hz)) {
+            return Err(format!(
+                "rate_hz must be within 10..2000, got {}",
+                self.rate_hz
+            ));
+        }
+        if !(self.duration_s > self.start_s && self.start_s >= 0.0) {
+            return Err(format!(
+                "duration_s ({}) must exceed start_s ({}) >= 0",
+                self.duration_s, self.start_s
+            ));
+        }
+        if self.methods.is_empty() {
+            return Err("methods is empty (use e.g. [\"ls\", \"srivc\"])".into());
+        }
+        self.parsed_methods()?;
+        if self
+            .noise_std_deg
+            .iter()
+            .any(|n| !(n.is_finite() && *n >= 0.0))
+            || self.seeds.is_empty()
+        {
+            return Err("noise_std_deg must be >= 0 and seeds non-empty".into());
+        }
+        if self.configurations.is_empty() || self.maneuvers.is_empty() {
+            return Err("a campaign needs at least one configuration and one maneuver".into());
+        }
+        let known = crate::aircraft::known();
+        let mut names = std::collections::BTreeSet::new();
+        for c in &self.configurations {
+            if !names.insert(c.name.clone()) {
+                return Err(format!("configuration '{}' is listed twice", c.name));
+            }
+            if !c
+                .name
+                .chars()
+                .all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-')
+            {
+                return Err(format!(
+                    "configuration name '{}' may hold only letters, digits, '_' and '-'",
+                    c.name
+                ));
+            }
+            if crate::aircraft::load(&c.aircraft).is_err() {
+                return Err(format!(
+                    "configuration '{}': unknown aircraft '{}' (known: {})",
+                    c.name,
+                    c.aircraft,
+                    known.join(", ")
+                ));
+            }
+            if c.conditions.is_empty() {
+                return Err(format!("configuration '{}' has no conditions", c.name));
+            }
+            for (k, v) in &c.coefficient_scales {
+                if !v.is_finite() {
+                    return Err(format!(
+                        "configuration '{}': scale of {k} is not finite",
+                        c.name
+                    ));
+                }
+            }
+        }
+        for m in &self.maneuvers {
+            if crate::compare::tf_key_for(&m.surface).is_none() {
+                return Err(format!(
+                    "maneuver surface '{}' unknown (use elevator, aileron or rudder)",
+                    m.surface
+                ));
+            }
+            m.maneuver()?;
+            if m.amplitudes_deg.is_empty()
+                || m.amplitudes_deg
+                    .iter()
+                    .any(|a| !(a.is_finite() && *a > 0.0 && *a <= 30.0))
+            {
+                return Err(format!(
+                    "maneuver on {}: amplitudes_deg must be non-empty, each within (0, 30]",
+                    m.surface
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Every case, grouped by configuration (so a worker rarely has to switch aircraft).
+    pub fn cases(&self) -> Vec<CaseSpec> {
+        let mut out = Vec::new();
+        for c in &self.configurations {
+            for cond in &c.conditions {
+                for m in &self.maneuvers {
+                    let Ok(maneuver) = m.maneuver() else { continue };
+                    for &amp in &m.amplitudes_deg {
+                        out.push(CaseSpec {
+                            id: format!(
+                                "{}_{}ft_{}kts_{}_{}_{}deg",
+                                c.name,
+                                num_id(cond.altitude_ft),
+                                num_id(cond.speed_kts),
+                                m.surface,
+                                maneuver.name(),
+                                num_id(amp)
+                            ),
+                            configuration: c.name.clone(),
+                            aircraft: c.aircraft.clone(),
+                            coefficient_scales: c.coefficient_scales.clone(),
+                            altitude_ft: cond.altitude_ft,
+                            speed_kts: cond.speed_kts,
+                            surface: m.surface.clone(),
+                            tf_key: crate::compare::tf_key_for(&m.surface)
+                                .unwrap_or("")
+                                .to_string(),
+                            maneuver: maneuver.clone(),
+                            amplitude_deg: amp,
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+impl ManeuverSpec {
+    /// The unit-peak shape.
+    pub fn maneuver(&self) -> Result<Maneuver, String> {
+        if !(self.pulse_s.is_finite() && self.pulse_s > 0.0) {
+            return Err(format!(
+                "maneuver pulse_s must be positive, got {}",
+                self.pulse_s
+            ));
+        }
+        match self.shape.as_str() {
+            "doublet" => Ok(Maneuver::Doublet {
+                pulse_s: self.pulse_s,
+            }),
+            "3211" => Ok(Maneuver::ThreeTwoOneOne {
+                pulse_s: self.pulse_s,
+            }),
+            other => Err(format!(
+                "unknown maneuver shape '{other}' on {} (use doublet or 3211)",
+                self.surface
+            )),
+        }
+    }
+}

@@ -1,0 +1,104 @@
+//! `flightid compare`: identified linear models vs JSBSim's linearization and nonlinear flight, as a report.
+
+use super::common::{emit_json, TrimArgs};
+use crate::cli::UsageError;
+use crate::compare::{self, CompareOptions};
+use crate::ident::Method;
+use crate::sim::JsbsimSim;
+use anyhow::Context;
+use std::path::PathBuf;
+
+/// Trim, linearize (JSBSim), fly elevator/aileron/rudder doublets, identify θ/δe, φ/δa, φ/δr with each method
+/// and compare with the linearization: modal parameters with errors, Bode and time overlays, ISE and fit %,
+/// and an amplitude sweep. Writes DIR/index.html (self-contained), report.md, *.svg and report.json.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  flightid compare --aircraft c172x --report out/compare\n  flightid compare --aircraft 737 --amplitude-deg 1 --method ls,srivc,oe --report out/737 --json out/737.json"
+)]
+pub struct CompareCmd {
+    #[command(flatten)]
+    pub trim: TrimArgs,
+    /// Doublet amplitude of the main comparison, deg.
+    #[arg(long, default_value_t = 2.0)]
+    pub amplitude_deg: f64,
+    /// Doublet pulse width, s.
+    #[arg(long, default_value_t = 1.0)]
+    pub pulse_s: f64,
+    /// Record length, s.
+    #[arg(long, default_value_t = 20.0)]
+    pub duration_s: f64,
+    /// Estimators, comma separated (ls, iv, srivc, oe).
+    #[arg(long, value_delimiter = ',', default_value = "ls,srivc,oe")]
+    pub method: Vec<String>,
+    /// Amplitudes of the linearity sweep, deg, comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4,8,12")]
+    pub sweep_deg: Vec<f64>,
+    /// Report directory.
+    #[arg(long)]
+    pub report: PathBuf,
+    /// Also write the results as JSON (to stdout, or to the file given).
+    #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
+    pub json: Option<String>,
+}
+
+/// Runs `flightid compare`.
+pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
+    let cfg = args.trim.config()?;
+    let point = args.trim.point(&cfg)?;
+    let methods: Vec<Method> = args
+        .method
+        .iter()
+        .map(|m| m.parse::<Method>().map_err(|e| UsageError(e.to_string())))
+        .collect::<Result<_, _>>()?;
+    if !(args.amplitude_deg.is_finite() && args.amplitude_deg > 0.0 && args.amplitude_deg <= 30.0) {
+        return Err(UsageError(format!(
+            "--amplitude-deg must be within (0, 30], got {}",
+            args.amplitude_deg
+        ))
+        .into());
+    }
+    if args
+        .sweep_deg
+        .iter()
+        .any(|a| !(a.is_finite() && *a > 0.0 && *a <= 30.0))
+    {
+        return Err(UsageError("--sweep-deg values must be within (0, 30]".into()).into());
+    }
+    let opts = CompareOptions {
+        point,
+        amplitude_deg: args.amplitude_deg,
+        pulse_s: args.pulse_s,
+        duration_s: args.duration_s,
+        methods,
+        sweep_amplitudes_deg: args.sweep_deg.clone(),
+    };
+    let mut sim = JsbsimSim::start(&cfg, 120.0)
+        .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
+    let (outcome, report) = compare::run_compare(&mut sim, &opts).map_err(|e| match e {
+        compare::CompareError::Options(m) => anyhow::Error::new(UsageError(m)),
+        other => anyhow::Error::new(other),
+    })?;
+    let json = compare::outcome_json(&outcome);
+    let index = crate::report::write_report(&args.report, &report, &json)?;
+    if let Some(target) = &args.json {
+        emit_json(target, &json)?;
+    }
+    if args.json.as_deref() != Some("-") {
+        for (key, fits) in &outcome.models {
+            for f in fits {
+                println!(
+                    "{key:<15} {:<21} fit {:>9.2} %  {}",
+                    f.model,
+                    f.fit_percent,
+                    f.modal
+                        .iter()
+                        .map(|(k, v)| format!("{k} {v:.4}"))
+                        .collect::<Vec<_>>()
+                        .join("  ")
+                );
+            }
+        }
+        println!("report: {}", index.display());
+    }
+    Ok(())
+}

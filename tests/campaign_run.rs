@@ -1,0 +1,233 @@
+//! Campaigns run for real on JSBSim: resumption after kill -9, failed trims, bad campaign files.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+fn flightid() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_flightid"))
+}
+
+/// 6 cases: c172x at one condition × 3 surfaces × 2 amplitudes, 8 s records.
+const SMALL: &str = r#"
+name = "small"
+rate_hz = 60.0
+duration_s = 8.0
+methods = ["srivc"]
+
+[[configurations]]
+name = "c172x"
+aircraft = "c172x"
+conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
+
+[[maneuvers]]
+surface = "elevator"
+shape = "doublet"
+amplitudes_deg = [1.0, 3.0]
+
+[[maneuvers]]
+surface = "aileron"
+shape = "doublet"
+amplitudes_deg = [1.0, 3.0]
+
+[[maneuvers]]
+surface = "rudder"
+shape = "3211"
+pulse_s = 0.5
+amplitudes_deg = [1.0, 3.0]
+"#;
+
+fn case_files(dir: &Path) -> BTreeMap<String, String> {
+    let Ok(entries) = std::fs::read_dir(dir.join("cases")) else {
+        return BTreeMap::new();
+    };
+    entries
+        .flatten()
+        .filter(|e| !e.file_name().to_string_lossy().starts_with('.'))
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().to_string(),
+                std::fs::read_to_string(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn killed_campaign_resumes_to_the_same_results_as_an_uninterrupted_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = tmp.path().join("small.toml");
+    std::fs::write(&spec, SMALL).unwrap();
+    let full = tmp.path().join("full");
+    let st = flightid()
+        .args(["campaign", "run"])
+        .arg(&spec)
+        .arg("--out")
+        .arg(&full)
+        .args(["--jobs", "2"])
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let reference = case_files(&full);
+    assert_eq!(reference.len(), 6, "6 cases: {:?}", reference.keys());
+
+    // Interrupted run: kill -9 as soon as two results exist, then resume with a different job count.
+    let part = tmp.path().join("part");
+    let mut child = flightid()
+        .args(["campaign", "run"])
+        .arg(&spec)
+        .arg("--out")
+        .arg(&part)
+        .args(["--jobs", "1"])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while case_files(&part).len() < 2 && t0.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let done = case_files(&part).len();
+    assert!(
+        (2..6).contains(&done),
+        "the kill must land mid-campaign, {done} of 6 done"
+    );
+    let out = flightid()
+        .args(["campaign", "run"])
+        .arg(&spec)
+        .arg("--out")
+        .arg(&part)
+        .args(["--jobs", "2", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        summary["skipped"], done as u64,
+        "finished cases are not redone"
+    );
+    assert_eq!(summary["ran"], (6 - done) as u64);
+    // Byte-identical: every case runs in a fresh JSBSim process, so scheduling cannot leak into results.
+    assert_eq!(case_files(&part), reference);
+}
+
+#[test]
+fn a_case_whose_trim_fails_is_recorded_and_the_campaign_carries_on() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = tmp.path().join("slow.toml");
+    std::fs::write(
+        &spec,
+        r#"
+name = "slow"
+duration_s = 6.0
+methods = ["ls"]
+[[configurations]]
+name = "c172x"
+aircraft = "c172x"
+conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 }, { altitude_ft = 4000.0, speed_kts = 15.0 } ]
+[[maneuvers]]
+surface = "elevator"
+shape = "doublet"
+amplitudes_deg = [2.0]
+"#,
+    )
+    .unwrap();
+    let out_dir = tmp.path().join("out");
+    let out = flightid()
+        .args(["campaign", "run"])
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out_dir)
+        .args(["--jobs", "2", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["total"], 2);
+    assert_eq!(
+        summary["failed"], 1,
+        "15 kts is below the c172x stall speed"
+    );
+    let failed: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            out_dir.join("cases/c172x_4000ft_15kts_elevator_doublet_2deg.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(failed["status"], "failed");
+    assert!(failed["error"].as_str().unwrap().contains("trim"));
+    let ok: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            out_dir.join("cases/c172x_4000ft_100kts_elevator_doublet_2deg.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(ok["status"], "ok");
+    // The summary report lists the failure.
+    let st = flightid()
+        .args(["campaign", "report"])
+        .arg(&out_dir)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let html = std::fs::read_to_string(out_dir.join("report/index.html")).unwrap();
+    assert!(html.contains("Cases that failed") && html.contains("c172x_4000ft_15kts_elevator"));
+    assert!(
+        html.matches("<svg").count() >= 4,
+        "modal plots vs speed and altitude"
+    );
+}
+
+fn run_bad(text: &str) -> (i32, String) {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = tmp.path().join("bad.toml");
+    std::fs::write(&spec, text).unwrap();
+    let out = flightid()
+        .args(["campaign", "run"])
+        .arg(&spec)
+        .arg("--out")
+        .arg(tmp.path().join("out"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).to_string(),
+    )
+}
+
+#[test]
+fn malformed_or_meaningless_campaign_files_are_usage_errors_that_say_what_is_wrong() {
+    let (code, err) = run_bad("name = \"x\"\nmethods = [\"ls\"\n");
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("malformed") && err.contains("line"), "{err}");
+
+    let good = SMALL.replace("\"3211\"", "\"3211\"");
+    let (code, err) = run_bad(&good.replacen("aircraft = \"c172x\"", "aircraft = \"a380\"", 1));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("unknown aircraft 'a380'"), "{err}");
+
+    let (code, err) = run_bad(&good.replace("\"3211\"", "\"sawtooth\""));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("unknown maneuver shape 'sawtooth'"), "{err}");
+
+    let (code, err) = run_bad(&good.replacen("surface = \"elevator\"", "surface = \"flaps\"", 1));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("'flaps'"), "{err}");
+
+    let (code, err) = run_bad(&good.replace("[\"srivc\"]", "[\"magic\"]"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("unknown method 'magic'"), "{err}");
+
+    let (code, err) = run_bad(&good.replace("rate_hz = 60.0", "rate_hz = 60.0\ncolour = 1"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("colour"), "unknown keys are named: {err}");
+}

@@ -1,0 +1,61 @@
+//! `flightid compare` on c172x: the report holds every plot inline and the numbers agree with the
+//! linearization where the flight is linear.
+
+use std::process::Command;
+
+#[test]
+fn compare_report_holds_every_plot_and_srivc_matches_the_linearized_short_period() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("report");
+    let json = tmp.path().join("compare.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
+        .args(["compare", "--aircraft", "c172x", "--duration-s", "12"])
+        .args(["--method", "ls,srivc", "--sweep-deg", "1,6"])
+        .arg("--report")
+        .arg(&dir)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let html = std::fs::read_to_string(dir.join("index.html")).unwrap();
+    // 3 transfer functions × (time overlay, Bode magnitude, Bode phase, amplitude sweep)
+    for tf in ["theta_elevator", "phi_aileron", "phi_rudder"] {
+        for plot in ["time", "bode_mag", "bode_phase", "sweep"] {
+            let id = format!("{tf}_{plot}");
+            assert!(
+                html.contains(&format!("<figure id=\"{id}\"><svg")),
+                "{id} inline"
+            );
+            assert!(dir.join(format!("{id}.svg")).exists(), "{id}.svg");
+        }
+    }
+    assert_eq!(html.matches("<svg").count(), 12);
+    assert!(
+        !html.contains("src=\"http") && !html.contains("href=\"http"),
+        "no network"
+    );
+    assert!(dir.join("report.md").exists() && dir.join("report.json").exists());
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let models = v["models"]["theta/elevator"].as_array().unwrap();
+    let wn = |name: &str| {
+        models.iter().find(|m| m["model"] == name).unwrap()["modal"]["osc_omega_n_rad_s"]
+            .as_f64()
+            .unwrap()
+    };
+    // DESIGN.md: linearized short period 6.1 rad/s at 4000 ft, 100 kts; SRIVC on a 2 deg doublet of the
+    // nonlinear model lands within 3 % (measured 1.3 %: the nonlinearity at 2 deg is small).
+    assert!((wn("jsbsim_linearization") - 6.11).abs() < 0.05);
+    assert!((wn("srivc") / wn("jsbsim_linearization") - 1.0).abs() < 0.03);
+    // the sweep scores the linearization at both amplitudes, and it fits worse at 6 deg than at 1 deg
+    let sweep = v["sweep"]["theta/elevator"]["jsbsim_linearization"]
+        .as_array()
+        .unwrap();
+    assert_eq!(sweep.len(), 2);
+    assert!(sweep[1][1].as_f64().unwrap() < sweep[0][1].as_f64().unwrap());
+}
