@@ -6,6 +6,7 @@
 pub mod aircraft;
 pub mod cli;
 pub mod data;
+pub mod diagnose;
 pub mod ident;
 pub mod lti;
 pub mod report;
