@@ -309,7 +309,7 @@ pub const DERIVATIVE_KNOBS: [(&str, &str); 23] = [
 
 /// Output columns that may carry a sensor bias or scale. Airspeed and altitude are not among them: they set
 /// the trim point of the replay, so an error in them shows as a trim mismatch instead.
-pub const SENSOR_COLUMNS: [&str; 11] = [
+pub const SENSOR_COLUMNS: [&str; 10] = [
     "phi_rad",
     "theta_rad",
     "p_rad_s",
@@ -320,7 +320,6 @@ pub const SENSOR_COLUMNS: [&str; 11] = [
     "ax_m_s2",
     "ay_m_s2",
     "az_m_s2",
-    "psi_rad",
 ];
 
 /// Builds one extension from its effect and target names (the `--extension` file and the catalogue use it).
@@ -380,9 +379,7 @@ pub fn catalogue(
     }
     for c in SENSOR_COLUMNS {
         all.push(Box::new(SensorBias(c.into())));
-        if c != "psi_rad" {
-            all.push(Box::new(SensorScale(c.into())));
-        }
+        all.push(Box::new(SensorScale(c.into())));
     }
     let mut skipped = Vec::new();
     for (name, knob) in DERIVATIVE_KNOBS {

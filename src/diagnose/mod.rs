@@ -315,10 +315,10 @@ pub fn diagnose(
                     .any(|s| s.ext.effect() == e.effect() && s.ext.target() == e.target())
             })
             .collect();
-        // Cheap pass: each candidate alone (selected effects held), three LM iterations.
+        // Cheap pass: each candidate alone (selected effects held), two LM iterations.
         let quick = par_map(workers, &pool, |wk, e| {
             let mut a = with_candidate(&selected, *e, false);
-            let out = fit(wk, &w, &mut a, 3);
+            let out = fit(wk, &w, &mut a, 2, false);
             if let Ok(o) = &out {
                 simulations.add(o.evaluations);
             }
@@ -336,7 +336,7 @@ pub fn diagnose(
         let top_exts: Vec<&dyn Extension> = top.iter().map(|&i| pool[i]).collect();
         let full = par_map(workers, &top_exts, |wk, e| {
             let mut a = with_candidate(&selected, *e, true);
-            let out = fit(wk, &w, &mut a, 10);
+            let out = fit(wk, &w, &mut a, 10, true);
             if let Ok(o) = &out {
                 simulations.add(o.evaluations);
             }

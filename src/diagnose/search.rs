@@ -178,6 +178,7 @@ pub fn fit(
     w: &Weighted,
     active: &mut [Active],
     max_iter: usize,
+    final_jacobian: bool,
 ) -> Result<FitOutcome, SimError> {
     // Index of every free scalar parameter: (active index, parameter index).
     let free: Vec<(usize, usize)> = active
@@ -228,8 +229,10 @@ pub fn fit(
         }
         (a, g)
     };
+    let mut last_cols: Vec<Vec<f64>> = Vec::new();
     for _ in 0..max_iter {
         let cols = jacobian(worker, active, &r, &mut evaluations)?;
+        last_cols = cols.clone();
         let (a, g) = normal(&cols, &r);
         if a.iter().enumerate().all(|(i, row)| row[i] <= 0.0) {
             break;
@@ -273,7 +276,12 @@ pub fn fit(
         }
     }
     // Cramér–Rao bound at the fitted values with the residual variance estimate s² = J / (n − p).
-    let cols = jacobian(worker, active, &r, &mut evaluations)?;
+    // (The cheap pass uses the last iteration's sensitivities instead of new ones.)
+    let cols = if final_jacobian || last_cols.is_empty() {
+        jacobian(worker, active, &r, &mut evaluations)?
+    } else {
+        last_cols
+    };
     let (a, _) = normal(&cols, &r);
     let n = r.len() as f64;
     let s2 = c / (n - free.len() as f64).max(1.0);
