@@ -58,15 +58,33 @@ fn inputs(validation: bool) -> Vec<(&'static str, Vec<f64>)> {
     };
     if !validation {
         vec![
-            ("elevator", gen(Maneuver::ThreeTwoOneOne { pulse_s: 0.5 }, 0.03, 1.0)),
-            ("aileron", gen(Maneuver::Doublet { pulse_s: 1.0 }, 0.05, 6.0)),
-            ("rudder", gen(Maneuver::Doublet { pulse_s: 1.0 }, 0.05, 10.0)),
+            (
+                "elevator",
+                gen(Maneuver::ThreeTwoOneOne { pulse_s: 0.5 }, 0.03, 1.0),
+            ),
+            (
+                "aileron",
+                gen(Maneuver::Doublet { pulse_s: 1.0 }, 0.05, 6.0),
+            ),
+            (
+                "rudder",
+                gen(Maneuver::Doublet { pulse_s: 1.0 }, 0.05, 10.0),
+            ),
         ]
     } else {
         vec![
-            ("elevator", gen(Maneuver::Doublet { pulse_s: 0.8 }, 0.035, 1.0)),
-            ("aileron", gen(Maneuver::ThreeTwoOneOne { pulse_s: 0.4 }, 0.04, 5.0)),
-            ("rudder", gen(Maneuver::Doublet { pulse_s: 0.7 }, 0.06, 10.5)),
+            (
+                "elevator",
+                gen(Maneuver::Doublet { pulse_s: 0.8 }, 0.035, 1.0),
+            ),
+            (
+                "aileron",
+                gen(Maneuver::ThreeTwoOneOne { pulse_s: 0.4 }, 0.04, 5.0),
+            ),
+            (
+                "rudder",
+                gen(Maneuver::Doublet { pulse_s: 0.7 }, 0.06, 10.5),
+            ),
         ]
     }
 }
@@ -164,7 +182,13 @@ fn run(hidden: &[Hidden], seed: u64) -> Diagnosis {
     let mut workers: Vec<Worker> = (0..2)
         .map(|_| Worker::new(Box::new(JsbsimSim::start(&cfg, RATE_HZ).unwrap())))
         .collect();
-    let d = diagnose(&mut workers, &train, Some(&valid), &DiagnoseOptions::default()).unwrap();
+    let d = diagnose(
+        &mut workers,
+        &train,
+        Some(&valid),
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
     eprintln!(
         "named: {}\nvalidation: {:?} -> {:?}; {} simulations, {:.1} s",
         serde_json::to_string(&d.named_cause).unwrap(),

@@ -7,8 +7,10 @@ use clap::{Parser, Subcommand};
 
 pub mod common;
 pub mod demo;
+pub mod diagnose;
 pub mod fly;
 pub mod linearize;
+pub mod replay;
 pub mod trim;
 
 /// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
@@ -30,6 +32,10 @@ pub enum Command {
     Linearize(linearize::LinearizeCmd),
     /// Fly a maneuver (doublet, 3211, multisine, chirp) from trim and write the flight-data CSV.
     Fly(fly::FlyCmd),
+    /// Name what the simulation gets wrong on measured data and measure the gain on a validation record.
+    Diagnose(diagnose::DiagnoseCmd),
+    /// Replay measured data on the simulation (optionally with fitted extensions) and compare the outputs.
+    Replay(replay::ReplayCmd),
 }
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
@@ -51,6 +57,8 @@ pub fn main() -> i32 {
         Command::Trim(a) => trim::run(a),
         Command::Linearize(a) => linearize::run(a),
         Command::Fly(a) => fly::run(a),
+        Command::Diagnose(a) => diagnose::run(a),
+        Command::Replay(a) => replay::run(a),
     };
     match result {
         Ok(()) => 0,

@@ -358,10 +358,12 @@ pub fn make(
                 knob,
             })
         }
-        other => return Err(DiagnoseError::UnknownExtension(format!(
+        other => {
+            return Err(DiagnoseError::UnknownExtension(format!(
             "unknown effect '{other}' (known: input_delay, actuator_lag, control_effectiveness, \
                  sensor_bias, sensor_scale, aero_derivative)"
-        ))),
+        )))
+        }
     })
 }
 
