@@ -252,3 +252,35 @@ fn q_gyro_bias_is_named() {
     let d = run(&[Hidden::Bias("q_rad_s", 0.02)], 41);
     assert_named(&d, "sensor_bias", "q_rad_s", 0.02);
 }
+
+#[test]
+fn aileron_actuator_lag_of_100_ms_is_named() {
+    let d = run(&[Hidden::Lag("aileron", 0.1)], 51);
+    assert_named(&d, "actuator_lag", "aileron", 0.1);
+}
+
+#[test]
+fn rudder_effectiveness_30_percent_low_is_named() {
+    let d = run(&[Hidden::Effectiveness("rudder", 0.7)], 61);
+    assert_named(&d, "control_effectiveness", "rudder", 0.7);
+}
+
+#[test]
+fn directional_stability_cn_beta_40_percent_high_is_named() {
+    let d = run(&[Hidden::Coefficient("Cnb", 1.4)], 71);
+    assert_named(&d, "aero_derivative", "Cn_beta", 1.4);
+}
+
+#[test]
+fn two_effects_at_once_are_both_named() {
+    // A roll-damping error and a pitch-gyro bias in the same record: forward selection must find both.
+    let d = run(
+        &[
+            Hidden::Coefficient("Clp", 0.7),
+            Hidden::Bias("theta_rad", 0.03),
+        ],
+        81,
+    );
+    assert_named(&d, "aero_derivative", "Cl_p", 0.7);
+    assert_named(&d, "sensor_bias", "theta_rad", 0.03);
+}
