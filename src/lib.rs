@@ -9,6 +9,7 @@ pub mod campaign;
 pub mod cli;
 pub mod compare;
 pub mod data;
+pub mod diagnose;
 pub mod ident;
 pub mod lti;
 pub mod report;

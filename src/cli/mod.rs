@@ -10,11 +10,13 @@ pub mod campaign;
 pub mod common;
 pub mod compare;
 pub mod demo;
+pub mod diagnose;
 pub mod fly;
 pub mod ingest;
 pub mod linearize;
 pub mod segments;
 pub mod regress;
+pub mod replay;
 pub mod trim;
 
 /// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
@@ -48,6 +50,10 @@ pub enum Command {
     Campaign(campaign::CampaignCmd),
     /// Compare a campaign's identified modal parameters with a stored baseline (exit 1 when any moved).
     Regress(regress::RegressCmd),
+    /// Name what the simulation gets wrong on measured data and measure the gain on a validation record.
+    Diagnose(diagnose::DiagnoseCmd),
+    /// Replay measured data on the simulation (optionally with fitted extensions) and compare the outputs.
+    Replay(replay::ReplayCmd),
 }
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
@@ -75,6 +81,8 @@ pub fn main() -> i32 {
         Command::Compare(a) => compare::run(a),
         Command::Campaign(a) => campaign::run(a),
         Command::Regress(a) => regress::run(a),
+        Command::Diagnose(a) => diagnose::run(a),
+        Command::Replay(a) => replay::run(a),
     };
     match result {
         Ok(()) => 0,

@@ -1,0 +1,73 @@
+//! `flightid replay`: drive the simulation with measured deflections and compare every output channel.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use super::common::emit_json;
+use super::diagnose::{classify, read_record, start_workers};
+use super::UsageError;
+use crate::diagnose::analyse_replay;
+use crate::diagnose::extension::ExtensionFile;
+use crate::diagnose::replay::ReplayCase;
+
+/// Replay a measured record on the aircraft's simulation (trimmed at the measured initial condition, surfaces
+/// driven with the measured deflections), optionally with fitted extensions, and compare the outputs.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  flightid replay --aircraft c172x --data flight.csv --extension ext.json --json"
+)]
+pub struct ReplayCmd {
+    /// Aircraft configuration.
+    #[arg(long, default_value = "c172x")]
+    pub aircraft: String,
+    /// Measured record (flight-data CSV).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Extension file written by `flightid diagnose`.
+    #[arg(long)]
+    pub extension: Option<PathBuf>,
+    /// Print the comparison as JSON (to stdout, or to the file given).
+    #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
+    pub json: Option<String>,
+}
+
+/// Runs `flightid replay`.
+pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
+    let rec = read_record(&args.data)?;
+    let case = ReplayCase::new(&rec).map_err(classify)?;
+    let mut workers = start_workers(&args.aircraft, case.rate_hz, 1)?;
+    let exts = match &args.extension {
+        Some(p) => ExtensionFile::read(p)
+            .and_then(|f| f.build(&workers[0].sim.coefficient_names()))
+            .map_err(|e| UsageError(e.to_string()))?,
+        None => Vec::new(),
+    };
+    let refs: Vec<_> = exts
+        .iter()
+        .map(|(e, p)| (e.as_ref(), p.as_slice()))
+        .collect();
+    let (_, stats, trim) = analyse_replay(&mut workers[0], &case, &refs).map_err(classify)?;
+    if let Some(target) = &args.json {
+        let mut v = BTreeMap::new();
+        v.insert("residuals", serde_json::to_value(&stats)?);
+        v.insert("trim_mismatch", serde_json::to_value(&trim)?);
+        return emit_json(target, &v);
+    }
+    println!(
+        "{:<13} {:>9} {:>12} {:>10}",
+        "channel", "fit %", "rms", "white p"
+    );
+    for (c, s) in &stats {
+        println!(
+            "{c:<13} {:9.1} {:12.5} {:10.3}",
+            s.fit_percent, s.rms, s.whiteness_p
+        );
+    }
+    for m in &trim {
+        println!(
+            "trim: {:<13} measured {:+.5}  model {:+.5}",
+            m.quantity, m.measured, m.model
+        );
+    }
+    Ok(())
+}

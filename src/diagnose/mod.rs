@@ -1,0 +1,516 @@
+//! Diagnose: show what the simulation gets wrong on measured data, name the cause from a catalogue of
+//! model extensions, and measure the gain on a validation record (issue 7, JSON contract DESIGN.md §7).
+//!
+//! Pipeline: [`replay`] the record → [`residual`] analysis → fit every [`extension`] by output error
+//! ([`search`]) → forward selection by BIC → re-simulate the validation record with the chosen effects.
+
+pub mod extension;
+pub mod replay;
+pub mod residual;
+pub mod search;
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use crate::data::FlightRecord;
+use crate::sim::SimError;
+use extension::{Extension, ExtensionFile, FittedEffect};
+use replay::{ReplayCase, TrimMismatch};
+use residual::ChannelResidual;
+use search::{fit, par_map, residuals, Active, Weighted, Worker};
+
+/// Errors of the diagnose module.
+#[derive(Debug, thiserror::Error)]
+pub enum DiagnoseError {
+    /// The record is too short to identify anything.
+    #[error("record too short: {0}")]
+    TooShort(String),
+    /// The record lacks something replay needs.
+    #[error("bad flight data: {0}")]
+    BadData(String),
+    /// An effect/target that the catalogue does not know.
+    #[error("{0}")]
+    UnknownExtension(String),
+    /// An extension file that cannot be read.
+    #[error("extension file {path}: {message}")]
+    ExtensionFile { path: String, message: String },
+    /// The simulation failed (trim at the measured condition, bridge error).
+    #[error("simulation during {during}: {source}")]
+    Sim { during: String, source: SimError },
+}
+
+/// Search settings.
+#[derive(Debug, Clone)]
+pub struct DiagnoseOptions {
+    /// At most this many effects are named (forward selection rounds).
+    pub max_effects: usize,
+    /// Candidates fully fitted after the cheap 1-D pass, per round.
+    pub full_fit_top: usize,
+    /// ΔBIC below which an improvement counts (−10: "very strong" evidence, Kass & Raftery 1995).
+    pub bic_threshold: f64,
+    /// Minimum |value − null| / std error for a named effect.
+    pub min_z: f64,
+    /// Minimum relative cost reduction for a named effect (guards against coloured residuals).
+    pub min_relative_reduction: f64,
+    /// Correlation of sensitivities above which near-equal candidates form an ambiguous group.
+    pub ambiguity_correlation: f64,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            max_effects: 3,
+            full_fit_top: 4,
+            bic_threshold: -10.0,
+            min_z: 5.0,
+            min_relative_reduction: 0.02,
+            ambiguity_correlation: 0.9,
+        }
+    }
+}
+
+/// One evaluated candidate (DESIGN.md §7 `candidates`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Candidate {
+    /// Effect.
+    pub effect: String,
+    /// Target.
+    pub target: String,
+    /// Fitted value.
+    pub value: f64,
+    /// Cramér–Rao standard error.
+    pub std_error: f64,
+    /// Noise-weighted cost before (current model).
+    pub cost_before: f64,
+    /// Noise-weighted cost after fitting this candidate.
+    pub cost_after: f64,
+    /// `BIC`.
+    pub criterion: String,
+    /// ΔBIC = n ln(cost_after / cost_before) + ln n.
+    pub criterion_delta: f64,
+    /// Selection round (0 = first).
+    pub round: usize,
+    /// Fully fitted (true) or only the cheap 1-D pass.
+    pub full_fit: bool,
+}
+
+/// A named cause (DESIGN.md §7 `named_cause`).
+#[derive(Debug, Clone, Serialize)]
+pub struct NamedCause {
+    /// Effect.
+    pub effect: String,
+    /// Target.
+    pub target: String,
+    /// Value.
+    pub value: f64,
+    /// Cramér–Rao standard error.
+    pub std_error: f64,
+    /// Other candidates the data cannot tell apart from this one ("effect/target").
+    pub ambiguous_with: Vec<String>,
+}
+
+/// Validation on a record the fit never saw (DESIGN.md §7 `validation`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Validation {
+    /// Noise-weighted ISE, Σ_c ISE_c / σ_c², without the named effects.
+    pub ise_before: f64,
+    /// The same with the named effects.
+    pub ise_after: f64,
+    /// Fit % per channel before.
+    pub fit_percent_before: BTreeMap<String, f64>,
+    /// Fit % per channel after.
+    pub fit_percent_after: BTreeMap<String, f64>,
+    /// Raw ISE per channel before (column units² · s).
+    pub ise_per_channel_before: BTreeMap<String, f64>,
+    /// Raw ISE per channel after.
+    pub ise_per_channel_after: BTreeMap<String, f64>,
+}
+
+/// A skipped catalogue entry and why.
+#[derive(Debug, Clone, Serialize)]
+pub struct Skipped {
+    /// Effect.
+    pub effect: String,
+    /// Target.
+    pub target: String,
+    /// Reason.
+    pub reason: String,
+}
+
+/// The whole diagnosis (DESIGN.md §7 keys first, extras after).
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnosis {
+    /// Significant effects, in order of selection; empty when nothing is significant.
+    pub named_cause: Vec<NamedCause>,
+    /// Every evaluated candidate.
+    pub candidates: Vec<Candidate>,
+    /// Validation gain (absent without a validation record).
+    pub validation: Option<Validation>,
+    /// Residual statistics per channel of the unextended model on the training record.
+    pub residuals: BTreeMap<String, ChannelResidual>,
+    /// Residual statistics with the named effects.
+    pub residuals_after: BTreeMap<String, ChannelResidual>,
+    /// Model trim vs measured initial condition.
+    pub trim_mismatch: Vec<TrimMismatch>,
+    /// Catalogue entries not evaluated.
+    pub skipped: Vec<Skipped>,
+    /// Noise standard deviation estimated per channel (the cost weights).
+    pub noise_std: BTreeMap<String, f64>,
+    /// Number of residual values (samples × channels).
+    pub n_residuals: usize,
+    /// Simulations run.
+    pub simulations: usize,
+    /// Wall time, s.
+    pub wall_s: f64,
+}
+
+impl Diagnosis {
+    /// The extension file of the named effects.
+    pub fn extension_file(&self, aircraft: &str) -> ExtensionFile {
+        ExtensionFile {
+            aircraft: aircraft.to_string(),
+            effects: self
+                .named_cause
+                .iter()
+                .map(|c| FittedEffect {
+                    effect: c.effect.clone(),
+                    target: c.target.clone(),
+                    value: c.value,
+                    std_error: c.std_error,
+                })
+                .collect(),
+            notes: BTreeMap::new(),
+        }
+    }
+}
+
+fn sim_err(during: &str) -> impl FnOnce(SimError) -> DiagnoseError + '_ {
+    move |source| DiagnoseError::Sim {
+        during: during.to_string(),
+        source,
+    }
+}
+
+/// Noise standard deviation per output channel, floored at 10⁻³ of the channel's spread (noise-free data).
+fn weights(case: &ReplayCase) -> Vec<f64> {
+    case.outputs
+        .iter()
+        .map(|c| {
+            let y = case.measured(c);
+            let m = y.iter().sum::<f64>() / y.len() as f64;
+            let sd = (y.iter().map(|v| (v - m).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
+            residual::noise_std(y).max(1e-3 * sd).max(1e-9)
+        })
+        .collect()
+}
+
+/// Replays a case with extensions and analyses every channel.
+pub fn analyse_replay(
+    worker: &mut Worker,
+    case: &ReplayCase,
+    extensions: &[(&dyn Extension, &[f64])],
+) -> Result<
+    (
+        FlightRecord,
+        BTreeMap<String, ChannelResidual>,
+        Vec<TrimMismatch>,
+    ),
+    DiagnoseError,
+> {
+    let (rec, trim) =
+        replay::replay(worker.sim.as_mut(), case, extensions).map_err(sim_err("replay"))?;
+    let stats = case
+        .outputs
+        .iter()
+        .filter_map(|c| {
+            rec.column(c).map(|yhat| {
+                (
+                    c.clone(),
+                    residual::analyse(case.measured(c), yhat, case.dt_s(), &case.inputs),
+                )
+            })
+        })
+        .collect();
+    Ok((rec, stats, case.trim_mismatch(&trim)))
+}
+
+/// Diagnoses `train` (and validates on `valid`) with one simulation per worker.
+pub fn diagnose(
+    workers: &mut [Worker],
+    train: &FlightRecord,
+    valid: Option<&FlightRecord>,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let t0 = std::time::Instant::now();
+    if workers.is_empty() {
+        return Err(DiagnoseError::BadData("no simulation worker".into()));
+    }
+    let case = ReplayCase::new(train)?;
+    let vcase = valid.map(ReplayCase::new).transpose()?;
+    if let Some(v) = &vcase {
+        if (v.rate_hz - case.rate_hz).abs() > 1e-6 * case.rate_hz {
+            return Err(DiagnoseError::BadData(format!(
+                "validation record rate {:.3} Hz differs from the training record rate {:.3} Hz",
+                v.rate_hz, case.rate_hz
+            )));
+        }
+    }
+    let w = Weighted {
+        case: &case,
+        sigma: weights(&case),
+    };
+    let n = w.n();
+    let coeffs = workers[0].sim.coefficient_names();
+    let (catalogue, skipped_raw) = extension::catalogue(&case.record, &coeffs);
+    let mut skipped: Vec<Skipped> = skipped_raw
+        .into_iter()
+        .map(|(effect, target, reason)| Skipped {
+            effect,
+            target,
+            reason,
+        })
+        .collect();
+    // Inputs that do not move cannot reveal signal-path effects.
+    let still: Vec<String> = case
+        .inputs
+        .iter()
+        .filter(|(_, d)| d.iter().all(|v| v.abs() < 1e-6))
+        .map(|(s, _)| s.clone())
+        .collect();
+    let catalogue: Vec<&dyn Extension> = catalogue
+        .iter()
+        .map(|b| b.as_ref())
+        .filter(|e| {
+            let unexcited =
+                e.stage() == extension::Stage::Input && still.iter().any(|s| s == e.target());
+            if unexcited {
+                skipped.push(Skipped {
+                    effect: e.effect().into(),
+                    target: e.target().into(),
+                    reason: "the input does not move in the record".into(),
+                });
+            }
+            !unexcited
+        })
+        .collect();
+
+    let (_, residuals_before, trim_mismatch) = analyse_replay(&mut workers[0], &case, &[])?;
+    let simulations = AtomicCounter::default();
+    let ln_n = (n as f64).ln();
+    let mut selected: Vec<Active> = Vec::new();
+    let mut named: Vec<NamedCause> = Vec::new();
+    let mut candidates = Vec::new();
+    let mut base_cost = {
+        let r = residuals(&mut workers[0], &w, &[]).map_err(sim_err("replay"))?;
+        r.iter().map(|v| v * v).sum::<f64>()
+    };
+    for round in 0..opts.max_effects {
+        let pool: Vec<&dyn Extension> = catalogue
+            .iter()
+            .copied()
+            .filter(|e| {
+                !selected
+                    .iter()
+                    .any(|s| s.ext.effect() == e.effect() && s.ext.target() == e.target())
+            })
+            .collect();
+        // Cheap pass: each candidate alone (selected effects held), two LM iterations.
+        let quick = par_map(workers, &pool, |wk, e| {
+            let mut a = with_candidate(&selected, *e, false);
+            let out = fit(wk, &w, &mut a, 2, false);
+            if let Ok(o) = &out {
+                simulations.add(o.evaluations);
+            }
+            out
+        });
+        let mut order: Vec<(usize, f64)> = quick
+            .iter()
+            .enumerate()
+            .filter_map(|(i, r)| r.as_ref().ok().map(|o| (i, o.cost_after)))
+            .filter(|(_, c)| c.is_finite())
+            .collect();
+        order.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let top: Vec<usize> = order.iter().take(opts.full_fit_top).map(|x| x.0).collect();
+        // Full pass: the top candidates jointly with the selected effects.
+        let top_exts: Vec<&dyn Extension> = top.iter().map(|&i| pool[i]).collect();
+        let full = par_map(workers, &top_exts, |wk, e| {
+            let mut a = with_candidate(&selected, *e, true);
+            let out = fit(wk, &w, &mut a, 10, true);
+            if let Ok(o) = &out {
+                simulations.add(o.evaluations);
+            }
+            out.map(|o| (o, a))
+        });
+        for (i, r) in quick.iter().enumerate() {
+            if top.contains(&i) {
+                continue;
+            }
+            if let Ok(o) = r {
+                let k = o.values.len() - 1;
+                candidates.push(Candidate {
+                    effect: pool[i].effect().into(),
+                    target: pool[i].target().into(),
+                    value: o.values[k],
+                    std_error: o.std_errors[k],
+                    cost_before: base_cost,
+                    cost_after: o.cost_after,
+                    criterion: "BIC".into(),
+                    criterion_delta: n as f64 * (o.cost_after / base_cost).ln() + ln_n,
+                    round,
+                    full_fit: false,
+                });
+            }
+        }
+        // Significance of each fully fitted candidate.
+        let mut sig: Vec<(usize, f64)> = Vec::new(); // (index in top, cost)
+        for (t, r) in full.iter().enumerate() {
+            let Ok((o, _)) = r else { continue };
+            let e = top_exts[t];
+            let k = o.values.len() - 1;
+            let null = e.params()[0].null;
+            let delta = n as f64 * (o.cost_after / base_cost).ln() + ln_n;
+            let z = (o.values[k] - null).abs() / o.std_errors[k].max(1e-300);
+            candidates.push(Candidate {
+                effect: e.effect().into(),
+                target: e.target().into(),
+                value: o.values[k],
+                std_error: o.std_errors[k],
+                cost_before: base_cost,
+                cost_after: o.cost_after,
+                criterion: "BIC".into(),
+                criterion_delta: delta,
+                round,
+                full_fit: true,
+            });
+            let rel = 1.0 - o.cost_after / base_cost;
+            if delta < opts.bic_threshold && z > opts.min_z && rel > opts.min_relative_reduction {
+                sig.push((t, o.cost_after));
+            }
+        }
+        let Some(&(best, best_cost)) = sig.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+            break;
+        };
+        let Ok((best_fit, best_active)) = &full[best] else {
+            break;
+        };
+        let kb = best_fit.values.len() - 1;
+        let mut ambiguous_with = Vec::new();
+        for &(t, c) in &sig {
+            if t == best {
+                continue;
+            }
+            let Ok((o, _)) = &full[t] else { continue };
+            let rho = search::correlation(
+                &best_fit.sensitivities[kb],
+                &o.sensitivities[o.values.len() - 1],
+            );
+            if n as f64 * (c / best_cost).ln() < 10.0 && rho.abs() > opts.ambiguity_correlation {
+                ambiguous_with.push(format!("{}/{}", top_exts[t].effect(), top_exts[t].target()));
+            }
+        }
+        // Accept: the joint fit updates the values of the effects already selected.
+        selected = best_active.clone();
+        for s in selected.iter_mut() {
+            s.free = false;
+        }
+        named = selected
+            .iter()
+            .enumerate()
+            .map(|(i, s)| NamedCause {
+                effect: s.ext.effect().into(),
+                target: s.ext.target().into(),
+                value: s.params[0],
+                std_error: best_fit.std_errors.get(i).copied().unwrap_or(f64::NAN),
+                ambiguous_with: named
+                    .get(i)
+                    .map(|c: &NamedCause| c.ambiguous_with.clone())
+                    .unwrap_or_else(|| ambiguous_with.clone()),
+            })
+            .collect();
+        base_cost = best_cost;
+    }
+
+    let sel: Vec<(&dyn Extension, &[f64])> = selected
+        .iter()
+        .map(|a| (a.ext, a.params.as_slice()))
+        .collect();
+    let (_, residuals_after, _) = analyse_replay(&mut workers[0], &case, &sel)?;
+    let validation = match &vcase {
+        Some(v) => {
+            let sigma = weights(v);
+            let (_, before, _) = analyse_replay(&mut workers[0], v, &[])?;
+            let (_, after, _) = analyse_replay(&mut workers[0], v, &sel)?;
+            let wise = |m: &BTreeMap<String, ChannelResidual>| -> f64 {
+                v.outputs
+                    .iter()
+                    .zip(&sigma)
+                    .filter_map(|(c, s)| m.get(c).map(|r| r.ise / (s * s)))
+                    .sum()
+            };
+            let pick = |m: &BTreeMap<String, ChannelResidual>, f: fn(&ChannelResidual) -> f64| {
+                m.iter().map(|(k, r)| (k.clone(), f(r))).collect()
+            };
+            Some(Validation {
+                ise_before: wise(&before),
+                ise_after: wise(&after),
+                fit_percent_before: pick(&before, |r| r.fit_percent),
+                fit_percent_after: pick(&after, |r| r.fit_percent),
+                ise_per_channel_before: pick(&before, |r| r.ise),
+                ise_per_channel_after: pick(&after, |r| r.ise),
+            })
+        }
+        None => None,
+    };
+    Ok(Diagnosis {
+        named_cause: named,
+        candidates,
+        validation,
+        residuals: residuals_before,
+        residuals_after,
+        trim_mismatch,
+        skipped,
+        noise_std: case
+            .outputs
+            .iter()
+            .cloned()
+            .zip(w.sigma.iter().copied())
+            .collect(),
+        n_residuals: n,
+        simulations: simulations.get(),
+        wall_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The selected effects (free or held) plus one candidate at its null values, free.
+fn with_candidate<'e>(
+    selected: &[Active<'e>],
+    e: &'e dyn Extension,
+    free_selected: bool,
+) -> Vec<Active<'e>> {
+    let mut a: Vec<Active<'e>> = selected
+        .iter()
+        .map(|s| Active {
+            free: free_selected,
+            ..s.clone()
+        })
+        .collect();
+    a.push(Active {
+        ext: e,
+        params: e.params().iter().map(|p| p.null).collect(),
+        free: true,
+    });
+    a
+}
+
+#[derive(Default)]
+struct AtomicCounter(std::sync::atomic::AtomicUsize);
+
+impl AtomicCounter {
+    fn add(&self, k: usize) {
+        self.0.fetch_add(k, std::sync::atomic::Ordering::Relaxed);
+    }
+    fn get(&self) -> usize {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}

@@ -1,0 +1,292 @@
+//! Replay: trim the simulation at the measured initial condition and drive it with the measured
+//! surface deflections (as deviations from their initial values), optionally through model extensions.
+
+use std::collections::BTreeMap;
+
+use super::extension::{Extension, Stage};
+use super::DiagnoseError;
+use crate::data::FlightRecord;
+use crate::sim::{
+    FlightPlan, JsbsimSim, LinearSim, SimError, Simulator, SurfaceInput, TrimPoint, TrimState,
+    FT_TO_M, KTS_TO_M_S,
+};
+use serde::Serialize;
+
+/// A simulation that can be replayed: JSBSim or a linear model (no coefficient knobs).
+pub trait ReplaySim: Simulator + Send {
+    /// Names of the aerodynamic coefficient functions that can be scaled.
+    fn coefficient_names(&self) -> Vec<String>;
+    /// Sets the factor on a coefficient function from the next trim on.
+    fn set_coefficient_scale(&mut self, name: &str, factor: f64) -> Result<(), SimError>;
+}
+
+impl ReplaySim for JsbsimSim {
+    fn coefficient_names(&self) -> Vec<String> {
+        self.coefficient_knobs.clone()
+    }
+    fn set_coefficient_scale(&mut self, name: &str, factor: f64) -> Result<(), SimError> {
+        JsbsimSim::set_coefficient_scale(self, name, factor)
+    }
+}
+
+impl ReplaySim for LinearSim {
+    fn coefficient_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn set_coefficient_scale(&mut self, name: &str, _factor: f64) -> Result<(), SimError> {
+        Err(SimError::Usage(format!(
+            "a linear model has no coefficient knob '{name}'"
+        )))
+    }
+}
+
+/// Surface inputs of the CSV schema: (surface name, column).
+pub const INPUTS: [(&str, &str); 4] = [
+    ("elevator", "elevator_rad"),
+    ("aileron", "aileron_rad"),
+    ("rudder", "rudder_rad"),
+    ("throttle", "throttle"),
+];
+
+/// Output columns compared between data and simulation (those present in both).
+/// (`psi_rad` is left out: heading wraps at 2π and drifts without bound.)
+pub const OUTPUTS: [&str; 12] = [
+    "phi_rad",
+    "theta_rad",
+    "p_rad_s",
+    "q_rad_s",
+    "r_rad_s",
+    "alpha_rad",
+    "beta_rad",
+    "airspeed_m_s",
+    "altitude_m",
+    "ax_m_s2",
+    "ay_m_s2",
+    "az_m_s2",
+];
+
+/// A measured record prepared for replay: uniform grid, trim point, input deviations, compared outputs.
+#[derive(Debug, Clone)]
+pub struct ReplayCase {
+    /// The record on a uniform time grid.
+    pub record: FlightRecord,
+    /// Sampling rate, Hz.
+    pub rate_hz: f64,
+    /// Trim point at the measured initial condition.
+    pub point: TrimPoint,
+    /// Measured initial values of inputs and states (mean over the quiet start of the record).
+    pub initial: BTreeMap<String, f64>,
+    /// Measured input deviations from their initial values, one per sample (surface name, values).
+    pub inputs: Vec<(String, Vec<f64>)>,
+    /// Output columns compared.
+    pub outputs: Vec<String>,
+}
+
+/// Model trim versus measured initial condition (a trim mismatch is evidence of a model error).
+#[derive(Debug, Clone, Serialize)]
+pub struct TrimMismatch {
+    /// Quantity: `elevator_rad`, `alpha_rad`, ...
+    pub quantity: String,
+    /// Measured initial value.
+    pub measured: f64,
+    /// Model trim value.
+    pub model: f64,
+}
+
+impl ReplayCase {
+    /// Prepares a record: resamples to a uniform grid if needed, finds the quiet start, builds the trim point.
+    pub fn new(record: &FlightRecord) -> Result<Self, DiagnoseError> {
+        let n = record.len();
+        if n < 50 {
+            return Err(DiagnoseError::TooShort(format!(
+                "{n} samples; replay and identification need at least 50"
+            )));
+        }
+        let t = &record.time_s;
+        let duration = t[n - 1] - t[0];
+        let dt = duration / (n - 1) as f64;
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(DiagnoseError::BadData("time_s does not increase".into()));
+        }
+        let uniform = t.windows(2).all(|w| ((w[1] - w[0]) - dt).abs() < 1e-3 * dt);
+        let rec = if uniform {
+            let mut r = record.clone();
+            r.time_s = (0..n).map(|k| k as f64 * dt).collect();
+            r
+        } else {
+            let grid: Vec<f64> = (0..n).map(|k| t[0] + k as f64 * dt).collect();
+            let mut r = FlightRecord::new((0..n).map(|k| k as f64 * dt).collect());
+            r.metadata = record.metadata.clone();
+            for (name, col) in &record.columns {
+                r.push_column(name, crate::signal::resample_linear(t, col, &grid));
+            }
+            r
+        };
+        for c in ["airspeed_m_s", "altitude_m"] {
+            rec.require(
+                c,
+                "replay trims the model at the measured airspeed and altitude",
+            )
+            .map_err(|e| DiagnoseError::BadData(e.to_string()))?;
+        }
+        let present_inputs: Vec<(&str, &str)> = INPUTS
+            .iter()
+            .copied()
+            .filter(|(_, c)| rec.column(c).is_some())
+            .collect();
+        if present_inputs.is_empty() {
+            return Err(DiagnoseError::BadData(
+                "the data have no surface column (elevator_rad, aileron_rad, rudder_rad, throttle)"
+                    .into(),
+            ));
+        }
+        // Quiet start: until any input moves by more than 1 mrad (0.001 throttle) or 0.5 s pass.
+        let mut quiet = 1;
+        while quiet < n && quiet as f64 * dt < 0.5 {
+            let moved = present_inputs.iter().any(|(_, c)| {
+                let x = rec.column(c).unwrap_or(&[]);
+                (x[quiet] - x[0]).abs() > 1e-3
+            });
+            if moved {
+                break;
+            }
+            quiet += 1;
+        }
+        let mean0 = |x: &[f64]| x[..quiet].iter().sum::<f64>() / quiet as f64;
+        let mut initial = BTreeMap::new();
+        for (name, col) in &rec.columns {
+            initial.insert(name.clone(), mean0(col));
+        }
+        let inputs = present_inputs
+            .iter()
+            .map(|(s, c)| {
+                let x = rec.column(c).unwrap_or(&[]);
+                let x0 = initial[*c];
+                (s.to_string(), x.iter().map(|v| v - x0).collect())
+            })
+            .collect();
+        let outputs = OUTPUTS
+            .iter()
+            .filter(|c| rec.column(c).is_some())
+            .map(|c| c.to_string())
+            .collect();
+        let heading_deg = initial
+            .get("psi_rad")
+            .map(|p| p.to_degrees())
+            .unwrap_or(0.0);
+        let point = TrimPoint {
+            altitude_ft: initial["altitude_m"] / FT_TO_M,
+            speed_kts: initial["airspeed_m_s"] / KTS_TO_M_S,
+            heading_deg: heading_deg.rem_euclid(360.0),
+            gamma_deg: 0.0,
+        };
+        if !(point.speed_kts > 1.0 && point.altitude_ft.is_finite()) {
+            return Err(DiagnoseError::BadData(format!(
+                "initial airspeed {:.2} m/s / altitude {:.1} m cannot be a trim point",
+                initial["airspeed_m_s"], initial["altitude_m"]
+            )));
+        }
+        Ok(ReplayCase {
+            rate_hz: 1.0 / dt,
+            record: rec,
+            point,
+            initial,
+            inputs,
+            outputs,
+        })
+    }
+
+    /// Time step, s.
+    pub fn dt_s(&self) -> f64 {
+        1.0 / self.rate_hz
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.record.len()
+    }
+
+    /// True when the record has no samples.
+    pub fn is_empty(&self) -> bool {
+        self.record.is_empty()
+    }
+
+    /// Measured column.
+    pub fn measured(&self, column: &str) -> &[f64] {
+        self.record.column(column).unwrap_or(&[])
+    }
+
+    /// Compares the model trim with the measured initial condition.
+    pub fn trim_mismatch(&self, trim: &TrimState) -> Vec<TrimMismatch> {
+        let mut out = Vec::new();
+        let mut push = |q: &str, model: f64| {
+            if let Some(m) = self.initial.get(q) {
+                out.push(TrimMismatch {
+                    quantity: q.to_string(),
+                    measured: *m,
+                    model,
+                });
+            }
+        };
+        for (s, c) in INPUTS {
+            if s == "throttle" {
+                push(c, trim.throttle);
+            } else if let Some(v) = trim.surfaces_rad.get(s) {
+                push(c, *v);
+            }
+        }
+        push("alpha_rad", trim.alpha_rad);
+        push("theta_rad", trim.theta_rad);
+        push("phi_rad", trim.phi_rad);
+        push("beta_rad", trim.beta_rad);
+        out
+    }
+}
+
+/// Replays the case on `sim` with extensions (each with its parameter values). Returns the simulated record
+/// (same grid as the measured one) and the model trim.
+pub fn replay(
+    sim: &mut dyn ReplaySim,
+    case: &ReplayCase,
+    extensions: &[(&dyn Extension, &[f64])],
+) -> Result<(FlightRecord, TrimState), SimError> {
+    for name in sim.coefficient_names() {
+        sim.set_coefficient_scale(&name, 1.0)?;
+    }
+    for (e, p) in extensions {
+        if e.stage() == Stage::Model {
+            e.apply_model(p, sim)?;
+        }
+    }
+    let trim = sim.trim(&case.point)?;
+    let n_steps = case.len() - 1;
+    let dt = case.dt_s();
+    let mut inputs = Vec::new();
+    for (surface, dev) in &case.inputs {
+        let mut d = dev.clone();
+        for (e, p) in extensions {
+            if e.stage() == Stage::Input {
+                e.apply_input(p, surface, &mut d, dt);
+            }
+        }
+        // The value set for step k is what the model reads during that step; the record's sample k+1
+        // shows it (sample 0 is the trim state), so step k takes the measured sample k+1.
+        inputs.push(SurfaceInput {
+            surface: surface.clone(),
+            deflection_rad: d[1..].to_vec(),
+        });
+    }
+    let plan = FlightPlan {
+        rate_hz: case.rate_hz,
+        n_steps,
+        inputs,
+    };
+    let mut rec = sim.fly(&plan)?;
+    rec.time_s = case.record.time_s.clone();
+    for (e, p) in extensions {
+        if e.stage() == Stage::Output {
+            e.apply_output(p, &mut rec);
+        }
+    }
+    Ok((rec, trim))
+}

@@ -1,0 +1,345 @@
+//! Fitting extensions by output error with the simulation in the loop, and choosing among them.
+//!
+//! Output error: minimise J(θ) = Σ_c Σ_k (y_c[k] − ŷ_c[k](θ))² / σ_c², with σ_c the measurement-noise
+//! standard deviation of channel c, by Levenberg–Marquardt with finite-difference output sensitivities;
+//! standard errors from the Cramér–Rao bound s² (SᵀS)⁻¹ (Morelli & Klein, Aircraft System Identification,
+//! 2nd ed., §6.2–6.3, eqs. 6.19–6.27). Selection: BIC = n ln(J/n) + k ln n (Schwarz 1978), forward selection.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use super::extension::{Extension, Stage};
+use super::replay::{replay, ReplayCase, ReplaySim};
+use crate::data::FlightRecord;
+use crate::sim::SimError;
+
+/// A simulation worker: one simulator and a cache of its last simulated record.
+pub struct Worker {
+    /// The simulator (one JSBSim process, or a linear model).
+    pub sim: Box<dyn ReplaySim>,
+    cache: Option<(CacheKey, FlightRecord)>,
+}
+
+type CacheKey = (usize, Vec<(String, Vec<u64>)>);
+
+impl Worker {
+    /// Wraps a simulator.
+    pub fn new(sim: Box<dyn ReplaySim>) -> Self {
+        Worker { sim, cache: None }
+    }
+}
+
+/// An extension with its current parameter values; `free` ones are fitted.
+#[derive(Clone)]
+pub struct Active<'e> {
+    /// The extension.
+    pub ext: &'e dyn Extension,
+    /// Parameter values.
+    pub params: Vec<f64>,
+    /// Whether the parameters are fitted.
+    pub free: bool,
+}
+
+/// Channel weights (1/σ_c) of a case.
+pub struct Weighted<'c> {
+    /// The case.
+    pub case: &'c ReplayCase,
+    /// Noise standard deviation per output column (same order as `case.outputs`).
+    pub sigma: Vec<f64>,
+}
+
+impl<'c> Weighted<'c> {
+    /// Number of residual values.
+    pub fn n(&self) -> usize {
+        self.case.len() * self.case.outputs.len()
+    }
+}
+
+fn is_null(e: &dyn Extension, p: &[f64]) -> bool {
+    e.params().iter().zip(p).all(|(s, v)| *v == s.null)
+}
+
+/// Simulates with the active extensions (re-using the worker's last simulation when only sensor extensions
+/// changed) and returns the noise-normalised residual vector, channel-major.
+pub fn residuals(
+    worker: &mut Worker,
+    w: &Weighted,
+    active: &[Active],
+) -> Result<Vec<f64>, SimError> {
+    let key: CacheKey = (
+        w.case as *const ReplayCase as usize,
+        active
+            .iter()
+            .filter(|a| a.ext.stage() != Stage::Output && !is_null(a.ext, &a.params))
+            .map(|a| {
+                (
+                    format!("{}/{}", a.ext.effect(), a.ext.target()),
+                    a.params.iter().map(|v| v.to_bits()).collect(),
+                )
+            })
+            .collect(),
+    );
+    let cached = matches!(&worker.cache, Some((k, _)) if *k == key);
+    if !cached {
+        let sim_exts: Vec<(&dyn Extension, &[f64])> = active
+            .iter()
+            .filter(|a| a.ext.stage() != Stage::Output)
+            .map(|a| (a.ext, a.params.as_slice()))
+            .collect();
+        let (rec, _) = replay(worker.sim.as_mut(), w.case, &sim_exts)?;
+        worker.cache = Some((key, rec));
+    }
+    let mut rec = match &worker.cache {
+        Some((_, r)) => r.clone(),
+        None => return Err(SimError::Protocol("replay cache is empty".into())),
+    };
+    for a in active.iter().filter(|a| a.ext.stage() == Stage::Output) {
+        a.ext.apply_output(&a.params, &mut rec);
+    }
+    let mut r = Vec::with_capacity(w.n());
+    for (c, name) in w.case.outputs.iter().enumerate() {
+        let y = w.case.measured(name);
+        let yhat = rec.column(name).ok_or_else(|| {
+            SimError::Protocol(format!("the simulation does not produce column {name}"))
+        })?;
+        for k in 0..y.len() {
+            let e = (y[k] - yhat[k]) / w.sigma[c];
+            r.push(if e.is_finite() { e } else { 1e6 });
+        }
+    }
+    Ok(r)
+}
+
+fn cost(r: &[f64]) -> f64 {
+    r.iter().map(|v| v * v).sum()
+}
+
+/// Result of an output-error fit.
+#[derive(Debug, Clone)]
+pub struct FitOutcome {
+    /// Cost at the start values.
+    pub cost_before: f64,
+    /// Cost at the fitted values.
+    pub cost_after: f64,
+    /// Fitted values of the free parameters (in order of `active`).
+    pub values: Vec<f64>,
+    /// Cramér–Rao standard errors of the free parameters.
+    pub std_errors: Vec<f64>,
+    /// Output sensitivity column (∂r/∂θ) of each free parameter at the fitted values.
+    pub sensitivities: Vec<Vec<f64>>,
+    /// Simulations run.
+    pub evaluations: usize,
+}
+
+/// Solves the small symmetric system A x = b by Gaussian elimination with partial pivoting.
+fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
+    for i in 0..n {
+        let p = (i..n).max_by(|&x, &y| a[x][i].abs().total_cmp(&a[y][i].abs()))?;
+        if a[p][i].abs() < 1e-300 {
+            return None;
+        }
+        a.swap(i, p);
+        b.swap(i, p);
+        for j in i + 1..n {
+            let f = a[j][i] / a[i][i];
+            for k in i..n {
+                a[j][k] -= f * a[i][k];
+            }
+            b[j] -= f * b[i];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for i in (0..n).rev() {
+        let s: f64 = (i + 1..n).map(|k| a[i][k] * x[k]).sum();
+        x[i] = (b[i] - s) / a[i][i];
+    }
+    Some(x)
+}
+
+fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+    let n = a.len();
+    let mut cols = Vec::new();
+    for j in 0..n {
+        let mut e = vec![0.0; n];
+        e[j] = 1.0;
+        cols.push(solve(a.to_vec(), e)?);
+    }
+    Some(
+        (0..n)
+            .map(|i| (0..n).map(|j| cols[j][i]).collect())
+            .collect(),
+    )
+}
+
+/// Levenberg–Marquardt output-error fit of the free parameters of `active` (updated in place).
+pub fn fit(
+    worker: &mut Worker,
+    w: &Weighted,
+    active: &mut [Active],
+    max_iter: usize,
+    final_jacobian: bool,
+) -> Result<FitOutcome, SimError> {
+    // Index of every free scalar parameter: (active index, parameter index).
+    let free: Vec<(usize, usize)> = active
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| a.free)
+        .flat_map(|(i, a)| (0..a.params.len()).map(move |j| (i, j)))
+        .collect();
+    let mut evaluations = 1;
+    let mut r = residuals(worker, w, active)?;
+    let cost_before = cost(&r);
+    let mut c = cost_before;
+    let mut lambda = 1e-3;
+    let jacobian = |worker: &mut Worker,
+                    active: &mut [Active],
+                    r: &[f64],
+                    evaluations: &mut usize|
+     -> Result<Vec<Vec<f64>>, SimError> {
+        let mut cols = Vec::new();
+        for &(i, j) in &free {
+            let spec = active[i].ext.params()[j];
+            let p0 = active[i].params[j];
+            let h = if p0 + spec.fd_step <= spec.max {
+                spec.fd_step
+            } else {
+                -spec.fd_step
+            };
+            active[i].params[j] = p0 + h;
+            let rh = residuals(worker, w, active);
+            active[i].params[j] = p0;
+            *evaluations += 1;
+            let rh = rh?;
+            cols.push(rh.iter().zip(r).map(|(a, b)| (a - b) / h).collect());
+        }
+        Ok(cols)
+    };
+    let normal = |cols: &[Vec<f64>], r: &[f64]| {
+        let m = cols.len();
+        let mut a = vec![vec![0.0; m]; m];
+        let mut g = vec![0.0; m];
+        for i in 0..m {
+            for j in i..m {
+                let v: f64 = cols[i].iter().zip(&cols[j]).map(|(x, y)| x * y).sum();
+                a[i][j] = v;
+                a[j][i] = v;
+            }
+            g[i] = cols[i].iter().zip(r).map(|(x, y)| x * y).sum();
+        }
+        (a, g)
+    };
+    let mut last_cols: Vec<Vec<f64>> = Vec::new();
+    for _ in 0..max_iter {
+        let cols = jacobian(worker, active, &r, &mut evaluations)?;
+        last_cols = cols.clone();
+        let (a, g) = normal(&cols, &r);
+        if a.iter().enumerate().all(|(i, row)| row[i] <= 0.0) {
+            break;
+        }
+        let mut accepted = false;
+        for _ in 0..5 {
+            let mut damped = a.clone();
+            for (i, row) in damped.iter_mut().enumerate() {
+                row[i] += lambda * a[i][i].max(1e-12);
+            }
+            let Some(step) = solve(damped, g.iter().map(|v| -v).collect()) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let old: Vec<f64> = free.iter().map(|&(i, j)| active[i].params[j]).collect();
+            for (k, &(i, j)) in free.iter().enumerate() {
+                let spec = active[i].ext.params()[j];
+                active[i].params[j] = (old[k] + step[k]).clamp(spec.min, spec.max);
+            }
+            evaluations += 1;
+            let r_new = residuals(worker, w, active)?;
+            let c_new = cost(&r_new);
+            if c_new < c {
+                accepted = true;
+                let gain = (c - c_new) / c.max(1e-300);
+                r = r_new;
+                c = c_new;
+                lambda = (lambda / 5.0).max(1e-6);
+                if gain < 1e-5 {
+                    lambda = -1.0; // converged marker
+                }
+                break;
+            }
+            for (k, &(i, j)) in free.iter().enumerate() {
+                active[i].params[j] = old[k];
+            }
+            lambda *= 8.0;
+        }
+        if !accepted || lambda < 0.0 {
+            break;
+        }
+    }
+    // Cramér–Rao bound at the fitted values with the residual variance estimate s² = J / (n − p).
+    // (The cheap pass uses the last iteration's sensitivities instead of new ones.)
+    let cols = if final_jacobian || last_cols.is_empty() {
+        jacobian(worker, active, &r, &mut evaluations)?
+    } else {
+        last_cols
+    };
+    let (a, _) = normal(&cols, &r);
+    let n = r.len() as f64;
+    let s2 = c / (n - free.len() as f64).max(1.0);
+    let std_errors = match inverse(&a) {
+        Some(inv) => (0..free.len())
+            .map(|i| (s2 * inv[i][i]).max(0.0).sqrt())
+            .collect(),
+        None => vec![f64::INFINITY; free.len()],
+    };
+    // Restore the cache to the fitted values (the last simulation was a perturbed one).
+    Ok(FitOutcome {
+        cost_before,
+        cost_after: c,
+        values: free.iter().map(|&(i, j)| active[i].params[j]).collect(),
+        std_errors,
+        sensitivities: cols,
+        evaluations,
+    })
+}
+
+/// Runs `f` over `items` on the workers in parallel (one thread per worker), results in item order.
+pub fn par_map<T: Sync, R: Send>(
+    workers: &mut [Worker],
+    items: &[T],
+    f: impl Fn(&mut Worker, &T) -> R + Sync,
+) -> Vec<R> {
+    let next = AtomicUsize::new(0);
+    let out: Mutex<Vec<Option<R>>> = Mutex::new((0..items.len()).map(|_| None).collect());
+    std::thread::scope(|s| {
+        for worker in workers.iter_mut() {
+            let (next, out, f) = (&next, &out, &f);
+            s.spawn(move || loop {
+                let i = next.fetch_add(1, Ordering::SeqCst);
+                if i >= items.len() {
+                    break;
+                }
+                let r = f(worker, &items[i]);
+                if let Ok(mut o) = out.lock() {
+                    o[i] = Some(r);
+                }
+            });
+        }
+    });
+    out.into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .map(|r| r.expect("every item is processed by one worker"))
+        .collect()
+}
+
+/// Sample correlation of two sensitivity vectors (|ρ| near 1: the data cannot tell the parameters apart).
+pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    let ab: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+    let aa: f64 = a.iter().map(|x| x * x).sum();
+    let bb: f64 = b.iter().map(|x| x * x).sum();
+    if aa <= 0.0 || bb <= 0.0 {
+        0.0
+    } else {
+        ab / (aa * bb).sqrt()
+    }
+}
