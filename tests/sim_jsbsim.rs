@@ -452,7 +452,7 @@ fn c172x_truth_derivatives_are_the_models_own_constants() {
     let mut sim = start("c172x");
     sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
     let truth = sim.aero_truth().unwrap();
-    let d = &truth.derivatives;
+    let d = &truth.derivatives_aero_reference;
     for (name, want) in [
         ("Cm_alpha", -1.8),
         ("Cm_q", -12.4),
@@ -480,7 +480,14 @@ fn c172x_truth_derivatives_are_the_models_own_constants() {
     sim.set_coefficient_scale("Clp", 1.3).unwrap();
     sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
     let scaled = sim.aero_truth().unwrap();
-    assert!((scaled.derivatives["Cl_p"] / (-0.47 * 1.3) - 1.0).abs() < 1e-9);
-    assert!((scaled.derivatives["Cm_q"] / -12.4 - 1.0).abs() < 1e-9);
+    assert!((scaled.derivatives_aero_reference["Cl_p"] / (-0.47 * 1.3) - 1.0).abs() < 1e-9);
+    assert!((scaled.derivatives_aero_reference["Cm_q"] / -12.4 - 1.0).abs() < 1e-9);
+    // About the CG (JSBSim's own transferred body moments) the c172x is less stable than the XML's -1.8 about
+    // its aero reference point: the reference point sits ahead of the CG. Value measured with this probe: -1.345.
+    let cm_alpha_cg = truth.derivatives["Cm_alpha"];
+    assert!(
+        cm_alpha_cg > -1.8 && cm_alpha_cg < -1.0,
+        "Cm_alpha about the CG {cm_alpha_cg}"
+    );
     assert!(sim.set_coefficient_scale("NoSuchCoefficient", 1.0).is_err());
 }

@@ -5,8 +5,8 @@
 
 use clap::{Parser, Subcommand};
 
-pub mod check;
 pub mod campaign;
+pub mod check;
 pub mod common;
 pub mod compare;
 pub mod demo;
@@ -14,9 +14,9 @@ pub mod diagnose;
 pub mod fly;
 pub mod ingest;
 pub mod linearize;
-pub mod segments;
 pub mod regress;
 pub mod replay;
+pub mod segments;
 pub mod trim;
 
 /// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.

@@ -382,8 +382,11 @@ const SLUG_FT3_TO_KG_M3: f64 = 515.378_818;
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct AeroTruth {
     /// Derivatives by the DESIGN.md section 7 names (`CL_alpha`, `Cm_q`, `Cn_beta`, …), per rad; rate derivatives
-    /// nondimensionalised with c̄/2V (pitch) and b/2V (roll, yaw).
+    /// nondimensionalised with c̄/2V (pitch) and b/2V (roll, yaw); moments about the CG, in the axes the model
+    /// declares (c172x: lift/drag/side in wind axes, moments in body axes).
     pub derivatives: BTreeMap<String, f64>,
+    /// The same derivatives about the model's aero reference point: the values written in its XML.
+    pub derivatives_aero_reference: BTreeMap<String, f64>,
     /// Coefficients at trim: `CL`, `CD`, `CY`, `Cl`, `Cm`, `Cn` (about the model's aero reference point).
     pub coefficients: BTreeMap<String, f64>,
     /// True airspeed, m/s.
@@ -440,8 +443,13 @@ impl JsbsimSim {
             "metrics/bw-ft",
             "metrics/cbarw-ft",
         ];
+        let extra = [
+            "moments/m-aero-lbsft",
+            "moments/l-aero-lbsft",
+            "moments/n-aero-lbsft",
+        ];
         let resp = self.bridge.request(
-            json!({"cmd": "probe", "perturb": perturb, "condition": condition}),
+            json!({"cmd": "probe", "perturb": perturb, "condition": condition, "extra": extra}),
             &[],
         )?;
         let h = &resp.header;
@@ -470,9 +478,24 @@ impl JsbsimSim {
             let step = p["h"].as_f64().unwrap_or(1.0);
             (plus - minus) / (2.0 * step) / norm(axis)
         };
+        let slope_of = |var: &str, prop: &str, n: f64| -> f64 {
+            let p = &h["perturbed"][var];
+            let plus = p["plus"][prop].as_f64().unwrap_or(0.0);
+            let minus = p["minus"][prop].as_f64().unwrap_or(0.0);
+            (plus - minus) / (2.0 * p["h"].as_f64().unwrap_or(1.0)) / n
+        };
         let pitch_rate = 2.0 * v_fps / cbar_ft;
         let lat_rate = 2.0 * v_fps / b_ft;
+        // Moments about the CG (what the dynamics see) are JSBSim's own body-axis aero moments, which include the
+        // transfer of the aero forces from the aero reference point to the CG.
+        let cg_axis = |axis: &str| match axis {
+            "PITCH" => Some("moments/m-aero-lbsft"),
+            "ROLL" => Some("moments/l-aero-lbsft"),
+            "YAW" => Some("moments/n-aero-lbsft"),
+            _ => None,
+        };
         let mut d = BTreeMap::new();
+        let mut d_arp = BTreeMap::new();
         for (name, var, axis, scale) in [
             ("CL_alpha", "alpha", "LIFT", 1.0),
             ("CL_q", "q", "LIFT", pitch_rate),
@@ -498,7 +521,12 @@ impl JsbsimSim {
             ("Cn_da", "surface:aileron", "YAW", 1.0),
             ("Cn_dr", "surface:rudder", "YAW", 1.0),
         ] {
-            d.insert(name.to_string(), slope(var, axis) * scale);
+            d_arp.insert(name.to_string(), slope(var, axis) * scale);
+            let about_cg = match cg_axis(axis) {
+                Some(prop) => slope_of(var, prop, norm(axis)),
+                None => slope(var, axis),
+            };
+            d.insert(name.to_string(), about_cg * scale);
         }
         let cl = coef("LIFT");
         let cd = coef("DRAG");
@@ -508,8 +536,10 @@ impl JsbsimSim {
         } else {
             f64::NAN
         };
-        d.insert("CD_CL2".into(), k);
-        d.insert("CD_0".into(), cd - k * cl * cl);
+        for map in [&mut d, &mut d_arp] {
+            map.insert("CD_CL2".into(), k);
+            map.insert("CD_0".into(), cd - k * cl * cl);
+        }
         let coefficients = [
             ("CL", "LIFT"),
             ("CD", "DRAG"),
@@ -523,6 +553,7 @@ impl JsbsimSim {
         .collect();
         Ok(AeroTruth {
             derivatives: d,
+            derivatives_aero_reference: d_arp,
             coefficients,
             airspeed_m_s: v_fps * FT_TO_M,
             qbar_pa: qbar_psf * PSF_TO_PA,
