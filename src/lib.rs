@@ -8,6 +8,7 @@ pub mod cli;
 pub mod data;
 pub mod ident;
 pub mod lti;
+pub mod paper;
 pub mod report;
 pub mod signal;
 pub mod sim;

@@ -8,7 +8,9 @@ use clap::{Parser, Subcommand};
 pub mod common;
 pub mod demo;
 pub mod fly;
+pub mod identify;
 pub mod linearize;
+pub mod paper;
 pub mod trim;
 
 /// flightid — aircraft system identification coupled to the JSBSim flight dynamics model.
@@ -30,6 +32,10 @@ pub enum Command {
     Linearize(linearize::LinearizeCmd),
     /// Fly a maneuver (doublet, 3211, multisine, chirp) from trim and write the flight-data CSV.
     Fly(fly::FlyCmd),
+    /// Identify a transfer function from an input column to an output column of a flight-data CSV.
+    Identify(identify::IdentifyCmd),
+    /// Reproduce Section 4 of Sahin & Kalyon 2021 (coefficients, ISE table, response overlays).
+    Paper(paper::PaperCmd),
 }
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
@@ -51,6 +57,8 @@ pub fn main() -> i32 {
         Command::Trim(a) => trim::run(a),
         Command::Linearize(a) => linearize::run(a),
         Command::Fly(a) => fly::run(a),
+        Command::Identify(a) => identify::run(a),
+        Command::Paper(a) => paper::run(a),
     };
     match result {
         Ok(()) => 0,
