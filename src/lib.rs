@@ -12,6 +12,7 @@ pub mod data;
 pub mod diagnose;
 pub mod ident;
 pub mod lti;
+pub mod paper;
 pub mod report;
 pub mod signal;
 pub mod sim;

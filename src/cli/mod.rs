@@ -12,8 +12,11 @@ pub mod compare;
 pub mod demo;
 pub mod diagnose;
 pub mod fly;
+pub mod identify;
 pub mod ingest;
 pub mod linearize;
+pub mod linearize;
+pub mod paper;
 pub mod regress;
 pub mod replay;
 pub mod segments;
@@ -54,6 +57,10 @@ pub enum Command {
     Diagnose(diagnose::DiagnoseCmd),
     /// Replay measured data on the simulation (optionally with fitted extensions) and compare the outputs.
     Replay(replay::ReplayCmd),
+    /// Identify a transfer function from an input column to an output column of a flight-data CSV.
+    Identify(identify::IdentifyCmd),
+    /// Reproduce Section 4 of Sahin & Kalyon 2021 (coefficients, ISE table, response overlays).
+    Paper(paper::PaperCmd),
 }
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
@@ -83,6 +90,8 @@ pub fn main() -> i32 {
         Command::Regress(a) => regress::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Replay(a) => replay::run(a),
+        Command::Identify(a) => identify::run(a),
+        Command::Paper(a) => paper::run(a),
     };
     match result {
         Ok(()) => 0,

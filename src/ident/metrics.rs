@@ -159,7 +159,8 @@ pub(crate) fn build_result(
     u_offset: f64,
     y_offset: f64,
 ) -> IdentResult {
-    let y_sim = simulate(&model.num, &model.den, u, dt_s, model.delay_s);
+    let mut y_sim = simulate(&model.num, &model.den, u, dt_s, model.delay_s);
+    y_sim.iter_mut().for_each(|v| *v += model.y_bias);
     let poles = roots(&model.den);
     let zeros = roots(&model.num);
     // ls/iv carry the ARX (equation-error) noise model, whose one-step predictor is the ARX
@@ -212,6 +213,6 @@ pub(crate) fn build_result(
         n_samples: y.len(),
         dt_s,
         u_offset,
-        y_offset,
+        y_offset: y_offset + model.y_bias,
     }
 }

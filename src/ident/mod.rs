@@ -212,7 +212,8 @@ pub struct IdentResult {
     pub dt_s: f64,
     /// Input trim removed before identification (input units).
     pub u_offset: f64,
-    /// Output trim removed before identification (output units).
+    /// Output trim removed before identification (output units); for `oe` it includes the
+    /// constant output offset estimated beside the model.
     pub y_offset: f64,
 }
 
@@ -223,6 +224,8 @@ pub(crate) struct ContinuousModel {
     pub num: Vec<f64>,
     pub den: Vec<f64>,
     pub delay_s: f64,
+    /// Constant output offset estimated beside the model (added to the simulated output).
+    pub y_bias: f64,
     pub cov: Option<Vec<f64>>,
 }
 
@@ -233,6 +236,7 @@ impl ContinuousModel {
             num,
             den,
             delay_s,
+            y_bias: 0.0,
             cov: None,
         }
     }
@@ -315,11 +319,14 @@ pub fn identify(
     let u: Vec<f64> = u.iter().map(|x| x - u_offset).collect();
     let y: Vec<f64> = y.iter().map(|x| x - y_offset).collect();
     let (n, m) = (opts.poles, opts.zeros);
-    let model = if opts.estimate_delay {
+    let mut model = if opts.estimate_delay {
         delay::with_delay_search(&u, &y, dt_s, opts)?
     } else {
         estimate(&u, &y, dt_s, opts.method, n, m, 0.0)?
     };
+    if opts.method == Method::Srivc && model.cov.is_none() {
+        model.cov = oe::covariance(&u, &y, dt_s, &model);
+    }
     Ok(metrics::build_result(
         opts.method,
         model,

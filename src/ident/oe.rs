@@ -147,7 +147,23 @@ fn normal(s: &[f64], r: &[f64], p: usize) -> (Vec<f64>, Vec<f64>) {
     (h, g)
 }
 
+/// Appends a column of ones (the sensitivity of the output offset `c`) to an N × p matrix.
+fn with_offset_column(s: &[f64], p: usize) -> Vec<f64> {
+    let mut out = Vec::with_capacity(s.len() / p * (p + 1));
+    for row in s.chunks_exact(p) {
+        out.extend_from_slice(row);
+        out.push(1.0);
+    }
+    out
+}
+
 /// Output-error estimate from `start` (usually SRIVC); `with_delay` adds τ as a parameter.
+///
+/// A constant output offset `c` (ŷ = B/A·u + c) is always estimated beside the model: the trim
+/// removed by [`super::identify`] is the mean of the few samples before the input moves, and its
+/// noise, left unmodelled, biases the slow poles (phugoid, spiral) by many standard errors — on
+/// the paper's φ/δa with 1 % noise the spiral landed up to 20σ away. The returned covariance is
+/// the marginal block of `[num…, a…, (τ)]` from the full covariance including `c`.
 pub(crate) fn oe(
     u: &[f64],
     y: &[f64],
@@ -160,9 +176,16 @@ pub(crate) fn oe(
     let mut theta: Vec<f64> = start.num.clone();
     theta.extend_from_slice(&start.den[1..]);
     let mut delay_s = start.delay_s;
+    let mut c = start.y_bias;
     let np = m + 1 + n;
     let p = np + usize::from(with_delay);
-    let mut cost = sse(y, &sim(&theta, m, u, dt_s, delay_s));
+    let pf = p + 1;
+    let sim_c = |theta: &[f64], delay_s: f64, c: f64| {
+        let mut v = sim(theta, m, u, dt_s, delay_s);
+        v.iter_mut().for_each(|x| *x += c);
+        v
+    };
+    let mut cost = sse(y, &sim_c(&theta, delay_s, c));
     if !cost.is_finite() {
         return Err(IdentError::Failed {
             method: "oe".into(),
@@ -171,16 +194,16 @@ pub(crate) fn oe(
     }
     let mut mu = 1e-3;
     for _ in 0..MAX_ITER {
-        let s = sensitivities(&theta, m, u, dt_s, delay_s, with_delay);
-        let y_hat = sim(&theta, m, u, dt_s, delay_s);
+        let s = with_offset_column(&sensitivities(&theta, m, u, dt_s, delay_s, with_delay), p);
+        let y_hat = sim_c(&theta, delay_s, c);
         let r: Vec<f64> = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
-        let (h, g) = normal(&s, &r, p);
+        let (h, g) = normal(&s, &r, pf);
         let mut accepted = false;
         let mut last_gain = 0.0;
         for _ in 0..12 {
             let mut hm = h.clone();
-            for a in 0..p {
-                hm[a * p + a] += mu * h[a * p + a].max(1e-300);
+            for a in 0..pf {
+                hm[a * pf + a] += mu * h[a * pf + a].max(1e-300);
             }
             let Some(delta) = solve_square(&hm, &g) else {
                 mu *= 10.0;
@@ -192,12 +215,14 @@ pub(crate) fn oe(
             } else {
                 delay_s
             };
-            let c = sse(y, &sim(&trial[..np], m, u, dt_s, trial_delay));
-            if c.is_finite() && c < cost {
-                last_gain = (cost - c) / cost;
+            let trial_c = c + delta[p];
+            let cost_trial = sse(y, &sim_c(&trial[..np], trial_delay, trial_c));
+            if cost_trial.is_finite() && cost_trial < cost {
+                last_gain = (cost - cost_trial) / cost;
                 theta = trial[..np].to_vec();
                 delay_s = trial_delay;
-                cost = c;
+                c = trial_c;
+                cost = cost_trial;
                 mu = (mu / 10.0).max(1e-12);
                 accepted = true;
                 break;
@@ -209,18 +234,58 @@ pub(crate) fn oe(
         }
     }
     // covariance at the optimum, from central-difference sensitivities of the exact simulation
-    let s = fd_sensitivities(&theta, m, u, dt_s, delay_s, with_delay);
-    let y_hat = sim(&theta, m, u, dt_s, delay_s);
+    let s = with_offset_column(
+        &fd_sensitivities(&theta, m, u, dt_s, delay_s, with_delay),
+        p,
+    );
+    let y_hat = sim_c(&theta, delay_s, c);
     let r: Vec<f64> = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
-    let (mmat, _) = normal(&s, &r, p);
-    let cov = inverse(&mmat, p).map(|minv| coloured_covariance(&s, &r, &minv, p));
+    let (mmat, _) = normal(&s, &r, pf);
+    let cov = inverse(&mmat, pf).map(|minv| {
+        let full = coloured_covariance(&s, &r, &minv, pf);
+        (0..p * p).map(|k| full[(k / p) * pf + k % p]).collect()
+    });
     let mut den = vec![1.0];
     den.extend_from_slice(&theta[m + 1..]);
     Ok(ContinuousModel {
         num: theta[..=m].to_vec(),
         den,
         delay_s,
+        y_bias: c,
         cov,
+    })
+}
+
+/// Parameter covariance of a given model (e.g. SRIVC's estimate) by the same rule as [`oe`]:
+/// coloured-residual Cramér–Rao bound from exact sensitivities, output offset included and
+/// marginalised. At convergence SRIVC's filtered instruments are these sensitivities, so this is
+/// Young's SRIVC covariance `σ² [Σ ζ̂_f ζ̂_fᵀ]⁻¹` (Young 2011, *Recursive Estimation and
+/// Time-Series Analysis*, §8.3) with the coloured-residual correction.
+pub(crate) fn covariance(
+    u: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    model: &ContinuousModel,
+) -> Option<Vec<f64>> {
+    let m = model.num.len() - 1;
+    let mut theta = model.num.clone();
+    theta.extend_from_slice(&model.den[1..]);
+    let p = theta.len();
+    let pf = p + 1;
+    let s = with_offset_column(
+        &fd_sensitivities(&theta, m, u, dt_s, model.delay_s, false),
+        p,
+    );
+    let y_hat = sim(&theta, m, u, dt_s, model.delay_s);
+    let r: Vec<f64> = y
+        .iter()
+        .zip(&y_hat)
+        .map(|(a, b)| a - b - model.y_bias)
+        .collect();
+    let (mmat, _) = normal(&s, &r, pf);
+    inverse(&mmat, pf).map(|minv| {
+        let full = coloured_covariance(&s, &r, &minv, pf);
+        (0..p * p).map(|k| full[(k / p) * pf + k % p]).collect()
     })
 }
 
