@@ -15,7 +15,6 @@ pub mod fly;
 pub mod identify;
 pub mod ingest;
 pub mod linearize;
-pub mod linearize;
 pub mod paper;
 pub mod regress;
 pub mod replay;
