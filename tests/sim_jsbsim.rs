@@ -340,7 +340,7 @@ fn killed_bridge_mid_run_is_an_error_and_leaves_no_csv() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("long.csv");
     // A long record (2 hours of flight) so the kill lands while JSBSim is flying.
-    let mut child = flightid()
+    let child = flightid()
         .args([
             "fly",
             "--aircraft",
