@@ -145,6 +145,9 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
             })
         }
     };
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
     if args.json.as_deref() != Some("-") {
         print_result(args, &in_col, &r);
     }

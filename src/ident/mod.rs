@@ -215,6 +215,10 @@ pub struct IdentResult {
     /// Output trim removed before identification (output units); for `oe` it includes the
     /// constant output offset estimated beside the model.
     pub y_offset: f64,
+    /// What the user should know about this estimate (e.g. an estimator that fell back to its
+    /// starting model); empty when all went as designed.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 /// A continuous model inside `ident`: monic `den`, `num` highest power first, optional full
@@ -227,6 +231,8 @@ pub(crate) struct ContinuousModel {
     /// Constant output offset estimated beside the model (added to the simulated output).
     pub y_bias: f64,
     pub cov: Option<Vec<f64>>,
+    /// Notes for [`IdentResult::warnings`].
+    pub warnings: Vec<String>,
 }
 
 impl ContinuousModel {
@@ -238,6 +244,7 @@ impl ContinuousModel {
             delay_s,
             y_bias: 0.0,
             cov: None,
+            warnings: Vec::new(),
         }
     }
 }

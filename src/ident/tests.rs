@@ -175,13 +175,7 @@ fn with_one_percent_noise_ls_fails_while_srivc_iv_and_oe_hold_the_dominant_poles
                 r.fit_sim_percent
             );
         }
-        // iv (discrete, 100 Hz) holds θ/δe only; on the φ TFs it currently fails (see report)
-        let methods: &[Method] = if i == 0 {
-            &[Method::Srivc, Method::Iv, Method::Oe]
-        } else {
-            &[Method::Srivc, Method::Oe]
-        };
-        for &method in methods {
+        for method in [Method::Srivc, Method::Iv, Method::Oe] {
             let r = identify(&u, &y, 0.01, &opts(method)).unwrap();
             let err = dominant_pole_error(&tf.1, &r.poles);
             eprintln!(
