@@ -82,8 +82,11 @@ pub fn case_path(out: &Path, id: &str) -> PathBuf {
     out.join("cases").join(format!("{id}.json"))
 }
 
+/// What makes a process reusable for a case: the aircraft, its coefficient scales and pre-trim properties.
+type SimKey = (String, Vec<(String, String)>);
+
 struct Worker {
-    key: Option<(String, BTreeMap<String, String>)>,
+    key: Option<SimKey>,
     sim: Option<JsbsimSim>,
 }
 
@@ -93,6 +96,7 @@ impl Worker {
             case.aircraft.clone(),
             case.coefficient_scales
                 .iter()
+                .chain(&case.properties)
                 .map(|(k, v)| (k.clone(), format!("{v:e}")))
                 .collect(),
         );
@@ -103,6 +107,10 @@ impl Worker {
             let mut sim = JsbsimSim::start(&cfg, rate_hz).map_err(|e| e.to_string())?;
             for (name, factor) in &case.coefficient_scales {
                 sim.set_coefficient_scale(name, *factor)
+                    .map_err(|e| e.to_string())?;
+            }
+            for (property, value) in &case.properties {
+                sim.set_pre_trim_property(property, *value)
                     .map_err(|e| e.to_string())?;
             }
             self.sim = Some(sim);

@@ -123,6 +123,19 @@ impl JsbsimSim {
         Ok(())
     }
 
+    /// Sets a JSBSim property before every trim, after the models are reset (a mass/CG variant such as
+    /// `inertia/pointmass-weight-lbs[4]` or `propulsion/tank[0]/contents-lbs`). Unknown properties are refused.
+    pub fn set_pre_trim_property(&mut self, property: &str, value: f64) -> Result<(), SimError> {
+        if !value.is_finite() {
+            return Err(SimError::Usage(format!(
+                "property '{property}': value {value} is not finite"
+            )));
+        }
+        self.get_properties(&[property])?;
+        self.knob_values.insert(property.to_string(), value);
+        Ok(())
+    }
+
     /// Reads arbitrary JSBSim properties (current state).
     pub fn get_properties(&mut self, names: &[&str]) -> Result<BTreeMap<String, f64>, SimError> {
         let resp = self
