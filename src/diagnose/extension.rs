@@ -155,16 +155,13 @@ impl Extension for ActuatorLag {
         if surface != self.0 || p[0] <= 0.0 {
             return;
         }
-        // τ ẋ = δ − x with δ linear between samples (first-order-hold discretisation,
-        // Franklin, Powell & Workman, Digital Control of Dynamic Systems, §6.3.2).
+        // τ ẋ = δ − x, discretised exactly for the input the simulation applies: sample k is held over the
+        // step that ends at it (zero-order hold; Franklin, Powell & Workman, Digital Control of Dynamic
+        // Systems, §6.3.1): x_k = a x_{k−1} + (1 − a) δ_k, a = e^{−Δt/τ}.
         let a = (-dt_s / p[0]).exp();
-        let b = 1.0 - p[0] / dt_s * (1.0 - a); // weight of the newer sample
         let mut x = 0.0;
-        let mut prev = 0.0;
         for v in dev.iter_mut() {
-            let u = *v;
-            x = a * x + (1.0 - a) * prev + b * (u - prev);
-            prev = u;
+            x = a * x + (1.0 - a) * *v;
             *v = x;
         }
     }

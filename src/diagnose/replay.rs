@@ -155,7 +155,13 @@ impl ReplayCase {
         let mean0 = |x: &[f64]| x[..quiet].iter().sum::<f64>() / quiet as f64;
         let mut initial = BTreeMap::new();
         for (name, col) in &rec.columns {
-            initial.insert(name.clone(), mean0(col));
+            // Heading wraps at 2π: an arithmetic mean of samples on both sides of north points south.
+            let v = if name == "psi_rad" {
+                circular_mean(&col[..quiet])
+            } else {
+                mean0(col)
+            };
+            initial.insert(name.clone(), v);
         }
         let inputs = present_inputs
             .iter()
@@ -241,6 +247,14 @@ impl ReplayCase {
         push("beta_rad", trim.beta_rad);
         out
     }
+}
+
+/// Mean direction of angles, atan2(Σ sin θ, Σ cos θ) (Mardia & Jupp, Directional Statistics, §2.2.1), rad.
+pub fn circular_mean(angles_rad: &[f64]) -> f64 {
+    let (s, c) = angles_rad
+        .iter()
+        .fold((0.0, 0.0), |(s, c), a| (s + a.sin(), c + a.cos()));
+    s.atan2(c)
 }
 
 /// Replays the case on `sim` with extensions (each with its parameter values). Returns the simulated record
