@@ -455,6 +455,13 @@ impl JsbsimSim {
             "metrics/Sw-sqft",
             "metrics/bw-ft",
             "metrics/cbarw-ft",
+            "aero/beta-rad",
+            "metrics/aero-rp-x-in",
+            "metrics/aero-rp-y-in",
+            "metrics/aero-rp-z-in",
+            "inertia/cg-x-in",
+            "inertia/cg-y-in",
+            "inertia/cg-z-in",
         ];
         let extra = [
             "moments/m-aero-lbsft",
@@ -507,6 +514,38 @@ impl JsbsimSim {
             "YAW" => Some("moments/n-aero-lbsft"),
             _ => None,
         };
+        // Force turn: the probe changes what the coefficient functions read, but JSBSim rotates the wind-axis
+        // forces into body axes with the *unperturbed* α and β, so `moments/*-aero-lbsft` miss the moment of
+        // the force vector turning with α (β) about the CG. In flight the lift vector turns with α; with the
+        // c172x reference point ~2 ft above the CG that is worth −0.19 in Cm_α (−1.345 without, −1.535 with,
+        // the value `scripts/oracle_aero.py` gets from run_ic states). Add r × (∂T_w2b/∂x) F_w.
+        let arm_ft = [
+            -(c("metrics/aero-rp-x-in") - c("inertia/cg-x-in")) / 12.0,
+            (c("metrics/aero-rp-y-in") - c("inertia/cg-y-in")) / 12.0,
+            -(c("metrics/aero-rp-z-in") - c("inertia/cg-z-in")) / 12.0,
+        ];
+        let force_wind_lbs = [
+            -base.get("DRAG").copied().unwrap_or(0.0),
+            base.get("SIDE").copied().unwrap_or(0.0),
+            -base.get("LIFT").copied().unwrap_or(0.0),
+        ];
+        let (alpha0, beta0) = (trim.alpha_rad, c("aero/beta-rad"));
+        let force_turn = |var: &str, axis: &str| -> f64 {
+            let step = 1e-6;
+            let moment = |a: f64, b: f64| cross(arm_ft, wind_to_body(a, b, force_wind_lbs));
+            let (plus, minus) = match var {
+                "alpha" => (moment(alpha0 + step, beta0), moment(alpha0 - step, beta0)),
+                "beta" => (moment(alpha0, beta0 + step), moment(alpha0, beta0 - step)),
+                _ => return 0.0,
+            };
+            let k = match axis {
+                "ROLL" => 0,
+                "PITCH" => 1,
+                "YAW" => 2,
+                _ => return 0.0,
+            };
+            (plus[k] - minus[k]) / (2.0 * step) / norm(axis)
+        };
         let mut d = BTreeMap::new();
         let mut d_arp = BTreeMap::new();
         for (name, var, axis, scale) in [
@@ -536,7 +575,7 @@ impl JsbsimSim {
         ] {
             d_arp.insert(name.to_string(), slope(var, axis) * scale);
             let about_cg = match cg_axis(axis) {
-                Some(prop) => slope_of(var, prop, norm(axis)),
+                Some(prop) => slope_of(var, prop, norm(axis)) + force_turn(var, axis),
                 None => slope(var, axis),
             };
             d.insert(name.to_string(), about_cg * scale);
@@ -582,4 +621,24 @@ impl JsbsimSim {
             alpha_rad: trim.alpha_rad,
         })
     }
+}
+
+/// JSBSim's wind-to-body rotation (`FGAuxiliary::Tw2b`) applied to a wind-axis vector.
+fn wind_to_body(alpha_rad: f64, beta_rad: f64, v: [f64; 3]) -> [f64; 3] {
+    let (sa, ca) = alpha_rad.sin_cos();
+    let (sb, cb) = beta_rad.sin_cos();
+    [
+        ca * cb * v[0] - ca * sb * v[1] - sa * v[2],
+        sb * v[0] + cb * v[1],
+        sa * cb * v[0] - sa * sb * v[1] + ca * v[2],
+    ]
+}
+
+/// Cross product r × f.
+fn cross(r: [f64; 3], f: [f64; 3]) -> [f64; 3] {
+    [
+        r[1] * f[2] - r[2] * f[1],
+        r[2] * f[0] - r[0] * f[2],
+        r[0] * f[1] - r[1] * f[0],
+    ]
 }
