@@ -212,7 +212,7 @@ pub struct IdentResult {
     pub dt_s: f64,
     /// Input trim removed before identification (input units).
     pub u_offset: f64,
-    /// Output trim removed before identification (output units); for `oe` it includes the
+    /// Output trim removed before identification (output units); for `srivc` and `oe` it includes the
     /// constant output offset estimated beside the model.
     pub y_offset: f64,
     /// What the user should know about this estimate (e.g. an estimator that fell back to its
