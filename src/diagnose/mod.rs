@@ -5,7 +5,9 @@
 //! ([`search`]) → forward selection by BIC → re-simulate the validation record with the chosen effects.
 
 pub mod extension;
+pub mod model;
 pub mod replay;
+pub mod report;
 pub mod residual;
 pub mod search;
 
@@ -35,6 +37,9 @@ pub enum DiagnoseError {
     /// An extension file that cannot be read.
     #[error("extension file {path}: {message}")]
     ExtensionFile { path: String, message: String },
+    /// The report could not be written.
+    #[error("report: {0}")]
+    Report(String),
     /// The simulation failed (trim at the measured condition, bridge error).
     #[error("simulation during {during}: {source}")]
     Sim { during: String, source: SimError },
@@ -196,6 +201,7 @@ impl Diagnosis {
                     std_error: c.std_error,
                 })
                 .collect(),
+            model_effects: Vec::new(),
             notes: BTreeMap::new(),
         }
     }
@@ -203,7 +209,14 @@ impl Diagnosis {
 
 fn sim_err(during: &str) -> impl FnOnce(SimError) -> DiagnoseError + '_ {
     move |source| DiagnoseError::Sim {
-        during: during.to_string(),
+        during: match source {
+            SimError::TrimFailed(_) => {
+                format!(
+                    "{during}: the model cannot trim at the record's measured initial condition"
+                )
+            }
+            _ => during.to_string(),
+        },
         source,
     }
 }
@@ -278,7 +291,8 @@ pub fn diagnose(
     };
     let n = w.n();
     let coeffs = workers[0].sim.coefficient_names();
-    let (catalogue, skipped_raw) = extension::catalogue(&case.record, &coeffs);
+    let added = workers[0].sim.added_term_names();
+    let (catalogue, skipped_raw) = extension::catalogue(&case.record, &coeffs, &added);
     let mut skipped: Vec<Skipped> = skipped_raw
         .into_iter()
         .map(|(effect, target, reason)| Skipped {

@@ -37,6 +37,8 @@ pub struct JsbsimSim {
     knob_values: BTreeMap<String, f64>,
     /// Names of the aerodynamic coefficient functions that carry a scale knob (`flightid/knob/NAME`).
     pub coefficient_knobs: Vec<String>,
+    /// Added aerodynamic terms the private copy offers (`flightid/added/NAME`, default 0), e.g. `Cm_alpha2`.
+    pub added_terms: Vec<String>,
 }
 
 fn surface_property(surface: &str) -> String {
@@ -46,6 +48,16 @@ fn surface_property(surface: &str) -> String {
 impl JsbsimSim {
     /// Starts a bridge and loads the aircraft (a private copy, see `scripts/jsbsim_bridge.py`) at `rate_hz`.
     pub fn start(config: &AircraftConfig, rate_hz: f64) -> Result<Self, SimError> {
+        Self::start_with_model(config, rate_hz, None)
+    }
+
+    /// Like [`JsbsimSim::start`], with the aircraft XML taken from `model_dir` (an exported model, see
+    /// [`JsbsimSim::export_aircraft`]) instead of JSBSim's own.
+    pub fn start_with_model(
+        config: &AircraftConfig,
+        rate_hz: f64,
+        model_dir: Option<&std::path::Path>,
+    ) -> Result<Self, SimError> {
         if !(rate_hz.is_finite() && rate_hz > 0.0) {
             return Err(SimError::Usage(format!(
                 "simulation rate must be positive, got {rate_hz} Hz"
@@ -62,10 +74,16 @@ impl JsbsimSim {
                 )
             })
             .collect();
-        let req = json!({
+        let mut req = json!({
             "cmd": "load", "aircraft": config.model, "dt_s": 1.0 / rate_hz, "surfaces": surfaces,
             "engine_running": config.engine_running, "gear_up": config.gear_up, "engines": config.engines,
         });
+        if let Some(dir) = model_dir {
+            let abs = std::fs::canonicalize(dir).map_err(|e| {
+                SimError::UnknownModel(format!("model directory {}: {e}", dir.display()))
+            })?;
+            req["aircraft_dir"] = json!(abs.display().to_string());
+        }
         let resp = bridge.request(req, &[]).map_err(|e| match e {
             SimError::Bridge { kind, message } if kind == "unknown_aircraft" => {
                 SimError::UnknownModel(message)
@@ -80,6 +98,14 @@ impl JsbsimSim {
                     .collect()
             })
             .unwrap_or_default();
+        let added_terms = resp.header["added_terms"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|v| v.as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default();
         Ok(JsbsimSim {
             bridge,
             config: config.clone(),
@@ -87,6 +113,7 @@ impl JsbsimSim {
             trim: None,
             knob_values: BTreeMap::new(),
             coefficient_knobs,
+            added_terms,
         })
     }
 
@@ -641,4 +668,44 @@ fn cross(r: [f64; 3], f: [f64; 3]) -> [f64; 3] {
         r[2] * f[0] - r[0] * f[2],
         r[0] * f[1] - r[1] * f[0],
     ]
+}
+
+impl JsbsimSim {
+    /// Sets the coefficient of an added aerodynamic term (e.g. `Cm_alpha2`: ΔC_m = k α²), from the next trim on.
+    pub fn set_added_term(&mut self, term: &str, coefficient: f64) -> Result<(), SimError> {
+        if !self.added_terms.iter().any(|t| t == term) {
+            return Err(SimError::Usage(format!(
+                "no added aerodynamic term '{term}' (known: {})",
+                self.added_terms.join(", ")
+            )));
+        }
+        self.knob_values
+            .insert(format!("flightid/added/{term}"), coefficient);
+        Ok(())
+    }
+
+    /// Writes the aircraft with the current coefficient factors and added terms written into its XML to
+    /// `dir/<model>.xml` (plus the aircraft directory's other files), loadable by [`JsbsimSim::start_with_model`].
+    pub fn export_aircraft(
+        &mut self,
+        dir: &std::path::Path,
+    ) -> Result<std::path::PathBuf, SimError> {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| SimError::Usage(format!("creating {}: {e}", dir.display())))?;
+        let abs = std::fs::canonicalize(dir)
+            .map_err(|e| SimError::Usage(format!("{}: {e}", dir.display())))?;
+        let pick = |prefix: &str| -> serde_json::Map<String, Value> {
+            self.knob_values
+                .iter()
+                .filter_map(|(k, v)| k.strip_prefix(prefix).map(|n| (n.to_string(), json!(v))))
+                .collect()
+        };
+        let req = json!({"cmd": "export", "dir": abs.display().to_string(),
+                         "knobs": pick("flightid/knob/"), "added": pick("flightid/added/")});
+        let resp = self.bridge.request(req, &[])?;
+        Ok(resp.header["path"]
+            .as_str()
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| abs.join(format!("{}.xml", self.config.model))))
+    }
 }
