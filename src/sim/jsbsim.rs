@@ -453,6 +453,9 @@ pub struct AeroTruth {
     pub chord_m: f64,
     /// Trim angle of attack, rad.
     pub alpha_rad: f64,
+    /// Gravitational acceleration at the trim altitude, m/s².
+    #[serde(default)]
+    pub g_m_s2: f64,
 }
 
 impl JsbsimSim {
@@ -483,6 +486,7 @@ impl JsbsimSim {
             "metrics/bw-ft",
             "metrics/cbarw-ft",
             "aero/beta-rad",
+            "accelerations/gravity-ft_sec2",
             "metrics/aero-rp-x-in",
             "metrics/aero-rp-y-in",
             "metrics/aero-rp-z-in",
@@ -646,6 +650,7 @@ impl JsbsimSim {
             span_m: b_ft * FT_TO_M,
             chord_m: cbar_ft * FT_TO_M,
             alpha_rad: trim.alpha_rad,
+            g_m_s2: c("accelerations/gravity-ft_sec2") * FT_TO_M,
         })
     }
 }
