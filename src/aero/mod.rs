@@ -30,6 +30,7 @@ pub mod params;
 pub mod regression;
 pub mod score;
 pub mod spec;
+pub mod study;
 pub mod trials;
 
 pub use fit::{estimate_derivatives, DerivativeEstimate, FitOptions, IdentifiedTf, IdentifiedTfs};

@@ -215,3 +215,65 @@ pub fn identified_tfs_from_json(
     }
     Ok(())
 }
+
+/// Mass and inertia as a user gives them (every field required), body axes.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MassInput {
+    mass_kg: f64,
+    ixx_kg_m2: f64,
+    iyy_kg_m2: f64,
+    izz_kg_m2: f64,
+    ixz_kg_m2: f64,
+}
+
+/// Reference geometry as a user gives it (every field required).
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GeometryInput {
+    wing_area_m2: f64,
+    span_m: f64,
+    chord_m: f64,
+}
+
+/// Replaces the model's mass and geometry by the `mass` and `geometry` objects of an identified-TF document, if
+/// it has them (a real aircraft whose JSBSim model is only approximate). Missing or unusable fields are errors
+/// naming the field.
+/// `alpha0_rad` is the trim α used to rotate the body-axis inertia into stability axes.
+pub fn apply_overrides(
+    doc: &Value,
+    source: &str,
+    alpha0_rad: f64,
+    model: &mut AeroModel,
+) -> Result<(), AeroError> {
+    if let Some(m) = doc.get("mass") {
+        let m: MassInput = serde_json::from_value(m.clone()).map_err(|e| {
+            AeroError::BadInput(format!(
+                "{source}: mass: {e} (needs mass_kg, ixx_kg_m2, iyy_kg_m2, izz_kg_m2, ixz_kg_m2, body axes)"
+            ))
+        })?;
+        let body = MassProperties {
+            mass_kg: m.mass_kg,
+            ixx_kg_m2: m.ixx_kg_m2,
+            iyy_kg_m2: m.iyy_kg_m2,
+            izz_kg_m2: m.izz_kg_m2,
+            ixz_kg_m2: m.ixz_kg_m2,
+        };
+        body.validate()?;
+        model.mass = body.to_stability_axes(alpha0_rad);
+    }
+    if let Some(g) = doc.get("geometry") {
+        let g: GeometryInput = serde_json::from_value(g.clone()).map_err(|e| {
+            AeroError::BadInput(format!(
+                "{source}: geometry: {e} (needs wing_area_m2, span_m, chord_m)"
+            ))
+        })?;
+        model.geometry = Geometry {
+            wing_area_m2: g.wing_area_m2,
+            span_m: g.span_m,
+            chord_m: g.chord_m,
+        };
+        model.geometry.validate()?;
+    }
+    Ok(())
+}

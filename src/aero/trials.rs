@@ -348,8 +348,18 @@ pub fn equation_error_flights(
             .filter(|e| wanted.contains(&e.coefficient))
             .collect::<Vec<_>>()
     };
-    let mut skipped = lon.skipped.clone();
-    skipped.extend(lat.skipped.iter().cloned());
+    let mut skipped: Vec<_> = lon
+        .skipped
+        .iter()
+        .filter(|(c, _)| ["Cm", "CL"].contains(c))
+        .cloned()
+        .collect();
+    skipped.extend(
+        lat.skipped
+            .iter()
+            .filter(|(c, _)| ["Cl", "Cn", "CY"].contains(c))
+            .cloned(),
+    );
     let mut equations = keep(lon, &["Cm", "CL"]);
     equations.extend(keep(lat, &["Cl", "Cn", "CY"]));
     Ok(EquationErrorResult { equations, skipped })
