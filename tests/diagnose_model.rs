@@ -58,7 +58,10 @@ fn exported_aircraft_flies_like_the_knobs_it_was_exported_from() {
     let dir = tempfile::tempdir().unwrap();
     let xml = knobbed.export_aircraft(dir.path()).unwrap();
     let text = std::fs::read_to_string(&xml).unwrap();
-    assert!(text.contains("flightid/fitted/Cm_alpha2-term"), "added term missing");
+    assert!(
+        text.contains("flightid/fitted/Cm_alpha2-term"),
+        "added term missing"
+    );
     let t1 = knobbed.trim(&point).unwrap();
     let r1 = knobbed.fly(&plan()).unwrap();
 
