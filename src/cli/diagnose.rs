@@ -205,6 +205,9 @@ fn summary(d: &Diagnosis) {
     } else {
         println!("no validation record (--validate): the gain on unseen data is not measured");
     }
+    for w in &d.warnings {
+        println!("warning: {w}");
+    }
     for s in &d.skipped {
         if s.effect != "aero_derivative" {
             println!("skipped {} on {}: {}", s.effect, s.target, s.reason);

@@ -176,6 +176,8 @@ pub struct Diagnosis {
     pub trim_mismatch: Vec<TrimMismatch>,
     /// Catalogue entries not evaluated.
     pub skipped: Vec<Skipped>,
+    /// Conditions that limit what the verdict can be trusted for (e.g. a surface column missing).
+    pub warnings: Vec<String>,
     /// Noise standard deviation estimated per channel (the cost weights).
     pub noise_std: BTreeMap<String, f64>,
     /// Number of residual values (samples × channels).
@@ -285,6 +287,18 @@ pub fn diagnose(
             )));
         }
     }
+    // A surface without a column is held at its trim in the replay: if it moved in flight, its effect is
+    // unmodelled and any cause named on the axes it drives is suspect.
+    let warnings: Vec<String> = replay::INPUTS
+        .iter()
+        .filter(|(_, c)| train.column(c).is_none())
+        .map(|(s, c)| {
+            format!(
+                "no {c} column: the replay holds the {s} at its trim value; if it moved in flight, \
+                 causes named on the axes it drives are not trustworthy"
+            )
+        })
+        .collect();
     let w = Weighted {
         case: &case,
         sigma: weights(&case),
@@ -383,8 +397,9 @@ pub fn diagnose(
             out.map(|o| (o, a))
         });
         let floor = opts.residual_floor * n as f64;
-        let bic = |o: &search::FitOutcome| {
-            let k = (o.values.len() - selected.len()).max(1) as f64;
+        // One more parameter per candidate (the selected effects are counted in the base model).
+        let bic = |e: &dyn Extension, o: &search::FitOutcome| {
+            let k = e.params().len() as f64;
             o.n_eff * (o.cost_after.max(floor) / base_cost.max(floor)).ln() + k * o.n_eff.ln()
         };
         let candidate = |e: &dyn Extension, o: &search::FitOutcome, full_fit: bool| {
@@ -397,7 +412,7 @@ pub fn diagnose(
                 cost_before: base_cost,
                 cost_after: o.cost_after,
                 criterion: "BIC".into(),
-                criterion_delta: bic(o),
+                criterion_delta: bic(e, o),
                 z: (o.values[k] - e.params()[0].null).abs() / o.std_errors[k].max(1e-300),
                 n_eff: o.n_eff,
                 validation_gain: None,
@@ -421,7 +436,16 @@ pub fn diagnose(
             let Ok((o, _)) = r else { continue };
             let mut c = candidate(top_exts[t], o, true);
             let rel = 1.0 - o.cost_after / base_cost;
-            c.rejected_because = if c.criterion_delta >= opts.bic_threshold {
+            let spec = top_exts[t].params()[0];
+            let at_bound = (c.value - spec.min).abs() <= 1e-9 * spec.min.abs().max(1.0)
+                || (c.value - spec.max).abs() <= 1e-9 * spec.max.abs().max(1.0);
+            c.rejected_because = if at_bound {
+                // No interior optimum: the effect explains something else (a missing input, another effect).
+                Some(format!(
+                    "value at the bound of its range [{}, {}]",
+                    spec.min, spec.max
+                ))
+            } else if c.criterion_delta >= opts.bic_threshold {
                 Some(format!(
                     "ΔBIC {:.1} ≥ {}",
                     c.criterion_delta, opts.bic_threshold
@@ -546,6 +570,7 @@ pub fn diagnose(
         residuals_after,
         trim_mismatch,
         skipped,
+        warnings,
         noise_std: case
             .outputs
             .iter()

@@ -342,6 +342,7 @@ pub fn replay(
 pub struct LinearReplay {
     sim: LinearSim,
     point: TrimPoint,
+    input_names: Vec<String>,
 }
 
 impl LinearReplay {
@@ -367,6 +368,7 @@ impl LinearReplay {
             serde_json::from_value(v).map_err(|e| err(format!("not a linearization: {e}")))?;
         Ok(LinearReplay {
             point: trim.point,
+            input_names: lin.inputs.clone(),
             sim: LinearSim::new(lin, trim),
         })
     }
@@ -394,7 +396,27 @@ impl Simulator for LinearReplay {
         self.sim.linearize()
     }
     fn fly(&mut self, plan: &FlightPlan) -> Result<FlightRecord, SimError> {
-        self.sim.fly(plan)
+        // JSBSim's linearization names the throttle input ThtlCmd (normalised command, as the CSV's throttle);
+        // a model without a throttle input can still replay a record whose throttle does not move.
+        let mut plan = plan.clone();
+        let has = |n: &str| self.input_names.iter().any(|i| i == n);
+        let mut kept = Vec::new();
+        for mut input in plan.inputs.drain(..) {
+            if input.surface == "throttle" && !has("throttle") {
+                if has("ThtlCmd") {
+                    input.surface = "ThtlCmd".into();
+                } else if input.deflection_rad.iter().all(|v| v.abs() < 1e-9) {
+                    continue;
+                } else {
+                    return Err(SimError::Usage(
+                        "the throttle moves in the record but the linear model has no throttle input".into(),
+                    ));
+                }
+            }
+            kept.push(input);
+        }
+        plan.inputs = kept;
+        self.sim.fly(&plan)
     }
 }
 

@@ -154,6 +154,11 @@ fn candidates_section(d: &Diagnosis) -> Section {
 fn evidence_section(d: &Diagnosis) -> Section {
     let mut s = Section {
         heading: "What the model gets wrong (training record, before extension)".into(),
+        paragraphs: d
+            .warnings
+            .iter()
+            .map(|w| format!("Warning: {w}."))
+            .collect(),
         ..Default::default()
     };
     s.tables.push(Table {
