@@ -109,7 +109,8 @@ fn killed_campaign_resumes_to_the_same_results_as_an_uninterrupted_run() {
         "finished cases are not redone"
     );
     assert_eq!(summary["ran"], (6 - done) as u64);
-    // Byte-identical: every case runs in a fresh JSBSim process, so scheduling cannot leak into results.
+    // Byte-identical: the bridge resets every model before each trim, so neither scheduling nor process reuse
+    // can leak into results.
     assert_eq!(case_files(&part), reference);
 }
 

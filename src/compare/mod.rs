@@ -280,27 +280,30 @@ pub fn run_compare<S: Simulator>(
             error: None,
         }];
         let deg = |v: &[f64]| v.iter().map(|x| x.to_degrees()).collect::<Vec<_>>();
+        let reference = |label: &str, x: &[f64], y: Vec<f64>| Series {
+            reference: true,
+            ..Series::new(label, x.to_vec(), y)
+        };
         let mut time_series = vec![
             Series::new("JSBSim nonlinear", t.clone(), deg(&dy)),
-            Series {
-                reference: true,
-                ..Series::new("JSBSim linearization", t.clone(), deg(&lin_y))
-            },
+            reference("JSBSim linearization", &t, deg(&lin_y)),
         ];
         let (mag, ph) = lti::bode(lin_tf, &omega);
-        let mut bode_mag = vec![Series::new("JSBSim linearization", omega.clone(), mag)];
-        let mut bode_phase = vec![Series::new("JSBSim linearization", omega.clone(), ph)];
+        let mut bode_mag = vec![reference("JSBSim linearization", &omega, mag)];
+        let mut bode_phase = vec![reference("JSBSim linearization", &omega, ph)];
         let mut identified: Vec<(String, TransferFunction)> = Vec::new();
         for &method in &opts.methods {
             match ident::identify(&du, &dy, dt_s, &paper_options(method)) {
                 Ok(r) => {
                     let y_hat = lti::lsim(&r.tf, &du, dt_s);
                     fits.push(model_fit(&r, &lin_modal, &dy, &y_hat, dt_s));
-                    time_series.push(Series::new(
-                        method.name(),
-                        t.clone(),
-                        clip(&deg(&y_hat), 3.0 * max_abs(&deg(&dy))),
-                    ));
+                    let limit = 3.0 * max_abs(&deg(&dy));
+                    let label = if max_abs(&deg(&y_hat)) > limit {
+                        format!("{} (clipped)", method.name())
+                    } else {
+                        method.name().to_string()
+                    };
+                    time_series.push(Series::new(label, t.clone(), clip(&deg(&y_hat), limit)));
                     let (mag, ph) = lti::bode(&r.tf, &omega);
                     bode_mag.push(Series::new(method.name(), omega.clone(), mag));
                     bode_phase.push(Series::new(method.name(), omega.clone(), ph));
@@ -473,11 +476,14 @@ fn tf_section(
             } else {
                 name.as_str()
             };
-            Series::new(
-                label,
-                pts.iter().map(|p| p.0).collect(),
-                pts.iter().map(|p| p.1.max(-50.0)).collect(),
-            )
+            Series {
+                reference: name == "jsbsim_linearization",
+                ..Series::new(
+                    label,
+                    pts.iter().map(|p| p.0).collect(),
+                    pts.iter().map(|p| p.1.max(-50.0)).collect(),
+                )
+            }
         })
         .collect();
     Section {

@@ -29,7 +29,7 @@ pub struct Series {
     pub x: Vec<f64>,
     /// Ordinate values (non-finite points are skipped).
     pub y: Vec<f64>,
-    /// Dashed look for reference curves (drawn thinner and lighter).
+    /// Reference curve (e.g. the JSBSim linearization): drawn as a wide translucent band under the others.
     pub reference: bool,
 }
 
@@ -90,11 +90,17 @@ const LEGEND_W: u32 = 210;
 /// A series drawn with fewer points than this gets a marker on each point (sparse data: sweeps, campaigns).
 const MARKER_BELOW_POINTS: usize = 40;
 
-/// The colour of series `i`: the model's fixed colour when the label names a known model, else the palette.
+/// The colour of series `i`: the model's fixed colour when the label names a known model (optionally followed by
+/// a note in parentheses, `ls (clipped)`), else the palette.
 fn series_color(label: &str, i: usize) -> RGBColor {
     MODEL_COLORS
         .iter()
-        .find(|(name, _)| *name == label)
+        .find(|(name, _)| {
+            label == *name
+                || label
+                    .strip_prefix(name)
+                    .is_some_and(|rest| rest.starts_with(" ("))
+        })
         .map(|(_, c)| *c)
         .unwrap_or(PALETTE[i % PALETTE.len()])
 }
@@ -165,8 +171,10 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
                     .draw()
                     .map_err(|e| err(e.to_string()))?;
                 for (s, &color) in plot.series.iter().zip(&colors) {
+                    // a reference curve is a wide translucent band, so it stays visible under models that
+                    // lie on it
                     let style = if s.reference {
-                        color.mix(0.7).stroke_width(2)
+                        color.mix(0.45).stroke_width(7)
                     } else {
                         color.stroke_width(2)
                     };
@@ -218,11 +226,13 @@ fn draw_legend<DB: DrawingBackend>(
         if y + row_h > PLOT_H as i32 {
             break;
         }
-        area.draw(&PathElement::new(
-            vec![(6, y), (30, y)],
-            color.stroke_width(2),
-        ))
-        .map_err(|e| e.to_string())?;
+        let swatch = if s.reference {
+            color.mix(0.45).stroke_width(7)
+        } else {
+            color.stroke_width(2)
+        };
+        area.draw(&PathElement::new(vec![(6, y), (30, y)], swatch))
+            .map_err(|e| e.to_string())?;
         if s.x.len() < MARKER_BELOW_POINTS {
             area.draw(&Circle::new((18, y), 4, color.filled()))
                 .map_err(|e| e.to_string())?;
