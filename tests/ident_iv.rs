@@ -19,6 +19,7 @@ fn noise_free_iv_recovers_every_original_coefficient_within_half_percent() {
             .iter()
             .enumerate()
         {
+            eprintln!("{} coefficient {i}: {:.2e} %", t.tf.key, 100.0 * e);
             assert!(*e < 0.005, "{} coefficient {i}: {e}", t.tf.key);
         }
     }
