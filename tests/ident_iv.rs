@@ -7,7 +7,7 @@ use flightid::paper::{self, PaperOptions};
 
 #[test]
 fn noise_free_iv_recovers_every_original_coefficient_within_half_percent() {
-    // The δ-model is the exact ZOH equivalent, so noise-free data give the original back (measured ≤ 1e-4 %);
+    // The δ-model is the exact ZOH equivalent, so noise-free data give the original back (measured ≤ 3e-8 %);
     // 0.5 % is the noise-free acceptance for the paper reproduction.
     let mut opts = PaperOptions::new(0.0);
     opts.methods = vec![Method::Iv];
