@@ -178,7 +178,13 @@ pub(crate) fn iv(
                 break;
             }
         };
-        let num = refit_numerator(u, y, dt_s, &den, m, delay_s)?;
+        let num = match refit_numerator(u, y, dt_s, &den, m, delay_s) {
+            Ok(num) => num,
+            Err(e) => {
+                failure = Some(e.to_string());
+                break;
+            }
+        };
         let change = den
             .iter()
             .zip(&current.den)
