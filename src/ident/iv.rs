@@ -129,7 +129,7 @@ fn iv_step(u_d: &[f64], y: &[f64], x_hat: &[f64], den: &[f64], h: f64) -> Option
     let mut zy = vec![0.0; p];
     let mut phi = vec![0.0; p];
     let mut zeta = vec![0.0; p];
-    for k in 0..y.len() {
+    for (k, target) in ty.iter().enumerate() {
         let row = k * n;
         for i in 0..n {
             phi[i] = -sy[row + n - 1 - i];
@@ -138,7 +138,7 @@ fn iv_step(u_d: &[f64], y: &[f64], x_hat: &[f64], den: &[f64], h: f64) -> Option
             zeta[n + i] = phi[n + i];
         }
         for r in 0..p {
-            zy[r] += zeta[r] * ty[k];
+            zy[r] += zeta[r] * target;
             for c in 0..p {
                 zphi[r * p + c] += zeta[r] * phi[c];
             }
@@ -178,7 +178,13 @@ pub(crate) fn iv(
                 break;
             }
         };
-        let num = refit_numerator(u, y, dt_s, &den, m, delay_s)?;
+        let num = match refit_numerator(u, y, dt_s, &den, m, delay_s) {
+            Ok(num) => num,
+            Err(e) => {
+                failure = Some(e.to_string());
+                break;
+            }
+        };
         let change = den
             .iter()
             .zip(&current.den)

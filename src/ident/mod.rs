@@ -336,6 +336,17 @@ pub fn identify(
     if opts.method == Method::Srivc && model.cov.is_none() {
         model.cov = oe::covariance(&u, &y, dt_s, &model);
     }
+    let record_s = u.len() as f64 * dt_s;
+    if let Some(p) = linalg::roots(&model.den)
+        .into_iter()
+        .find(|p| p.re * record_s > 3.0)
+    {
+        model.warnings.push(format!(
+            "pole {p:.4} grows {:.1e}-fold over the {record_s:.1} s record: the model does not describe these \
+             data (wrong order, an input that does not drive this output, or direct feedthrough?)",
+            (p.re * record_s).exp()
+        ));
+    }
     Ok(metrics::build_result(
         opts.method,
         model,

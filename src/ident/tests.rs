@@ -338,3 +338,25 @@ fn bad_inputs_give_errors_naming_the_problem() {
     assert!(matches!(e, IdentError::SingularRegression { .. }), "{e}");
     assert!("bogus".parse::<Method>().is_err());
 }
+
+#[test]
+fn a_model_that_explodes_over_the_record_carries_a_warning() {
+    // y = u + noise has direct feedthrough, which no strictly proper 4/2 model can follow: the estimate has a fast
+    // unstable pole. The result says so instead of presenting it as an identified aircraft mode.
+    let dt_s = 0.01;
+    let u = doublet(3000, dt_s);
+    let y = crate::signal::add_white_noise(&u, 0.5, 3);
+    let r = identify(&u, &y, dt_s, &opts(Method::Srivc)).unwrap();
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("does not describe these data")),
+        "{:?} (poles {:?})",
+        r.warnings,
+        r.poles
+    );
+    // the paper's θ/δe, noise-free, gives no warning
+    let (u, y) = record(&PAPER_TFS[0].1, 60.0, dt_s);
+    let r = identify(&u, &y, dt_s, &opts(Method::Srivc)).unwrap();
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+}
