@@ -456,6 +456,10 @@ ADDED_TERMS = {
 }
 
 
+# Added terms the loaded aircraft offers (its model has the axis the term belongs to).
+ADDED = []
+
+
 def added_term_function(name, coefficient):
     """<function> of an added term; coefficient: a property name (knob) or a number (baked value)."""
     _axis, factors = ADDED_TERMS[name]
@@ -468,6 +472,7 @@ def added_term_function(name, coefficient):
 
 def add_term_knobs(aero):
     """Declares flightid/added/<name> = 0 and adds each term to its axis (nothing changes until a knob is set)."""
+    ADDED.clear()
     axes = {a.get("name", "").upper(): a for a in aero.iter("axis")}
     for i, name in enumerate(sorted(ADDED_TERMS)):
         d = ET.Element("property", {"value": "0.0"})
@@ -476,6 +481,7 @@ def add_term_knobs(aero):
         axis = axes.get(ADDED_TERMS[name][0])
         if axis is not None:
             axis.append(added_term_function(name, f"flightid/added/{name}"))
+            ADDED.append(name)
 
 
 def export_aircraft(sim, req):
@@ -549,7 +555,7 @@ def main():
                     sim.close()
                     sim = None
                 sim = Sim(req)
-                send({"ok": True, "knobs": sim.knobs, "added_terms": sorted(ADDED_TERMS),
+                send({"ok": True, "knobs": sim.knobs, "added_terms": sorted(set(ADDED)),
                       "jsbsim_version": jsbsim.__version__})
             elif cmd == "quit":
                 send({"ok": True})

@@ -43,14 +43,11 @@ fn fly(out: &Path) {
     assert!(o.status.success(), "fly failed: {}", text(&o));
 }
 
+/// A column and the change applied to each of its values.
+type Edit<'a> = Option<(&'a str, fn(f64) -> f64)>;
+
 /// Rewrites a CSV: keeps the first `rows` data rows, drops `drop` columns, applies `edit` to one column.
-fn rewrite(
-    src: &Path,
-    dst: &Path,
-    rows: usize,
-    drop: &[&str],
-    edit: Option<(&str, fn(f64) -> f64)>,
-) {
+fn rewrite(src: &Path, dst: &Path, rows: usize, drop: &[&str], edit: Edit) {
     let s = std::fs::read_to_string(src).unwrap();
     let mut lines = s.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

@@ -451,6 +451,9 @@ pub fn catalogue(
     (usable, skipped)
 }
 
+/// Extensions built from a file, each with its parameter values.
+pub type BuiltEffects = Vec<(Box<dyn Extension>, Vec<f64>)>;
+
 /// A fitted effect as written to and read from an extension file.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct FittedEffect {
@@ -494,10 +497,7 @@ impl ExtensionFile {
     }
 
     /// Builds the extensions with their values.
-    pub fn build(
-        &self,
-        coefficient_names: &[String],
-    ) -> Result<Vec<(Box<dyn Extension>, Vec<f64>)>, DiagnoseError> {
+    pub fn build(&self, coefficient_names: &[String]) -> Result<BuiltEffects, DiagnoseError> {
         self.effects
             .iter()
             .map(|f| {

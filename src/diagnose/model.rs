@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::extension::{Extension, ExtensionFile, FittedEffect, Stage};
+use super::extension::{BuiltEffects, ExtensionFile, FittedEffect, Stage};
 use super::replay::ReplaySim;
 use super::DiagnoseError;
 use crate::aircraft::AircraftConfig;
@@ -95,10 +95,7 @@ impl ExtendedModel {
     }
 
     /// The signal-path and sensor effects with their values (model effects are already in the aircraft).
-    pub fn effects(
-        &self,
-        coefficient_names: &[String],
-    ) -> Result<Vec<(Box<dyn Extension>, Vec<f64>)>, DiagnoseError> {
+    pub fn effects(&self, coefficient_names: &[String]) -> Result<BuiltEffects, DiagnoseError> {
         let built = self.extension.build(coefficient_names)?;
         if let Some((e, _)) = built.iter().find(|(e, _)| e.stage() == Stage::Model) {
             return Err(file_err(
@@ -116,7 +113,7 @@ impl ExtendedModel {
 
 /// Applies input-stage effects to a flight plan (per-step deviations from trim) and returns them for
 /// [`apply_to_record`]: `fly --model` flies the extended model this way.
-pub fn apply_to_plan(effects: &[(Box<dyn Extension>, Vec<f64>)], plan: &mut FlightPlan) {
+pub fn apply_to_plan(effects: &BuiltEffects, plan: &mut FlightPlan) {
     let dt = 1.0 / plan.rate_hz;
     for input in plan.inputs.iter_mut() {
         // Sample 0 is the trim (deviation 0); step k shows as sample k+1 (see `replay::replay`).
@@ -133,7 +130,7 @@ pub fn apply_to_plan(effects: &[(Box<dyn Extension>, Vec<f64>)], plan: &mut Flig
 }
 
 /// Applies output-stage (sensor) effects to a simulated record.
-pub fn apply_to_record(effects: &[(Box<dyn Extension>, Vec<f64>)], rec: &mut FlightRecord) {
+pub fn apply_to_record(effects: &BuiltEffects, rec: &mut FlightRecord) {
     for (e, p) in effects {
         if e.stage() == Stage::Output {
             e.apply_output(p, rec);

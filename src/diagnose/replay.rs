@@ -55,17 +55,6 @@ impl ReplaySim for JsbsimSim {
     }
 }
 
-impl ReplaySim for LinearSim {
-    fn coefficient_names(&self) -> Vec<String> {
-        Vec::new()
-    }
-    fn set_coefficient_scale(&mut self, name: &str, _factor: f64) -> Result<(), SimError> {
-        Err(SimError::Usage(format!(
-            "a linear model has no coefficient knob '{name}'"
-        )))
-    }
-}
-
 /// Surface inputs of the CSV schema: (surface name, column).
 pub const INPUTS: [(&str, &str); 4] = [
     ("elevator", "elevator_rad"),

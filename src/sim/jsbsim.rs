@@ -90,22 +90,8 @@ impl JsbsimSim {
             }
             other => other,
         })?;
-        let coefficient_knobs = resp.header["knobs"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(|v| v.as_str().map(String::from))
-                    .collect()
-            })
-            .unwrap_or_default();
-        let added_terms = resp.header["added_terms"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(|v| v.as_str().map(String::from))
-                    .collect()
-            })
-            .unwrap_or_default();
+        let coefficient_knobs = string_list(&resp.header["knobs"]);
+        let added_terms = string_list(&resp.header["added_terms"]);
         Ok(JsbsimSim {
             bridge,
             config: config.clone(),
@@ -170,6 +156,17 @@ impl JsbsimSim {
             .request(json!({"cmd": "get", "properties": names}), &[])?;
         Ok(values_map(&resp.header["values"]))
     }
+}
+
+/// The strings of a JSON array (empty for anything else).
+fn string_list(v: &Value) -> Vec<String> {
+    v.as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|v| v.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 fn values_map(v: &Value) -> BTreeMap<String, f64> {
