@@ -278,8 +278,9 @@ fn make_tlog(csv: &Path, tlog: &Path, extra: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
-/// Writes `truth` as CSV, encodes it with pymavlink (with damage) and checks the read-back.
-fn round_trip_agrees_to_field_quantisation(truth: &FlightRecord) {
+/// Writes `truth` as CSV, encodes it with pymavlink (with damage), checks the read-back and
+/// returns the record read from the `.tlog`.
+fn round_trip_agrees_to_field_quantisation(truth: &FlightRecord) -> FlightRecord {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("flight.csv");
     let tlog = dir.path().join("flight.tlog");
@@ -358,11 +359,33 @@ fn round_trip_agrees_to_field_quantisation(truth: &FlightRecord) {
     for (g, w) in psi.iter().zip(truth.column("psi_rad").unwrap()) {
         assert!((g - w).abs() < 1e-6, "psi {g} vs {w}");
     }
+    rep.record
 }
 
 #[test]
 fn synthetic_csv_to_pymavlink_tlog_and_back_agrees_to_field_quantisation() {
     round_trip_agrees_to_field_quantisation(&synthetic_flight());
+}
+
+/// q/δe (2 poles, 1 zero, SRIVC) over the elevator doublet (3–3.6–4.2 s) of the
+/// oracle flight, 2…9.5 s (the aileron doublet starts at 10 s).
+fn short_period_tf(rec: &FlightRecord) -> flightid::ident::IdentResult {
+    let start = rec.time_s.partition_point(|&t| t < 2.0);
+    let end = rec.time_s.partition_point(|&t| t <= 9.5);
+    let w = rec.slice(start, end);
+    let opts = flightid::ident::IdentOptions {
+        method: flightid::ident::Method::Srivc,
+        poles: 2,
+        zeros: 1,
+        estimate_delay: false,
+    };
+    flightid::ident::identify(
+        w.column("elevator_rad").unwrap(),
+        w.column("q_rad_s").unwrap(),
+        w.dt_s().unwrap(),
+        &opts,
+    )
+    .unwrap()
 }
 
 /// A JSBSim c172x flight (elevator, aileron, rudder doublets; scripts/oracle_check_flight.py).
@@ -383,5 +406,38 @@ fn jsbsim_csv_to_pymavlink_tlog_and_back_agrees_to_field_quantisation() {
         String::from_utf8_lossy(&out.stderr)
     );
     let rec = flightid::data::read_csv(&csv).unwrap();
-    round_trip_agrees_to_field_quantisation(&rec);
+    let from_tlog = round_trip_agrees_to_field_quantisation(&rec);
+
+    // Acceptance: identification on either record gives the same TF to 1 %. The records differ
+    // by the MAVLink quantisation, dominated by the elevator's 1 µs PWM step (±0.5 mrad on a
+    // ~0.05 rad doublet, ~1 %, but zero-mean over the maneuver).
+    // "Same TF" is judged on the transfer function's response, max |G_csv − G_tlog| / max |G_csv|
+    // over 0.3–30 rad/s, not on single coefficients or poles: this 7.5 s window of a 50 Hz
+    // flight leaves the slow pole and the numerator's constant term poorly determined (standard
+    // errors 35 % and 100 %), and they move by 1–2 % between the two records while the response
+    // does not (measured: 0.63 %).
+    let (a, b) = (short_period_tf(&rec), short_period_tf(&from_tlog));
+    let eval = |c: &[f64], s: num_complex::Complex64| {
+        c.iter()
+            .fold(num_complex::Complex64::new(0.0, 0.0), |acc, v| acc * s + v)
+    };
+    let g = |r: &flightid::ident::IdentResult, w: f64| {
+        let s = num_complex::Complex64::new(0.0, w);
+        eval(&r.tf.num, s) / eval(&r.tf.den, s)
+    };
+    let omegas: Vec<f64> = (0..=200)
+        .map(|k| 0.3 * 100f64.powf(k as f64 / 200.0))
+        .collect();
+    let peak = omegas.iter().map(|&w| g(&a, w).norm()).fold(0.0, f64::max);
+    let d_freq = omegas
+        .iter()
+        .map(|&w| (g(&a, w) - g(&b, w)).norm())
+        .fold(0.0, f64::max)
+        / peak;
+    eprintln!("csv vs tlog: frequency response {:.3} %", 100.0 * d_freq);
+    assert!(d_freq < 0.01, "csv {:?}\ntlog {:?}", a.tf, b.tf);
+    assert!(
+        a.fit_sim_percent > 80.0,
+        "the 2-pole model follows the doublet response"
+    );
 }

@@ -26,11 +26,18 @@ pub struct CheckArgs {
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
+    #[arg(long = "resample-hz", value_name = "HZ")]
+    pub resample_hz: Option<f64>,
 }
 
 /// Runs `flightid check`.
 pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     let mut rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
+    if let Some(hz) = args.resample_hz {
+        rec = data::resample_uniform(&rec, hz)
+            .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;
+    }
     let from = args.from_s.unwrap_or(f64::NEG_INFINITY);
     let to = args.to_s.unwrap_or(f64::INFINITY);
     if args.from_s.is_some() || args.to_s.is_some() {

@@ -19,9 +19,9 @@ use std::path::PathBuf;
     after_help = "Examples:\n  flightid identify --data doublet.csv --input elevator --output theta_rad --method srivc\n  flightid identify --data roll.csv --input aileron_rad --output phi_rad --method oe --json out.json"
 )]
 pub struct IdentifyCmd {
-    /// Flight-data CSV (DESIGN.md §4 schema; any columns).
-    #[arg(long, value_name = "FLIGHT.csv")]
-    pub data: PathBuf,
+    /// Flight-data CSV (DESIGN.md §4 schema; any columns). Repeat to fit several files jointly.
+    #[arg(long, value_name = "FLIGHT.csv", required = true)]
+    pub data: Vec<PathBuf>,
     /// Input: a surface (elevator, aileron, rudder → <surface>_rad) or any column name.
     #[arg(long)]
     pub input: String,
@@ -40,6 +40,17 @@ pub struct IdentifyCmd {
     /// Also estimate a pure input delay.
     #[arg(long)]
     pub delay: bool,
+    /// Identify on maneuver N as listed by `flightid segments` (K:N = segment N of the K-th
+    /// --data file). Repeat to fit several segments jointly.
+    #[arg(long, value_name = "N|K:N")]
+    pub segment: Vec<String>,
+    /// With --segment: seconds of record used, from 1 s before the maneuver starts (default: up
+    /// to 5 s after it ends).
+    #[arg(long, value_name = "SECONDS")]
+    pub window_s: Option<f64>,
+    /// Resample every record onto a uniform grid at this rate first (linear interpolation).
+    #[arg(long = "resample-hz", value_name = "HZ")]
+    pub resample_hz: Option<f64>,
     /// Write the result as JSON (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     pub json: Option<String>,
@@ -69,18 +80,22 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         .method
         .parse()
         .map_err(|e: IdentError| UsageError(format!("--method: {e}")))?;
-    let rec = data::read_csv(&args.data).map_err(|e| UsageError(e.to_string()))?;
+    if args.data.len() > 1 || !args.segment.is_empty() || args.window_s.is_some() {
+        return run_joint(args, method);
+    }
+    let data_path = &args.data[0];
+    let rec = read_record(data_path, args.resample_hz)?;
     let in_col = input_column(&rec, &args.input);
     let u = rec
         .require(&in_col, "the identification input (--input)")
-        .map_err(|e| UsageError(format!("{}: {e}", args.data.display())))?;
+        .map_err(|e| UsageError(format!("{}: {e}", data_path.display())))?;
     let y = rec
         .require(&args.output, "the identification output (--output)")
-        .map_err(|e| UsageError(format!("{}: {e}", args.data.display())))?;
+        .map_err(|e| UsageError(format!("{}: {e}", data_path.display())))?;
     let dt_s = rec.dt_s().ok_or_else(|| {
         UsageError(format!(
             "{}: {} samples, too few to identify anything",
-            args.data.display(),
+            data_path.display(),
             rec.len()
         ))
     })?;
@@ -96,7 +111,7 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         let grid: Vec<f64> = (0..n).map(|k| t0 + k as f64 * dt_s).collect();
         eprintln!(
             "note: {} is not uniformly sampled (step varies by up to {:.3} ms); resampled at {:.4} s",
-            args.data.display(),
+            data_path.display(),
             1e3 * worst_jitter,
             dt_s
         );
@@ -128,7 +143,7 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         Err(e) if bad_input(&e) => {
             return Err(UsageError(format!(
                 "{} ({} -> {}): {e}",
-                args.data.display(),
+                data_path.display(),
                 in_col,
                 args.output
             ))
@@ -140,7 +155,7 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
                     "identifying {} -> {} in {}",
                     in_col,
                     args.output,
-                    args.data.display()
+                    data_path.display()
                 )
             })
         }
@@ -149,13 +164,13 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         eprintln!("warning: {w}");
     }
     if args.json.as_deref() != Some("-") {
-        print_result(args, &in_col, &r);
+        print_result(args, &data_path.display().to_string(), &in_col, &r);
     }
     if let Some(target) = &args.json {
         emit_json(
             target,
             &json!({
-                "data": args.data.display().to_string(),
+                "data": data_path.display().to_string(),
                 "input": in_col,
                 "output": args.output,
                 "result": r,
@@ -165,17 +180,10 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn print_result(args: &IdentifyCmd, in_col: &str, r: &ident::IdentResult) {
+fn print_result(args: &IdentifyCmd, source: &str, in_col: &str, r: &ident::IdentResult) {
     println!(
         "{} -> {} from {}: {} samples at {:.4} s, method {}, {} poles / {} zeros",
-        in_col,
-        args.output,
-        args.data.display(),
-        r.n_samples,
-        r.dt_s,
-        r.method,
-        args.poles,
-        args.zeros
+        in_col, args.output, source, r.n_samples, r.dt_s, r.method, args.poles, args.zeros
     );
     println!(
         "trim removed: input {:.6}, output {:.6}",
@@ -277,4 +285,175 @@ fn print_result(args: &IdentifyCmd, in_col: &str, r: &ident::IdentResult) {
         "input-residual independence: {}",
         verdict(&r.input_residual_independence)
     );
+}
+
+/// Reads a flight-data CSV, resampled at `resample_hz` when given.
+fn read_record(path: &std::path::Path, resample_hz: Option<f64>) -> anyhow::Result<FlightRecord> {
+    let rec = data::read_csv(path).map_err(|e| UsageError(e.to_string()))?;
+    match resample_hz {
+        Some(hz) => Ok(data::resample_uniform(&rec, hz)
+            .map_err(|e| UsageError(format!("{}: {e}", path.display())))?),
+        None => Ok(rec),
+    }
+}
+
+/// The records a joint identification runs on: every `--data` file whole, or the `--segment`s.
+fn joint_records(args: &IdentifyCmd) -> anyhow::Result<Vec<(String, FlightRecord)>> {
+    let recs: Vec<FlightRecord> = args
+        .data
+        .iter()
+        .map(|p| read_record(p, args.resample_hz))
+        .collect::<anyhow::Result<_>>()?;
+    if args.segment.is_empty() {
+        if args.window_s.is_some() {
+            return Err(UsageError("--window-s applies to --segment".into()).into());
+        }
+        return Ok(args
+            .data
+            .iter()
+            .map(|p| p.display().to_string())
+            .zip(recs)
+            .collect());
+    }
+    let mut out = Vec::new();
+    for text in &args.segment {
+        let r: data::SegmentRef = text
+            .parse()
+            .map_err(|e: data::DataError| UsageError(format!("--segment: {e}")))?;
+        let k = match (r.file, args.data.len()) {
+            (Some(k), n) if k <= n => k,
+            (Some(k), n) => {
+                return Err(UsageError(format!(
+                    "--segment {text}: there is no --data file {k} (given: {n})"
+                ))
+                .into())
+            }
+            (None, 1) => 1,
+            (None, _) => {
+                return Err(UsageError(format!(
+                    "--segment {text}: with several --data files, say which: --segment K:{}",
+                    r.segment
+                ))
+                .into())
+            }
+        };
+        let file = args.data[k - 1].display().to_string();
+        let (seg, part) = data::segment_window(
+            &recs[k - 1],
+            &file,
+            r.segment,
+            args.window_s,
+            &data::SegmentOptions::default(),
+        )
+        .map_err(|e| UsageError(e.to_string()))?;
+        let label = format!(
+            "{file} segment {} ({} {} {:.2}-{:.2} s)",
+            r.segment,
+            seg.surface,
+            seg.kind.name(),
+            seg.start_s,
+            seg.end_s
+        );
+        out.push((label, part));
+    }
+    Ok(out)
+}
+
+/// `identify` on several files or segments: one transfer function fitted jointly
+/// ([`ident::identify_joint`]), each record with its own trim, offset and initial condition.
+fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
+    let named = joint_records(args)?;
+    let mut records = Vec::with_capacity(named.len());
+    let mut in_col = String::new();
+    for (label, rec) in &named {
+        in_col = input_column(rec, &args.input);
+        let column = |name: &str, why: &str| -> anyhow::Result<Vec<f64>> {
+            Ok(rec
+                .require(name, why)
+                .map_err(|e| UsageError(format!("{label}: {e}")))?
+                .to_vec())
+        };
+        let dt_s = rec.dt_s().ok_or_else(|| {
+            UsageError(format!(
+                "{label}: {} samples, too few to identify anything",
+                rec.len()
+            ))
+        })?;
+        records.push(ident::JointRecord {
+            label: label.clone(),
+            u: column(&in_col, "the identification input (--input)")?,
+            y: column(&args.output, "the identification output (--output)")?,
+            dt_s,
+        });
+    }
+    let opts = IdentOptions {
+        method,
+        poles: args.poles,
+        zeros: args.zeros,
+        estimate_delay: args.delay,
+    };
+    let joint = match ident::identify_joint(&records, &opts) {
+        Ok(j) => j,
+        Err(e @ (IdentError::InvalidOptions(_) | IdentError::TooFewSamples { .. })) => {
+            return Err(UsageError(e.to_string()).into())
+        }
+        Err(e) => {
+            return Err(anyhow::Error::new(e)).with_context(|| {
+                format!(
+                    "jointly identifying {in_col} -> {} from {} records",
+                    args.output,
+                    records.len()
+                )
+            })
+        }
+    };
+    if args.json.as_deref() != Some("-") {
+        let source = format!("{} record(s) jointly", records.len());
+        print_result(args, &source, &in_col, &joint.result);
+        if opts.estimate_delay {
+            println!("delay: whole samples only in a joint fit");
+        }
+        let rows = joint
+            .records
+            .iter()
+            .map(|r| {
+                vec![
+                    r.label.clone(),
+                    r.n_samples.to_string(),
+                    format!("{:.6}", r.u_offset),
+                    format!("{:.6}", r.y_offset),
+                    format!("{:.2}", r.fit_sim_percent),
+                ]
+            })
+            .collect();
+        println!(
+            "\n{}",
+            text_table(&Table {
+                caption: "records (each with its own trim, output offset and initial condition)"
+                    .into(),
+                header: vec![
+                    "record".into(),
+                    "samples".into(),
+                    "input trim".into(),
+                    "output offset".into(),
+                    "fit %".into(),
+                ],
+                rows,
+            })
+        );
+    }
+    if let Some(target) = &args.json {
+        emit_json(
+            target,
+            &json!({
+                "data": args.data.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+                "segments": args.segment,
+                "input": in_col,
+                "output": args.output,
+                "result": joint.result,
+                "records": joint.records,
+            }),
+        )?;
+    }
+    Ok(())
 }

@@ -16,11 +16,18 @@ pub struct SegmentsArgs {
     /// Print the segments as JSON on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
+    #[arg(long = "resample-hz", value_name = "HZ")]
+    pub resample_hz: Option<f64>,
 }
 
 /// Runs `flightid segments`.
 pub fn run(args: &SegmentsArgs) -> anyhow::Result<()> {
-    let rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
+    let mut rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
+    if let Some(hz) = args.resample_hz {
+        rec = data::resample_uniform(&rec, hz)
+            .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;
+    }
     let opts = SegmentOptions {
         min_amplitude_rad: args.min_amplitude_deg.to_radians(),
         ..SegmentOptions::default()

@@ -77,6 +77,9 @@ const STREAM_MIN_BYTES: u64 = 4 << 20;
 /// Bytes per streamed block; each is cut at its last line break and parsed as one chunk.
 const STREAM_BLOCK_BYTES: usize = 8 << 20;
 
+/// A parsed chunk, or the first error in it.
+type ChunkResult = Result<Chunk, DataError>;
+
 /// Reads the body in blocks of whole lines, each parsed on the rayon pool while the next is read.
 /// Returns the parsed chunks in file order and, if a quote character turned up, the unparsed rest
 /// of the file from the first block holding it (a quoted field may hold a line break, so that
@@ -88,8 +91,8 @@ fn stream_chunks(
     pre: &Preamble,
     file: &str,
     block_bytes: usize,
-) -> std::io::Result<(Vec<Result<Chunk, DataError>>, Option<Vec<u8>>)> {
-    let slots: std::sync::Mutex<Vec<Option<Result<Chunk, DataError>>>> = Default::default();
+) -> std::io::Result<(Vec<ChunkResult>, Option<Vec<u8>>)> {
+    let slots: std::sync::Mutex<Vec<Option<ChunkResult>>> = Default::default();
     let mut quoted_tail = None;
     let mut io_result = Ok(());
     rayon::scope(|s| {

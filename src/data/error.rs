@@ -98,6 +98,15 @@ pub enum DataError {
         line: usize,
         message: String,
     },
+    /// A segment number that `segments` did not list for this file.
+    #[error("{file}: there is no segment {segment}; `flightid segments` finds {found} in this file{listing}")]
+    NoSuchSegment {
+        file: String,
+        segment: usize,
+        found: usize,
+        /// ` (1 … N)` or empty.
+        listing: String,
+    },
     /// An argument is out of range (e.g. a non-positive resampling rate).
     #[error("invalid argument: {0}")]
     InvalidArgument(String),

@@ -21,6 +21,9 @@ pub mod tlog;
 pub use airframe::Airframe;
 pub use tlog::{parse_tlog_bytes, read_tlog, TlogOptions, TlogReport};
 pub mod segments;
-pub use segments::{find_segments, ManeuverKind, Segment, SegmentOptions};
+pub use segments::{
+    find_segments, segment_window, ManeuverKind, Segment, SegmentOptions, SegmentRef,
+    SEGMENT_LEAD_IN_S, SEGMENT_TAIL_S,
+};
 pub mod check;
 pub use check::{check_compatibility, CheckOptions, CheckReport, Estimate};

@@ -276,3 +276,82 @@ fn steady_before(rec: &FlightRecord, start: usize, window_s: f64, tol: f64) -> b
         w.iter().all(|v| (v - mean).abs() <= tol)
     })
 }
+
+/// Seconds of record kept before a maneuver's start when a segment is cut out for identification
+/// (the trim estimate needs samples before the input moves).
+pub const SEGMENT_LEAD_IN_S: f64 = 1.0;
+
+/// Seconds of record kept after a maneuver's end by default (its free response).
+pub const SEGMENT_TAIL_S: f64 = 5.0;
+
+/// A reference to a segment on the command line: `N` (segment N) or `K:N` (segment N of the
+/// K-th file), both 1-based.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SegmentRef {
+    /// 1-based file index, when given.
+    pub file: Option<usize>,
+    /// 1-based segment number as listed by [`find_segments`].
+    pub segment: usize,
+}
+
+impl std::str::FromStr for SegmentRef {
+    type Err = DataError;
+    fn from_str(s: &str) -> Result<SegmentRef, DataError> {
+        let bad = || {
+            DataError::InvalidArgument(format!(
+                "segment `{s}`: expected N or K:N (segment N of the K-th --data file, both from 1)"
+            ))
+        };
+        let number = |t: &str| t.trim().parse::<usize>().ok().filter(|v| *v >= 1);
+        match s.split_once(':') {
+            Some((k, n)) => Ok(SegmentRef {
+                file: Some(number(k).ok_or_else(bad)?),
+                segment: number(n).ok_or_else(bad)?,
+            }),
+            None => Ok(SegmentRef {
+                file: None,
+                segment: number(s).ok_or_else(bad)?,
+            }),
+        }
+    }
+}
+
+/// The part of `rec` around segment `number` (1-based, as listed by [`find_segments`] with
+/// `opts`): from [`SEGMENT_LEAD_IN_S`] before its start to `window_s` after that (default: to
+/// [`SEGMENT_TAIL_S`] after its end), clipped to the record. `file` names the record in errors.
+pub fn segment_window(
+    rec: &FlightRecord,
+    file: &str,
+    number: usize,
+    window_s: Option<f64>,
+    opts: &SegmentOptions,
+) -> Result<(Segment, FlightRecord), DataError> {
+    if let Some(w) = window_s {
+        if !(w.is_finite() && w > 0.0) {
+            return Err(DataError::InvalidArgument(format!(
+                "--window-s must be a positive number of seconds, got {w}"
+            )));
+        }
+    }
+    let segments = find_segments(rec, opts)?;
+    let Some(seg) = number.checked_sub(1).and_then(|i| segments.get(i)) else {
+        return Err(DataError::NoSuchSegment {
+            file: file.to_string(),
+            segment: number,
+            found: segments.len(),
+            listing: if segments.is_empty() {
+                String::new()
+            } else {
+                format!(" (1 … {})", segments.len())
+            },
+        });
+    };
+    let from_s = seg.start_s - SEGMENT_LEAD_IN_S;
+    let to_s = match window_s {
+        Some(w) => from_s + w,
+        None => seg.end_s + SEGMENT_TAIL_S,
+    };
+    let start = rec.time_s.partition_point(|&t| t < from_s);
+    let end = rec.time_s.partition_point(|&t| t <= to_s);
+    Ok((seg.clone(), rec.slice(start, end)))
+}

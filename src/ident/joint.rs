@@ -224,6 +224,14 @@ fn joint_cost(recs: &[Centered], dt_s: f64, model: &ContinuousModel) -> f64 {
     }
 }
 
+/// Largest relative change between two coefficient vectors (1e-6 guards zero coefficients).
+fn relative_change(new: &[f64], old: &[f64]) -> f64 {
+    new.iter()
+        .zip(old)
+        .map(|(a, b)| (a - b).abs() / (1e-6 + b.abs()))
+        .fold(0.0_f64, f64::max)
+}
+
 fn sse(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
@@ -389,11 +397,7 @@ fn iv_joint(
         let (a, b) = arx_joint(recs, n, d, Some(&aux))?;
         let den = poly_from_roots(&continuous_poles(&a, dt_s)?);
         let next = arx_to_continuous(&super::ls::Arx { a, b }, dt_s, n - 1, d)?;
-        let change = den
-            .iter()
-            .zip(&model.den)
-            .map(|(x, y)| (x - y).abs() / (1e-6 + y.abs()))
-            .fold(0.0_f64, f64::max);
+        let change = relative_change(&den, &model.den);
         model = next;
         let candidate = refit_linear(recs, dt_s, &model.den, m, delay_s)?;
         let cost = joint_cost(recs, dt_s, &candidate);
@@ -547,13 +551,8 @@ fn srivc_joint(
         let Some(next) = srivc_step(recs, dt_s, m, delay_s, &den_f, Some(&model.num)) else {
             break;
         };
-        let change = next
-            .den
-            .iter()
-            .zip(&model.den)
-            .chain(next.num.iter().zip(&model.num))
-            .map(|(a, b)| (a - b).abs() / (1e-6 + b.abs()))
-            .fold(0.0_f64, f64::max);
+        let change =
+            relative_change(&next.den, &model.den).max(relative_change(&next.num, &model.num));
         model = next;
         consider(&model, &mut best);
         if change < 1e-9 {
