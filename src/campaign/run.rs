@@ -306,9 +306,9 @@ pub fn run_campaign(
                 };
                 let mut group: Option<usize> = None;
                 loop {
-                    let Some(case) = queue.lock().ok().and_then(|mut q| q.next(&mut group)) else {
-                        break;
-                    };
+                    // two statements, so the queue is unlocked while the case runs
+                    let next = queue.lock().ok().and_then(|mut q| q.next(&mut group));
+                    let Some(case) = next else { break };
                     let result = match worker.sim_for(case, spec.rate_hz) {
                         Ok(sim) => {
                             let r = run_case(sim, spec, &methods, case);

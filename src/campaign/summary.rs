@@ -199,7 +199,7 @@ fn modal_section(results: &[CaseResult], key: &str) -> Section {
         }
     }
     Section {
-        heading: format!("{key}"),
+        heading: key.to_string(),
         paragraphs: vec![
             "Plots: noise-free identifications at each family's smallest amplitude, one plot per aircraft; each \
              curve joins one configuration's flight conditions (which may change speed and altitude together), \
