@@ -1,11 +1,12 @@
-//! Campaign throughput: `campaigns/c172x_737.toml` (24 cases) with 1 and 2 jobs, against the bare JSBSim
+//! Campaign throughput: `campaigns/c172x_737.toml` (36 cases) with 1 and 2 jobs, against the bare JSBSim
 //! stepping time of the same flights (one process, trim + fly only, no identification, no process starts).
 //!
 //! Run: `cargo bench --bench campaign`. Prints wall-clock seconds; a plain `main` (harness = false) because
 //! each measurement takes seconds and runs once.
 
 use flightid::campaign::{run_campaign, CampaignSpec, RunOptions};
-use flightid::compare::single_surface_plan;
+use flightid::compare::{paper_options, perturbations, single_surface_plan};
+use flightid::ident::identify;
 use flightid::sim::{JsbsimSim, Simulator, TrimPoint};
 use std::path::Path;
 use std::time::Instant;
@@ -15,9 +16,13 @@ fn main() {
     let spec = CampaignSpec::load(&path).expect("example campaign");
     let cases = spec.cases();
 
-    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded).
+    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded). The same loop also
+    // times what a campaign adds on top: process starts, trims and the identifications (a profile by phase).
+    let methods = spec.parsed_methods().unwrap();
     let mut fly_s = 0.0;
     let mut trim_s = 0.0;
+    let mut start_s = 0.0;
+    let mut ident_s = 0.0;
     let mut current: Option<(String, JsbsimSim)> = None;
     for c in &cases {
         if current
@@ -26,10 +31,12 @@ fn main() {
             .unwrap_or(true)
         {
             let cfg = flightid::aircraft::load(&c.aircraft).unwrap();
+            let t = Instant::now();
             current = Some((
                 c.aircraft.clone(),
                 JsbsimSim::start(&cfg, spec.rate_hz).unwrap(),
             ));
+            start_s += t.elapsed().as_secs_f64();
         }
         let sim = &mut current.as_mut().unwrap().1;
         let t = Instant::now();
@@ -45,14 +52,24 @@ fn main() {
             spec.rate_hz,
         );
         let t = Instant::now();
-        sim.fly(&plan).unwrap();
+        let rec = sim.fly(&plan).unwrap();
         fly_s += t.elapsed().as_secs_f64();
+        let (du, dy) = perturbations(&rec, &c.surface, &c.tf_key).unwrap();
+        let t = Instant::now();
+        for &m in &methods {
+            let _ = identify(&du, &dy, 1.0 / spec.rate_hz, &paper_options(m));
+        }
+        ident_s += t.elapsed().as_secs_f64();
     }
     println!(
-        "bare JSBSim for {} cases: fly {:.3} s total (trim {:.3} s)",
+        "bare JSBSim for {} cases: fly {:.3} s total; campaign extras: trim {:.3} s, identification ({}) {:.3} s, \
+         process starts (one per aircraft) {:.3} s",
         cases.len(),
         fly_s,
-        trim_s
+        trim_s,
+        spec.methods.join("+"),
+        ident_s,
+        start_s
     );
 
     let mut wall = Vec::new();

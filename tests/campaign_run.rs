@@ -109,7 +109,8 @@ fn killed_campaign_resumes_to_the_same_results_as_an_uninterrupted_run() {
         "finished cases are not redone"
     );
     assert_eq!(summary["ran"], (6 - done) as u64);
-    // Byte-identical: every case runs in a fresh JSBSim process, so scheduling cannot leak into results.
+    // Byte-identical: the bridge resets every model before each trim, so neither scheduling nor process reuse
+    // can leak into results.
     assert_eq!(case_files(&part), reference);
 }
 
@@ -127,6 +128,11 @@ methods = ["ls"]
 name = "c172x"
 aircraft = "c172x"
 conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 }, { altitude_ft = 4000.0, speed_kts = 15.0 } ]
+[[configurations]]
+name = "c172x_typo"
+aircraft = "c172x"
+properties = { "inertia/no-such-mass-lbs" = 10.0 }
+conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
 [[maneuvers]]
 surface = "elevator"
 shape = "doublet"
@@ -149,10 +155,25 @@ amplitudes_deg = [2.0]
         String::from_utf8_lossy(&out.stderr)
     );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(summary["total"], 2);
+    assert_eq!(summary["total"], 3);
     assert_eq!(
-        summary["failed"], 1,
-        "15 kts is below the c172x stall speed"
+        summary["failed"], 2,
+        "15 kts is below the c172x stall speed; the typo configuration names no JSBSim property"
+    );
+    let typo: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            out_dir.join("cases/c172x_typo_4000ft_100kts_elevator_doublet_2deg.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(typo["status"], "failed");
+    assert!(
+        typo["error"]
+            .as_str()
+            .unwrap()
+            .contains("inertia/no-such-mass-lbs"),
+        "the error names the property: {typo}"
     );
     let failed: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(
@@ -181,6 +202,7 @@ amplitudes_deg = [2.0]
     assert!(st.success());
     let html = std::fs::read_to_string(out_dir.join("report/index.html")).unwrap();
     assert!(html.contains("Cases that failed") && html.contains("c172x_4000ft_15kts_elevator"));
+    assert!(html.contains("c172x_typo_4000ft_100kts_elevator"));
     assert!(
         html.matches("<svg").count() >= 4,
         "modal plots vs speed and altitude"

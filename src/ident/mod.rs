@@ -19,6 +19,7 @@ mod complex_serde;
 mod delay;
 mod filter;
 mod iv;
+mod joint;
 mod linalg;
 mod ls;
 mod metrics;
@@ -31,6 +32,7 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 pub use crate::lti::{modes, Mode, TransferFunction};
+pub use joint::{identify_joint, JointRecord, JointResult, RecordFit};
 pub use metrics::{ise, CorrelationTest};
 
 /// Which estimator [`identify`] runs.
