@@ -3,15 +3,19 @@
 //! analysis, Part III: extensions", IJC 31(4); the algorithm of Garnier's CONTSID toolbox,
 //! Garnier, Gilson & Huselstein 2003, IFAC SYSID).
 //!
-//! Model: `A(s) y(t) = B(s) u(t − τ) + A(s) e(t)`, A monic of degree n, B of degree m.
-//! Each iteration j, with the previous estimate (Â, B̂):
+//! Model: `A(s) y(t) = B(s) u(t − τ) + A(s) (e(t) + c)`, A monic of degree n, B of degree m,
+//! `c` a constant output offset (the residual trim). Each iteration j, with the previous estimate (Â, B̂):
 //! 1. prefilter every signal with the SVF bank `s^i / Â(s)` (i = 0..n) — the optimal prefilter
 //!    for white output noise;
 //! 2. auxiliary-model output `x̂ = B̂/Â · u` (the instrument source);
 //! 3. solve the IV normal equations `Σ ζ̂_f φ_fᵀ θ = Σ ζ̂_f y_f^{(n)}` with
-//!    `φ_f = [−y_f^{(n−1)} … −y_f, u_f^{(m)} … u_f]` and `ζ̂_f` the same with `x̂_f` for `y_f`.
-//! Unstable Â are reflected into the left half plane before filtering (as CONTSID does);
-//! this changes only the efficiency, not the consistency, of the estimate.
+//!    `φ_f = [−y_f^{(n−1)} … −y_f, u_f^{(m)} … u_f, 1]` and `ζ̂_f` the same with `x̂_f` for
+//!    `y_f` (the last entry estimates `c`, see [`iv_step`]).
+//!
+//! Unstable Â are reflected into the left half plane before filtering (as CONTSID does) only
+//! when they would grow more than 20-fold over the record; a slow physical instability (the
+//! spiral) is kept, see [`stabilize_if_wild`]. Reflection changes only the efficiency, not the
+//! consistency, of the estimate.
 //!
 //! Initialisation: the plain SVF least-squares estimate (instruments = regressors) with the
 //! fixed prefilter `(s + λ)^n`, tried for several λ; the one with the best simulation fit
