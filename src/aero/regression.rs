@@ -662,6 +662,16 @@ fn lateral_regression(
         da.to_vec(),
         dr.to_vec(),
     ];
+    // A surface that never moves (a single-surface manoeuvre) is a copy of the bias column: leave it out
+    // rather than losing the whole equation to collinearity.
+    let moves = |c: &[f64]| c.iter().any(|x| *x != c[0]);
+    let (names, cols): (Vec<String>, Vec<Vec<f64>>) = names
+        .into_iter()
+        .zip(cols)
+        .enumerate()
+        .filter(|(k, (_, c))| *k < 4 || moves(c))
+        .map(|(_, nc)| nc)
+        .unzip();
     lesq_smoothed(coefficient, &names, &cols, z, options)
 }
 

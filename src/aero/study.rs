@@ -76,6 +76,22 @@ pub struct ModalCheck {
     pub jsbsim: f64,
 }
 
+/// One identified transfer function as used by the study.
+#[derive(Debug, Clone, Serialize)]
+pub struct IdentifiedSummary {
+    /// `theta_rad/elevator_rad` etc.
+    pub tf: String,
+    /// Numerator, highest power first.
+    pub num: Vec<f64>,
+    /// Denominator, monic.
+    pub den: Vec<f64>,
+    /// Simulation fit, % (when identified here).
+    pub fit_sim_percent: Option<f64>,
+}
+
+/// (short period, Dutch roll), each (ωn rad/s, ζ).
+type ModePair = ((f64, f64), (f64, f64));
+
 /// Everything the study found.
 #[derive(Debug, Clone, Serialize)]
 pub struct Study {
@@ -83,8 +99,8 @@ pub struct Study {
     pub truth: AeroTruth,
     /// Model check against JSBSim's linearization.
     pub modal_check: Vec<ModalCheck>,
-    /// Identified transfer functions: (label, num, den, simulation fit %).
-    pub identified: Vec<(String, Vec<f64>, Vec<f64>, Option<f64>)>,
+    /// Identified transfer functions.
+    pub identified: Vec<IdentifiedSummary>,
     /// One scorecard per route.
     pub scorecards: Vec<Scorecard>,
     /// The identifiability analysis of the transfer-function route, in words.
@@ -126,7 +142,7 @@ fn modal_check(sim: &mut JsbsimSim, truth: &AeroTruth) -> Result<Vec<ModalCheck>
         let dr = fastest(&m.lateral()?.modes()?).unwrap_or((f64::NAN, f64::NAN));
         per.push((sp, dr));
     }
-    let row = |q: &str, f: &dyn Fn(((f64, f64), (f64, f64))) -> f64, j: f64| ModalCheck {
+    let row = |q: &str, f: &dyn Fn(ModePair) -> f64, j: f64| ModalCheck {
         quantity: q.into(),
         paper: f(per[0]),
         full: f(per[1]),
@@ -167,12 +183,12 @@ pub fn run(
             let flights = fly_doublets(sim, point, trial)?;
             let (all, results) = identify_paper_tfs(&flights, trial)?;
             for (o, r) in &results {
-                identified.push((
-                    o.label(),
-                    r.tf.num.clone(),
-                    r.tf.den.clone(),
-                    Some(r.fit_sim_percent),
-                ));
+                identified.push(IdentifiedSummary {
+                    tf: o.label(),
+                    num: r.tf.num.clone(),
+                    den: r.tf.den.clone(),
+                    fit_sim_percent: Some(r.fit_sim_percent),
+                });
             }
             // φ/δa and φ/δr share the lateral poles; a rudder doublet barely excites the roll mode, so its
             // 4-pole fit often trades it for a zero. Use φ/δr only when its poles agree with φ/δa's.
@@ -211,7 +227,12 @@ pub fn run(
                 apply_overrides_note(d, &mut notes);
             }
             for (o, t) in &tfs.tfs {
-                identified.push((o.label(), t.num.clone(), t.den.clone(), None));
+                identified.push(IdentifiedSummary {
+                    tf: o.label(),
+                    num: t.num.clone(),
+                    den: t.den.clone(),
+                    fit_sim_percent: None,
+                });
             }
         }
         Source::Data(rec) => {
@@ -328,7 +349,7 @@ impl Study {
         json!({
             "truth": self.truth,
             "modal_check": self.modal_check,
-            "identified": self.identified.iter().map(|(l, n, d, f)| json!({"tf": l, "num": n, "den": d, "fit_sim_percent": f})).collect::<Vec<_>>(),
+            "identified": self.identified,
             "scorecards": self.scorecards,
             "identifiability": self.identifiability,
             "notes": self.notes,
