@@ -1,23 +1,51 @@
-//! Campaign throughput: `campaigns/c172x_737.toml` (24 cases) with 1 and 2 jobs, against the bare JSBSim
+//! Campaign throughput: `campaigns/c172x_737.toml` (36 cases) with 1 and 2 jobs, against the bare JSBSim
 //! stepping time of the same flights (one process, trim + fly only, no identification, no process starts).
 //!
 //! Run: `cargo bench --bench campaign`. Prints wall-clock seconds; a plain `main` (harness = false) because
 //! each measurement takes seconds and runs once.
 
 use flightid::campaign::{run_campaign, CampaignSpec, RunOptions};
-use flightid::compare::single_surface_plan;
+use flightid::compare::{paper_options, perturbations, single_surface_plan};
+use flightid::ident::identify;
 use flightid::sim::{JsbsimSim, Simulator, TrimPoint};
 use std::path::Path;
 use std::time::Instant;
+
+/// CPU seconds of this process and its reaped children (the JSBSim bridges), from /proc/self/stat: a figure
+/// that, unlike wall-clock time, does not depend on what else the machine runs.
+fn tree_cpu_s() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<f64> = after
+        .split_whitespace()
+        .map(|x| x.parse().unwrap_or(0.0))
+        .collect();
+    let ticks = std::process::Command::new("getconf")
+        .arg("CLK_TCK")
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8_lossy(&o.stdout).trim().parse().ok())
+        .unwrap_or(100.0);
+    // fields 14-17 of stat (utime, stime, cutime, cstime) are 11-14 after the command name
+    f.get(11..15)
+        .map(|v| v.iter().sum::<f64>())
+        .unwrap_or(f64::NAN)
+        / ticks
+}
 
 fn main() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("campaigns/c172x_737.toml");
     let spec = CampaignSpec::load(&path).expect("example campaign");
     let cases = spec.cases();
 
-    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded).
+    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded). The same loop also
+    // times what a campaign adds on top: process starts, trims and the identifications (a profile by phase).
+    let methods = spec.parsed_methods().unwrap();
     let mut fly_s = 0.0;
     let mut trim_s = 0.0;
+    let mut start_s = 0.0;
+    let mut ident_s = 0.0;
+    let cpu0 = tree_cpu_s();
     let mut current: Option<(String, JsbsimSim)> = None;
     for c in &cases {
         if current
@@ -26,10 +54,12 @@ fn main() {
             .unwrap_or(true)
         {
             let cfg = flightid::aircraft::load(&c.aircraft).unwrap();
+            let t = Instant::now();
             current = Some((
                 c.aircraft.clone(),
                 JsbsimSim::start(&cfg, spec.rate_hz).unwrap(),
             ));
+            start_s += t.elapsed().as_secs_f64();
         }
         let sim = &mut current.as_mut().unwrap().1;
         let t = Instant::now();
@@ -45,14 +75,29 @@ fn main() {
             spec.rate_hz,
         );
         let t = Instant::now();
-        sim.fly(&plan).unwrap();
+        let rec = sim.fly(&plan).unwrap();
         fly_s += t.elapsed().as_secs_f64();
+        let (du, dy) = perturbations(&rec, &c.surface, &c.tf_key).unwrap();
+        let t = Instant::now();
+        for &m in &methods {
+            let _ = identify(&du, &dy, 1.0 / spec.rate_hz, &paper_options(m));
+        }
+        ident_s += t.elapsed().as_secs_f64();
     }
+    drop(current); // reap the bridge, so its CPU time is counted
+    let bare_cpu_s = tree_cpu_s() - cpu0;
     println!(
-        "bare JSBSim for {} cases: fly {:.3} s total (trim {:.3} s)",
+        "bare loop CPU (process tree, incl. starts, trims, identification): {bare_cpu_s:.2} s"
+    );
+    println!(
+        "bare JSBSim for {} cases: fly {:.3} s total; campaign extras: trim {:.3} s, identification ({}) {:.3} s, \
+         process starts (one per aircraft) {:.3} s",
         cases.len(),
         fly_s,
-        trim_s
+        trim_s,
+        spec.methods.join("+"),
+        ident_s,
+        start_s
     );
 
     let mut wall = Vec::new();
@@ -63,6 +108,7 @@ fn main() {
             ..spec.clone()
         };
         let t = Instant::now();
+        let c0 = tree_cpu_s();
         let s = run_campaign(
             &spec,
             dir.path(),
@@ -73,9 +119,11 @@ fn main() {
         )
         .unwrap();
         let el = t.elapsed().as_secs_f64();
+        let cpu = tree_cpu_s() - c0;
         assert_eq!(s.failed, 0);
         println!(
-            "campaign, {jobs} job(s), fresh process per case = {fresh}: {el:.2} s ({:.2} cases/s)",
+            "campaign, {jobs} job(s), fresh process per case = {fresh}: {el:.2} s wall ({:.2} cases/s), \
+             {cpu:.2} s CPU",
             cases.len() as f64 / el
         );
         wall.push(el);

@@ -31,6 +31,7 @@ def main():
         np.linalg.lstsq(phi, target, rcond=None)
         times.append(time.perf_counter() - t0)
     times.sort()
+    lstsq_times = times
     print(f"numpy.linalg.lstsq {phi.shape[0]}x{phi.shape[1]}: median {1e3 * times[10]:.2f} ms "
           f"(min {1e3 * times[0]:.2f} ms)")
     # with the regressor build included, for a like-for-like comparison with the Rust bench
@@ -41,7 +42,10 @@ def main():
         np.linalg.lstsq(phi, y[k], rcond=None)
         times.append(time.perf_counter() - t0)
     times.sort()
-    print(f"regressor build + lstsq: median {1e3 * times[5]:.2f} ms")
+    build_ms = 1e3 * times[5]
+    print(f"regressor build + lstsq: median {build_ms:.2f} ms")
+    # machine-readable line for benches/paper.rs
+    print(f"RESULT lstsq_ms={1e3 * lstsq_times[10]:.3f} build_lstsq_ms={build_ms:.3f}")
 
 
 if __name__ == "__main__":

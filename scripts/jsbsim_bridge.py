@@ -114,11 +114,15 @@ PROBES = {}
 AXIS_OF = {}
 
 
-def make_private_aircraft(root_dir, aircraft, surfaces):
-    """Writes root_dir/aircraft/<aircraft>/ with the rewritten XML; returns the list of coefficient knobs."""
+def make_private_aircraft(root_dir, aircraft, surfaces, aircraft_dir=None):
+    """Writes root_dir/aircraft/<aircraft>/ with the rewritten XML; returns the list of coefficient knobs.
+
+    aircraft_dir: a directory holding <aircraft>.xml to use instead of the package's (an exported model)."""
     pkg = jsbsim.get_default_root_dir()
-    src_dir = os.path.join(pkg, "aircraft", aircraft)
+    src_dir = aircraft_dir or os.path.join(pkg, "aircraft", aircraft)
     src_xml = os.path.join(src_dir, aircraft + ".xml")
+    if aircraft_dir and not os.path.isfile(src_xml):
+        raise BridgeError("unknown_aircraft", f"model directory {aircraft_dir} has no {aircraft}.xml")
     if not os.path.isfile(src_xml):
         known = sorted(d for d in os.listdir(os.path.join(pkg, "aircraft"))
                        if os.path.isfile(os.path.join(pkg, "aircraft", d, d + ".xml")))
@@ -225,6 +229,7 @@ def make_private_aircraft(root_dir, aircraft, surfaces):
     PROBES.update(probes)
     for i, el in enumerate(head):
         aero.insert(i, el)
+    add_term_knobs(aero)
     tree.write(os.path.join(dst_dir, aircraft + ".xml"), encoding="utf-8", xml_declaration=True)
     return knobs
 
@@ -243,7 +248,8 @@ class Sim:
         self.engines = int(req.get("engines", 1))
         self.root = tempfile.mkdtemp(prefix="flightid-jsbsim-")
         os.makedirs(os.path.join(self.root, "output"))
-        self.knobs = make_private_aircraft(self.root, self.aircraft, self.surfaces)
+        self.aircraft_dir = req.get("aircraft_dir")
+        self.knobs = make_private_aircraft(self.root, self.aircraft, self.surfaces, self.aircraft_dir)
         fdm = jsbsim.FGFDMExec(self.root)
         fdm.set_debug_level(0)
         fdm.set_dt(self.dt_s)
@@ -437,6 +443,95 @@ class Sim:
         return {"n_records": len(out) // max(1, len(get)), "loop_s": elapsed}, out
 
 
+# ----------------------------------------------------------------------------------------------------------
+# Added aerodynamic terms and model export (flightid diagnose)
+# ----------------------------------------------------------------------------------------------------------
+
+# Added nonlinear terms: name -> (axis, factors of the force/moment); the coefficient is the declared property
+# flightid/added/<name> (default 0), e.g. Cm_alpha2: dM = qbar S cbar k alpha^2.
+ADDED_TERMS = {
+    "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft", "aero/alpha-rad",
+                            "aero/alpha-rad"]),
+    "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft", "aero/alpha-rad", "aero/alpha-rad"]),
+}
+
+
+# Added terms the loaded aircraft offers (its model has the axis the term belongs to).
+ADDED = []
+
+
+def added_term_function(name, coefficient):
+    """<function> of an added term; coefficient: a property name (knob) or a number (baked value)."""
+    _axis, factors = ADDED_TERMS[name]
+    last = (f"<property>{coefficient}</property>" if isinstance(coefficient, str)
+            else f"<value>{coefficient!r}</value>")
+    props = "".join(f"<property>{p}</property>" for p in factors)
+    fname = f"flightid/added/{name}-term" if isinstance(coefficient, str) else f"flightid/fitted/{name}-term"
+    return ET.fromstring(f'<function name="{fname}"><product>{props}{last}</product></function>')
+
+
+def add_term_knobs(aero):
+    """Declares flightid/added/<name> = 0 and adds each term to its axis (nothing changes until a knob is set)."""
+    ADDED.clear()
+    axes = {a.get("name", "").upper(): a for a in aero.iter("axis")}
+    for i, name in enumerate(sorted(ADDED_TERMS)):
+        d = ET.Element("property", {"value": "0.0"})
+        d.text = f"flightid/added/{name}"
+        aero.insert(i, d)
+        axis = axes.get(ADDED_TERMS[name][0])
+        if axis is not None:
+            axis.append(added_term_function(name, f"flightid/added/{name}"))
+            ADDED.append(name)
+
+
+def export_aircraft(sim, req):
+    """Writes req["dir"]/<aircraft>.xml: the source aircraft with the coefficient factors req["knobs"]
+    ({coefficient: factor}) and added terms req["added"] ({name: coefficient}) written into its functions, no
+    <input>/<output>; the other files of the aircraft directory are copied. Returns the XML path."""
+    pkg = jsbsim.get_default_root_dir()
+    src_dir = sim.aircraft_dir or os.path.join(pkg, "aircraft", sim.aircraft)
+    dst_dir = req["dir"]
+    os.makedirs(dst_dir, exist_ok=True)
+    for entry in os.listdir(src_dir):
+        src = os.path.join(src_dir, entry)
+        if entry != sim.aircraft + ".xml" and os.path.isfile(src) and not entry.endswith(".json"):
+            shutil.copy(src, os.path.join(dst_dir, entry))
+    tree = ET.parse(os.path.join(src_dir, sim.aircraft + ".xml"))
+    root = tree.getroot()
+    for tag in ("input", "output"):
+        for el in root.findall(tag):
+            root.remove(el)
+    aero = root.find("aerodynamics")
+    knobs = {k: float(v) for k, v in req.get("knobs", {}).items()}
+    for fn in aero.iter("function"):
+        coef = fn.get("name", "")[len("aero/coefficient/"):]
+        if not fn.get("name", "").startswith("aero/coefficient/") or knobs.get(coef, 1.0) == 1.0:
+            continue
+        body = [c for c in list(fn) if c.tag != "description"]
+        if len(body) != 1:
+            raise BridgeError("export", f"coefficient {coef} has no single body to scale")
+        fn.remove(body[0])
+        prod = ET.SubElement(fn, "product")
+        ET.SubElement(prod, "value").text = repr(knobs[coef])
+        prod.append(body[0])
+        desc = fn.find("description")
+        note = f" [flightid diagnose: x {knobs[coef]:.6g}]"
+        if desc is not None:
+            desc.text = (desc.text or "") + note
+    axes = {a.get("name", "").upper(): a for a in aero.iter("axis")}
+    for name, k in req.get("added", {}).items():
+        if name not in ADDED_TERMS:
+            raise BridgeError("export", f"unknown added term '{name}' (known: {', '.join(sorted(ADDED_TERMS))})")
+        axis = axes.get(ADDED_TERMS[name][0])
+        if axis is None:
+            raise BridgeError("export", f"aircraft has no {ADDED_TERMS[name][0]} axis for {name}")
+        if float(k) != 0.0:
+            axis.append(added_term_function(name, float(k)))
+    path = os.path.join(dst_dir, sim.aircraft + ".xml")
+    tree.write(path, encoding="utf-8", xml_declaration=True)
+    return path
+
+
 def main():
     sim = None
     stdin = sys.stdin.buffer
@@ -460,7 +555,8 @@ def main():
                     sim.close()
                     sim = None
                 sim = Sim(req)
-                send({"ok": True, "knobs": sim.knobs, "jsbsim_version": jsbsim.__version__})
+                send({"ok": True, "knobs": sim.knobs, "added_terms": sorted(set(ADDED)),
+                      "jsbsim_version": jsbsim.__version__})
             elif cmd == "quit":
                 send({"ok": True})
                 break
@@ -477,6 +573,8 @@ def main():
                 send(dict(ok=True, **sim.probe(req)))
             elif cmd == "linearize":
                 send(dict(ok=True, **sim.linearize(req)))
+            elif cmd == "export":
+                send({"ok": True, "path": export_aircraft(sim, req)})
             elif cmd == "fly":
                 header, out = sim.fly(req, payload)
                 send(dict(ok=True, **header), out)

@@ -70,7 +70,43 @@ fn committed_baselines_pass_and_fail_when_perturbed_or_when_the_aircraft_changes
         stderr.contains(key),
         "the error names the quantity: {stderr}"
     );
-    assert!(stdout.contains("87 of 88"), "only that one moved: {stdout}");
+    assert!(
+        stdout.contains("131 of 132"),
+        "only that one moved: {stdout}"
+    );
+
+    // Mass/CG variants move the short period the way flight mechanics says: an aft CG (less static margin)
+    // lowers the frequency. c172x 200 lb of rear luggage, CG 45.5 -> 50.6 in: measured 6.16 -> 5.23 rad/s
+    // (-15 %); 737 with 4000 lb instead of 24000 lb of fuel, CG 610.8 -> 633.5 in (aft of the aerodynamic
+    // reference point): 1.75 -> 1.22 rad/s (-30 %). Bands of +-7 points around the measured changes.
+    let sp = |id: &str| {
+        let v: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(results.join(format!("cases/{id}.json"))).unwrap(),
+        )
+        .unwrap();
+        v["identifications"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|i| i["method"] == "srivc")
+            .unwrap()["modal"]["osc_omega_n_rad_s"]
+            .as_f64()
+            .unwrap()
+    };
+    let c172_change = sp("c172x_aft_cg_4000ft_100kts_elevator_doublet_1deg")
+        / sp("c172x_4000ft_100kts_elevator_doublet_1deg")
+        - 1.0;
+    assert!(
+        (-0.22..=-0.08).contains(&c172_change),
+        "c172x aft CG: {c172_change}"
+    );
+    let b737_change = sp("737_light_30000ft_450kts_elevator_doublet_1deg")
+        / sp("737_30000ft_450kts_elevator_doublet_1deg")
+        - 1.0;
+    assert!(
+        (-0.37..=-0.23).contains(&b737_change),
+        "737 light: {b737_change}"
+    );
 
     // 3. The aircraft changed: c172x with Cmalpha × 1.3 (pitch stiffness up, short period ωn up ~10-15 %).
     let spec = std::fs::read_to_string(&campaign).unwrap();

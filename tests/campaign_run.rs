@@ -109,7 +109,8 @@ fn killed_campaign_resumes_to_the_same_results_as_an_uninterrupted_run() {
         "finished cases are not redone"
     );
     assert_eq!(summary["ran"], (6 - done) as u64);
-    // Byte-identical: every case runs in a fresh JSBSim process, so scheduling cannot leak into results.
+    // Byte-identical: the bridge resets every model before each trim, so neither scheduling nor process reuse
+    // can leak into results.
     assert_eq!(case_files(&part), reference);
 }
 
@@ -127,6 +128,11 @@ methods = ["ls"]
 name = "c172x"
 aircraft = "c172x"
 conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 }, { altitude_ft = 4000.0, speed_kts = 15.0 } ]
+[[configurations]]
+name = "c172x_typo"
+aircraft = "c172x"
+properties = { "inertia/no-such-mass-lbs" = 10.0 }
+conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
 [[maneuvers]]
 surface = "elevator"
 shape = "doublet"
@@ -149,27 +155,25 @@ amplitudes_deg = [2.0]
         String::from_utf8_lossy(&out.stderr)
     );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(summary["total"], 2);
+    assert_eq!(summary["total"], 3);
     assert_eq!(
-        summary["failed"], 1,
-        "15 kts is below the c172x stall speed"
+        summary["failed"], 2,
+        "15 kts is below the c172x stall speed; the typo configuration names no JSBSim property"
     );
-    let failed: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            out_dir.join("cases/c172x_4000ft_15kts_elevator_doublet_2deg.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
+    let typo: serde_json::Value =
+        case_json(&out_dir, "c172x_typo_4000ft_100kts_elevator_doublet_2deg");
+    assert_eq!(typo["status"], "failed");
+    assert!(
+        typo["error"]
+            .as_str()
+            .unwrap()
+            .contains("inertia/no-such-mass-lbs"),
+        "the error names the property: {typo}"
+    );
+    let failed: serde_json::Value = case_json(&out_dir, "c172x_4000ft_15kts_elevator_doublet_2deg");
     assert_eq!(failed["status"], "failed");
     assert!(failed["error"].as_str().unwrap().contains("trim"));
-    let ok: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            out_dir.join("cases/c172x_4000ft_100kts_elevator_doublet_2deg.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
+    let ok: serde_json::Value = case_json(&out_dir, "c172x_4000ft_100kts_elevator_doublet_2deg");
     assert_eq!(ok["status"], "ok");
     // The summary report lists the failure.
     let st = flightid()
@@ -181,10 +185,17 @@ amplitudes_deg = [2.0]
     assert!(st.success());
     let html = std::fs::read_to_string(out_dir.join("report/index.html")).unwrap();
     assert!(html.contains("Cases that failed") && html.contains("c172x_4000ft_15kts_elevator"));
+    assert!(html.contains("c172x_typo_4000ft_100kts_elevator"));
     assert!(
         html.matches("<svg").count() >= 4,
         "modal plots vs speed and altitude"
     );
+}
+
+/// The result file of one case.
+fn case_json(out_dir: &Path, id: &str) -> serde_json::Value {
+    let path = out_dir.join(format!("cases/{id}.json"));
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 fn run_bad(text: &str) -> (i32, String) {
@@ -210,7 +221,7 @@ fn malformed_or_meaningless_campaign_files_are_usage_errors_that_say_what_is_wro
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("malformed") && err.contains("line"), "{err}");
 
-    let good = SMALL.replace("\"3211\"", "\"3211\"");
+    let good = SMALL;
     let (code, err) = run_bad(&good.replacen("aircraft = \"c172x\"", "aircraft = \"a380\"", 1));
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("unknown aircraft 'a380'"), "{err}");

@@ -1,9 +1,12 @@
-//! Diagnose names hidden effects: "measured" data are generated with JSBSim itself with one effect hidden
-//! (a modified coefficient, a delayed/lagged/scaled surface, a biased sensor), realistic seeded noise, one
-//! training and one validation maneuver each exciting all three axes; `diagnose` must name the effect and
-//! target, recover the value within 20 % and at least halve the validation ISE. Clean data: nothing named.
-
-use std::sync::Mutex;
+//! Diagnose names hidden effects (issue 7 acceptance). "Measured" data are generated with JSBSim itself with one
+//! effect hidden — a modified coefficient, a delayed/lagged/scaled surface, a biased sensor — whose size is a
+//! seeded random draw (uniform over a physically sensible range, both directions where both exist), plus the noise
+//! of a small-aircraft sensor suite. Each case has one training and one validation maneuver, each exciting all
+//! three axes. `diagnose` must name exactly the hidden effect(s) (effect and target), recover the value within
+//! 20 % and at least halve the validation ISE; on clean data it must name nothing.
+//!
+//! The 20 % tolerance is the issue's; with this noise the estimates land within ~2 % (sandwich standard errors
+//! of 0.5–1 %), so a failure means a wrong structure, not bad luck of the draw.
 
 use flightid::aircraft;
 use flightid::data::FlightRecord;
@@ -11,9 +14,7 @@ use flightid::diagnose::search::Worker;
 use flightid::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use flightid::signal::{add_white_noise, generate, Maneuver};
 use flightid::sim::{FlightPlan, JsbsimSim, Simulator, SurfaceInput, TrimPoint};
-
-/// The cases share the two cores: run one at a time.
-static SERIAL: Mutex<()> = Mutex::new(());
+use rand::{rngs::StdRng, Rng, SeedableRng};
 
 const RATE_HZ: f64 = 50.0;
 const DURATION_S: f64 = 16.0;
@@ -36,17 +37,41 @@ const NOISE: [(&str, f64); 13] = [
 ];
 
 /// Hidden effect used to generate the data.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 enum Hidden {
+    /// Factor on a JSBSim coefficient function (knob name).
     Coefficient(&'static str, f64),
+    /// Surface delay, s (a whole number of samples).
     Delay(&'static str, f64),
+    /// First-order surface lag, s.
     Lag(&'static str, f64),
+    /// Factor on a surface deflection.
     Effectiveness(&'static str, f64),
+    /// Additive sensor bias on a column.
     Bias(&'static str, f64),
+    /// An added aerodynamic term the stock model lacks (e.g. `Cm_alpha2`: ΔC_m = k α²).
+    Added(&'static str, f64),
 }
 
-/// Training: 3211 on elevator, then doublets on aileron and rudder. Validation: other shapes and timing.
-fn inputs(validation: bool) -> Vec<(&'static str, Vec<f64>)> {
+/// Input shapes: step-like (3211 and doublets, staggered per axis) or multisines on all three axes at once.
+#[derive(Clone, Copy, PartialEq)]
+enum Shape {
+    Steps,
+    Multisine,
+}
+
+/// A seeded draw: magnitude uniform in `[lo, hi]`, sign random when `both_ways`.
+fn draw(rng: &mut StdRng, lo: f64, hi: f64, both_ways: bool) -> f64 {
+    let m = rng.gen_range(lo..hi);
+    if both_ways && rng.gen_bool(0.5) {
+        -m
+    } else {
+        m
+    }
+}
+
+/// Training and validation maneuvers: different shapes, amplitudes and timing; each moves all three surfaces.
+fn inputs(shape: Shape, validation: bool) -> Vec<(&'static str, Vec<f64>)> {
     let dt = 1.0 / RATE_HZ;
     let n = (DURATION_S * RATE_HZ).round() as usize;
     let gen = |m: Maneuver, amp: f64, start: f64| -> Vec<f64> {
@@ -56,8 +81,15 @@ fn inputs(validation: bool) -> Vec<(&'static str, Vec<f64>)> {
             .map(|v| amp * v)
             .collect()
     };
-    if !validation {
-        vec![
+    let ms =
+        |f_min_hz: f64, f_max_hz: f64, n_harmonics: usize, period_s: f64| Maneuver::Multisine {
+            f_min_hz,
+            f_max_hz,
+            n_harmonics,
+            period_s,
+        };
+    match (shape, validation) {
+        (Shape::Steps, false) => vec![
             (
                 "elevator",
                 gen(Maneuver::ThreeTwoOneOne { pulse_s: 0.5 }, 0.03, 1.0),
@@ -70,9 +102,8 @@ fn inputs(validation: bool) -> Vec<(&'static str, Vec<f64>)> {
                 "rudder",
                 gen(Maneuver::Doublet { pulse_s: 1.0 }, 0.05, 10.0),
             ),
-        ]
-    } else {
-        vec![
+        ],
+        (Shape::Steps, true) => vec![
             (
                 "elevator",
                 gen(Maneuver::Doublet { pulse_s: 0.8 }, 0.035, 1.0),
@@ -85,7 +116,17 @@ fn inputs(validation: bool) -> Vec<(&'static str, Vec<f64>)> {
                 "rudder",
                 gen(Maneuver::Doublet { pulse_s: 0.7 }, 0.06, 10.5),
             ),
-        ]
+        ],
+        (Shape::Multisine, false) => vec![
+            ("elevator", gen(ms(0.2, 1.5, 6, 10.0), 0.02, 1.0)),
+            ("aileron", gen(ms(0.15, 1.2, 5, 12.0), 0.03, 1.0)),
+            ("rudder", gen(ms(0.1, 1.0, 5, 14.0), 0.03, 1.0)),
+        ],
+        (Shape::Multisine, true) => vec![
+            ("elevator", gen(ms(0.25, 1.2, 5, 8.0), 0.02, 1.0)),
+            ("aileron", gen(ms(0.1, 1.0, 5, 14.0), 0.03, 1.0)),
+            ("rudder", gen(ms(0.15, 1.2, 5, 10.0), 0.03, 1.0)),
+        ],
     }
 }
 
@@ -117,17 +158,29 @@ fn hidden_input(h: &Hidden, surface: &str, u: &[f64]) -> Vec<f64> {
 }
 
 /// Flies one maneuver with the hidden effects and returns the noisy "measured" record.
-fn measure(sim: &mut JsbsimSim, hidden: &[Hidden], validation: bool, seed: u64) -> FlightRecord {
+fn measure(
+    sim: &mut JsbsimSim,
+    hidden: &[Hidden],
+    shape: Shape,
+    validation: bool,
+    seed: u64,
+) -> FlightRecord {
     for name in sim.coefficient_knobs.clone() {
         sim.set_coefficient_scale(&name, 1.0).unwrap();
+    }
+    for name in sim.added_terms.clone() {
+        sim.set_added_term(&name, 0.0).unwrap();
     }
     for h in hidden {
         if let Hidden::Coefficient(c, f) = h {
             sim.set_coefficient_scale(c, *f).unwrap();
         }
+        if let Hidden::Added(t, k) = h {
+            sim.set_added_term(t, *k).unwrap();
+        }
     }
     let trim = sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
-    let measured = inputs(validation);
+    let measured = inputs(shape, validation);
     let plan = FlightPlan {
         rate_hz: RATE_HZ,
         n_steps: measured[0].1.len(),
@@ -172,12 +225,11 @@ fn measure(sim: &mut JsbsimSim, hidden: &[Hidden], validation: bool, seed: u64) 
     rec
 }
 
-fn run(hidden: &[Hidden], seed: u64) -> Diagnosis {
-    let _guard = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+fn run(hidden: &[Hidden], shape: Shape, seed: u64) -> Diagnosis {
     let cfg = aircraft::load("c172x").unwrap();
     let mut gen = JsbsimSim::start(&cfg, RATE_HZ).unwrap();
-    let train = measure(&mut gen, hidden, false, seed);
-    let valid = measure(&mut gen, hidden, true, seed + 1);
+    let train = measure(&mut gen, hidden, shape, false, seed);
+    let valid = measure(&mut gen, hidden, shape, true, seed + 1);
     drop(gen);
     let mut workers: Vec<Worker> = (0..2)
         .map(|_| Worker::new(Box::new(JsbsimSim::start(&cfg, RATE_HZ).unwrap())))
@@ -189,37 +241,55 @@ fn run(hidden: &[Hidden], seed: u64) -> Diagnosis {
         &DiagnoseOptions::default(),
     )
     .unwrap();
-    eprintln!(
-        "named: {}\nvalidation: {:?} -> {:?}; {} simulations, {:.1} s",
+    let mut log = format!(
+        "hidden: {hidden:?}\nnamed: {}\nvalidation ISE: {:?} -> {:?}; {} simulations, {:.1} s\n",
         serde_json::to_string(&d.named_cause).unwrap(),
         d.validation.as_ref().map(|v| v.ise_before),
         d.validation.as_ref().map(|v| v.ise_after),
         d.simulations,
         d.wall_s
     );
-    let mut top: Vec<_> = d.candidates.iter().filter(|c| c.round == 0).collect();
-    top.sort_by(|a, b| a.cost_after.total_cmp(&b.cost_after));
-    for c in top.iter().take(6) {
-        eprintln!(
-            "  {}/{} = {:.4} ± {:.4}, dBIC {:.1}",
-            c.effect, c.target, c.value, c.std_error, c.criterion_delta
+    let mut full: Vec<_> = d.candidates.iter().filter(|c| c.full_fit).collect();
+    full.sort_by_key(|c| c.round);
+    for c in full {
+        log += &format!(
+            "  round {} {}/{} = {:.4} ± {:.4}, ΔBIC {:.1}, z {:.1}, n_eff {:.0}, validation gain {:?}, rejected: {:?}\n",
+            c.round,
+            c.effect,
+            c.target,
+            c.value,
+            c.std_error,
+            c.criterion_delta,
+            c.z,
+            c.n_eff,
+            c.validation_gain,
+            c.rejected_because
         );
     }
+    eprint!("{log}");
     d
 }
 
-/// Named effect with value within 20 % of the truth, and a validation ISE at least halved.
-fn assert_named(d: &Diagnosis, effect: &str, target: &str, truth: f64) {
-    let c = d
-        .named_cause
-        .iter()
-        .find(|c| c.effect == effect && c.target == target)
-        .unwrap_or_else(|| panic!("{effect}/{target} not named; named: {:?}", d.named_cause));
-    assert!(
-        ((c.value - truth) / truth).abs() < 0.2,
-        "{effect}/{target}: {} vs truth {truth} (20 % allowed)",
-        c.value
+/// Exactly the expected effects are named, each within 20 % of the truth, and the validation ISE is at least halved.
+fn assert_named(d: &Diagnosis, expected: &[(&str, &str, f64)]) {
+    assert_eq!(
+        d.named_cause.len(),
+        expected.len(),
+        "expected {expected:?}, named {:?}",
+        d.named_cause
     );
+    for (effect, target, truth) in expected {
+        let c = d
+            .named_cause
+            .iter()
+            .find(|c| c.effect == *effect && c.target == *target)
+            .unwrap_or_else(|| panic!("{effect}/{target} not named; named: {:?}", d.named_cause));
+        assert!(
+            ((c.value - truth) / truth).abs() < 0.2,
+            "{effect}/{target}: {} vs truth {truth} (20 % allowed)",
+            c.value
+        );
+    }
     let v = d.validation.as_ref().unwrap();
     assert!(
         v.ise_after <= 0.5 * v.ise_before,
@@ -231,56 +301,95 @@ fn assert_named(d: &Diagnosis, effect: &str, target: &str, truth: f64) {
 
 #[test]
 fn clean_data_names_no_cause() {
-    let d = run(&[], 11);
+    let d = run(&[], Shape::Steps, 11);
     assert!(d.named_cause.is_empty(), "named: {:?}", d.named_cause);
 }
 
 #[test]
-fn pitch_stiffness_cm_alpha_25_percent_high_is_named() {
-    let d = run(&[Hidden::Coefficient("Cmalpha", 1.25)], 21);
-    assert_named(&d, "aero_derivative", "Cm_alpha", 1.25);
+fn pitch_stiffness_cm_alpha_error_is_named() {
+    let mut rng = StdRng::seed_from_u64(21);
+    let f = 1.0 + draw(&mut rng, 0.2, 0.4, true);
+    let d = run(&[Hidden::Coefficient("Cmalpha", f)], Shape::Steps, 21);
+    assert_named(&d, &[("aero_derivative", "Cm_alpha", f)]);
 }
 
 #[test]
-fn elevator_delay_of_80_ms_is_named() {
-    let d = run(&[Hidden::Delay("elevator", 0.08)], 31);
-    assert_named(&d, "input_delay", "elevator", 0.08);
+fn elevator_delay_is_named() {
+    // 3..7 samples at 50 Hz: 60–140 ms.
+    let mut rng = StdRng::seed_from_u64(31);
+    let tau = rng.gen_range(3..=7) as f64 / RATE_HZ;
+    let d = run(&[Hidden::Delay("elevator", tau)], Shape::Steps, 31);
+    assert_named(&d, &[("input_delay", "elevator", tau)]);
 }
 
 #[test]
 fn q_gyro_bias_is_named() {
-    let d = run(&[Hidden::Bias("q_rad_s", 0.02)], 41);
-    assert_named(&d, "sensor_bias", "q_rad_s", 0.02);
+    let mut rng = StdRng::seed_from_u64(41);
+    let b = draw(&mut rng, 0.01, 0.03, true);
+    let d = run(&[Hidden::Bias("q_rad_s", b)], Shape::Steps, 41);
+    assert_named(&d, &[("sensor_bias", "q_rad_s", b)]);
 }
 
 #[test]
-fn aileron_actuator_lag_of_100_ms_is_named() {
-    let d = run(&[Hidden::Lag("aileron", 0.1)], 51);
-    assert_named(&d, "actuator_lag", "aileron", 0.1);
+fn aileron_actuator_lag_is_named() {
+    let mut rng = StdRng::seed_from_u64(51);
+    let tau = rng.gen_range(0.06..0.2);
+    let d = run(&[Hidden::Lag("aileron", tau)], Shape::Steps, 51);
+    assert_named(&d, &[("actuator_lag", "aileron", tau)]);
 }
 
 #[test]
-fn rudder_effectiveness_30_percent_low_is_named() {
-    let d = run(&[Hidden::Effectiveness("rudder", 0.7)], 61);
-    assert_named(&d, "control_effectiveness", "rudder", 0.7);
+fn rudder_effectiveness_error_is_named() {
+    let mut rng = StdRng::seed_from_u64(61);
+    let k = 1.0 + draw(&mut rng, 0.2, 0.4, true);
+    let d = run(&[Hidden::Effectiveness("rudder", k)], Shape::Steps, 61);
+    assert_named(&d, &[("control_effectiveness", "rudder", k)]);
 }
 
 #[test]
-fn directional_stability_cn_beta_40_percent_high_is_named() {
-    let d = run(&[Hidden::Coefficient("Cnb", 1.4)], 71);
-    assert_named(&d, "aero_derivative", "Cn_beta", 1.4);
+fn directional_stability_cn_beta_error_is_named() {
+    let mut rng = StdRng::seed_from_u64(71);
+    let f = 1.0 + draw(&mut rng, 0.25, 0.45, true);
+    let d = run(&[Hidden::Coefficient("Cnb", f)], Shape::Steps, 71);
+    assert_named(&d, &[("aero_derivative", "Cn_beta", f)]);
+}
+
+#[test]
+fn dihedral_effect_cl_beta_error_is_named_from_multisines() {
+    // Generalisation: another lateral derivative, and multisines on all axes instead of steps.
+    let mut rng = StdRng::seed_from_u64(91);
+    let f = 1.0 + draw(&mut rng, 0.25, 0.45, true);
+    let d = run(&[Hidden::Coefficient("Clb", f)], Shape::Multisine, 91);
+    assert_named(&d, &[("aero_derivative", "Cl_beta", f)]);
 }
 
 #[test]
 fn two_effects_at_once_are_both_named() {
-    // A roll-damping error and a pitch-gyro bias in the same record: forward selection must find both.
+    // A roll-damping error and a pitch-attitude bias in the same record: forward selection must find both,
+    // and nothing else.
+    let mut rng = StdRng::seed_from_u64(81);
+    let f = 1.0 + draw(&mut rng, 0.2, 0.35, true);
+    let b = draw(&mut rng, 0.015, 0.04, true);
     let d = run(
-        &[
-            Hidden::Coefficient("Clp", 0.7),
-            Hidden::Bias("theta_rad", 0.03),
-        ],
+        &[Hidden::Coefficient("Clp", f), Hidden::Bias("theta_rad", b)],
+        Shape::Steps,
         81,
     );
-    assert_named(&d, "aero_derivative", "Cl_p", 0.7);
-    assert_named(&d, "sensor_bias", "theta_rad", 0.03);
+    assert_named(
+        &d,
+        &[
+            ("aero_derivative", "Cl_p", f),
+            ("sensor_bias", "theta_rad", b),
+        ],
+    );
+}
+
+#[test]
+fn hidden_pitch_nonlinearity_cm_alpha2_is_named() {
+    // Generalisation beyond derivative scales: the data come from an aircraft with ΔC_m = k α² added, |k| in
+    // 3..8 (at α = 0.1 rad a ΔC_m of 0.03–0.08, a 15–40 % change of the local pitch stiffness).
+    let mut rng = StdRng::seed_from_u64(101);
+    let k = draw(&mut rng, 3.0, 8.0, true);
+    let d = run(&[Hidden::Added("Cm_alpha2", k)], Shape::Steps, 101);
+    assert_named(&d, &[("aero_nonlinearity", "Cm_alpha2", k)]);
 }

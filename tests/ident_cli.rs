@@ -72,6 +72,8 @@ fn identify_recovers_the_short_period_from_a_clean_csv_and_emits_json() {
         "{den:?}"
     );
     assert!((v["result"]["u_offset"].as_f64().unwrap() + 0.01).abs() < 1e-12);
+    // estimator notes travel with the result (empty: srivc converged as designed)
+    assert_eq!(v["result"]["warnings"], serde_json::json!([]));
     // the text form names coefficients, fits and the residual tests
     let text = identify(&csv, &["--method", "ls"]);
     let s = String::from_utf8_lossy(&text.stdout);

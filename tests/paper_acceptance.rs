@@ -89,59 +89,61 @@ fn with_one_percent_noise_ls_collapses_and_srivc_oe_hold_the_dominant_poles() {
 }
 
 #[test]
-fn oe_reports_the_slow_poles_with_three_sigma_bands_that_cover_the_truth_and_tighten_with_more_data(
+fn srivc_and_oe_report_the_slow_poles_with_three_sigma_bands_that_cover_the_truth_and_tighten_with_more_data(
 ) {
     // Acceptance: phugoid (θ/δe) and spiral (φ/δa, φ/δr), barely excited by one doublet, are reported with standard
-    // errors whose 3σ band covers the truth. oe estimates the output trim offset beside the model; without it the
-    // noise in the 1 s of pre-input trim biased the spiral by up to 20σ (seeds 1-8 probed, now all within 2σ).
+    // errors whose 3σ band covers the truth. Both estimators estimate a constant output offset beside the model;
+    // without it the noise in the 1 s of pre-input trim biased the spiral by up to 20σ (oe) and 5σ (srivc). srivc
+    // also keeps a slow unstable spiral in its prefilter and instruments (reflecting it left the 300 s spiral 12σ off).
+    // Measured (seed 1), srivc and oe alike: 60 s doublet ≤ 1.6σ; 300 s doublet ≤ 0.92σ with σ 9-16× smaller;
+    // 60 s 3211 ≤ 1.54σ with σ 6-54× smaller.
     let base = paper::run(&PaperOptions::new(0.01)).unwrap();
-    let short = slow_pole_sigmas(&base, Method::Oe);
-    for (key, p, q, sd) in &short {
-        eprintln!("60 s doublet {key}: slow pole {p} est {q} σ {sd:.2e}");
-        assert!(
-            (q - p).norm() <= 3.0 * sd,
-            "{key}: {q} vs {p}, 3σ = {}",
-            3.0 * sd
-        );
-    }
-    // A longer record (300 s) and a richer input (3211) shrink σ of every slow pole.
+    // A longer record (300 s) and a richer input (3211) must shrink σ of every slow pole.
     let mut longer = PaperOptions::new(0.01);
     longer.duration_s = 300.0;
-    longer.methods = vec![Method::Oe];
+    longer.methods = vec![Method::Srivc, Method::Oe];
     let mut richer = PaperOptions::new(0.01);
     richer.input = PaperInput::ThreeTwoOneOne;
-    richer.methods = vec![Method::Oe];
-    for (label, opts) in [("300 s doublet", longer), ("60 s 3211", richer)] {
-        let run = paper::run(&opts).unwrap();
-        for ((key, p, q, sd), (_, _, _, sd0)) in
-            slow_pole_sigmas(&run, Method::Oe).iter().zip(&short)
-        {
-            eprintln!("{label} {key}: slow pole {p} est {q} σ {sd:.2e} (60 s doublet {sd0:.2e})");
-            assert!(sd < sd0, "{label} {key}: σ {sd} not below {sd0}");
-            assert!(
-                (q - p).norm() <= 3.0 * sd,
-                "{label} {key}: {q} vs {p}, 3σ = {}",
-                3.0 * sd
+    richer.methods = vec![Method::Srivc, Method::Oe];
+    let longer = paper::run(&longer).unwrap();
+    let richer = paper::run(&richer).unwrap();
+    let mut failures = Vec::new();
+    for method in [Method::Srivc, Method::Oe] {
+        let short = slow_pole_sigmas(&base, method);
+        for (key, p, q, sd) in &short {
+            eprintln!(
+                "{method} 60 s doublet {key}: slow pole {p} est {q} σ {sd:.2e} ({:.2}σ)",
+                (q - p).norm() / sd
             );
+            assert!(sd.is_finite() && *sd > 0.0, "{method} {key}: σ {sd}");
+            if (q - p).norm() > 3.0 * sd {
+                failures.push(format!(
+                    "{method} 60 s doublet {key}: {q} vs {p}, 3σ = {}",
+                    3.0 * sd
+                ));
+            }
+        }
+        for (label, run) in [("300 s doublet", &longer), ("60 s 3211", &richer)] {
+            for ((key, p, q, sd), (_, _, _, sd0)) in
+                slow_pole_sigmas(run, method).iter().zip(&short)
+            {
+                eprintln!(
+                    "{method} {label} {key}: slow pole {p} est {q} σ {sd:.2e} ({:.2}σ; 60 s doublet σ {sd0:.2e})",
+                    (q - p).norm() / sd
+                );
+                if sd >= sd0 {
+                    failures.push(format!("{method} {label} {key}: σ {sd} not below {sd0}"));
+                }
+                if (q - p).norm() > 3.0 * sd {
+                    failures.push(format!(
+                        "{method} {label} {key}: {q} vs {p}, 3σ = {}",
+                        3.0 * sd
+                    ));
+                }
+            }
         }
     }
-}
-
-#[test]
-fn srivc_reports_slow_poles_with_standard_errors() {
-    // srivc keeps the trim offset of `identify` fixed (it has no offset parameter), so its slow-pole error carries
-    // the trim-estimate noise; its std errors (coloured-residual CRB with the offset marginalised) are reported
-    // and cover the truth within 3σ on the phugoid. The spiral check is the looser 5σ (measured: see stderr).
-    let run = paper::run(&PaperOptions::new(0.01)).unwrap();
-    for (key, p, q, sd) in slow_pole_sigmas(&run, Method::Srivc) {
-        eprintln!(
-            "srivc {key}: slow pole {p} est {q} σ {sd:.2e}, {:.2}σ",
-            (q - p).norm() / sd
-        );
-        assert!(sd > 0.0 && sd.is_finite());
-        let k = if key == "theta/elevator" { 3.0 } else { 5.0 };
-        assert!((q - p).norm() <= k * sd, "{key}: {q} vs {p}, σ = {sd}");
-    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 #[test]

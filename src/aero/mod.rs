@@ -28,6 +28,10 @@ pub mod identifiability;
 pub mod model;
 pub mod params;
 pub mod regression;
+pub mod score;
+pub mod spec;
+pub mod study;
+pub mod trials;
 
 pub use fit::{estimate_derivatives, DerivativeEstimate, FitOptions, IdentifiedTf, IdentifiedTfs};
 pub use identifiability::{
@@ -81,4 +85,18 @@ pub enum AeroError {
     /// A numerical step (SVD, eigenvalues) failed.
     #[error("numerical failure in {0}")]
     Numerical(&'static str),
+    /// Unusable user input (a file, an option) with what is wrong.
+    #[error("{0}")]
+    BadInput(String),
+    /// The simulator failed while flying the estimation manoeuvres.
+    #[error(transparent)]
+    Sim(#[from] crate::sim::SimError),
+    /// Identification of a transfer function failed.
+    #[error("identifying {tf}: {source}")]
+    Ident {
+        /// Which transfer function.
+        tf: String,
+        /// The estimator's error.
+        source: crate::ident::IdentError,
+    },
 }

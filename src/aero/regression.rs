@@ -470,7 +470,10 @@ pub fn equation_error(
         })())
     })();
     match cm {
-        Ok(res) => equations.push(res?),
+        Ok(Ok(res)) => equations.push(res),
+        // Collinear regressors (a flight that does not excite this axis): skipped, not fatal.
+        Ok(Err(AeroError::BadRecord(why))) => skipped.push(("Cm", why)),
+        Ok(Err(e)) => return Err(e),
         Err(why) => skipped.push(("Cm", why)),
     }
 
@@ -504,7 +507,12 @@ pub fn equation_error(
             })())
         })();
         match res {
-            Ok(res) => equations.push(res?),
+            Ok(Ok(res)) => equations.push(res),
+            // Collinear regressors (a flight that does not excite this axis): skipped, not fatal.
+            Ok(Err(AeroError::BadRecord(why))) => {
+                skipped.push((if eq == "Cl" { "Cl" } else { "Cn" }, why))
+            }
+            Ok(Err(e)) => return Err(e),
             Err(why) => skipped.push((if eq == "Cl" { "Cl" } else { "Cn" }, why)),
         }
     }
@@ -557,7 +565,10 @@ pub fn equation_error(
         ))
     })();
     match cy {
-        Ok(res) => equations.push(res?),
+        Ok(Ok(res)) => equations.push(res),
+        // Collinear regressors (a flight that does not excite this axis): skipped, not fatal.
+        Ok(Err(AeroError::BadRecord(why))) => skipped.push(("CY", why)),
+        Ok(Err(e)) => return Err(e),
         Err(why) => skipped.push(("CY", why)),
     }
 
@@ -603,7 +614,10 @@ pub fn equation_error(
         ))
     })();
     match cl {
-        Ok(res) => equations.push(res?),
+        Ok(Ok(res)) => equations.push(res),
+        // Collinear regressors (a flight that does not excite this axis): skipped, not fatal.
+        Ok(Err(AeroError::BadRecord(why))) => skipped.push(("CL", why)),
+        Ok(Err(e)) => return Err(e),
         Err(why) => skipped.push(("CL", why)),
     }
 

@@ -14,6 +14,7 @@
 //! name = "c172x"                           # the configuration's id (baselines are keyed by it)
 //! aircraft = "c172x"
 //! coefficient_scales = { Cmalpha = 1.0 }   # optional: factors on JSBSim aero coefficients
+//! properties = { "inertia/pointmass-weight-lbs[4]" = 200.0 }  # optional: mass/CG variant, set before trim
 //! conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
 //!
 //! [[maneuvers]]
@@ -98,6 +99,11 @@ pub struct ConfigurationSpec {
     /// Factors on aerodynamic coefficient functions (`Cmalpha = 1.3`).
     #[serde(default)]
     pub coefficient_scales: BTreeMap<String, f64>,
+    /// JSBSim properties set before every trim: mass and CG variants where the model has them (point-mass
+    /// weights and locations `inertia/pointmass-weight-lbs[i]`, `inertia/pointmass-location-X-inches[i]`, fuel
+    /// `propulsion/tank[i]/contents-lbs`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub properties: BTreeMap<String, f64>,
     /// Trim points.
     pub conditions: Vec<ConditionSpec>,
 }
@@ -142,6 +148,9 @@ pub struct CaseSpec {
     pub aircraft: String,
     /// Coefficient factors.
     pub coefficient_scales: BTreeMap<String, f64>,
+    /// Properties set before trim (mass/CG variant).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub properties: BTreeMap<String, f64>,
     /// Altitude, ft.
     pub altitude_ft: f64,
     /// True airspeed, kts.
@@ -250,6 +259,14 @@ impl CampaignSpec {
                     ));
                 }
             }
+            for (k, v) in &c.properties {
+                if !v.is_finite() {
+                    return Err(format!(
+                        "configuration '{}': property {k} is not finite",
+                        c.name
+                    ));
+                }
+            }
         }
         for m in &self.maneuvers {
             if crate::compare::tf_key_for(&m.surface).is_none() {
@@ -294,6 +311,7 @@ impl CampaignSpec {
                             configuration: c.name.clone(),
                             aircraft: c.aircraft.clone(),
                             coefficient_scales: c.coefficient_scales.clone(),
+                            properties: c.properties.clone(),
                             altitude_ft: cond.altitude_ft,
                             speed_kts: cond.speed_kts,
                             surface: m.surface.clone(),

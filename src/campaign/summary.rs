@@ -115,54 +115,60 @@ fn modal_section(results: &[CaseResult], key: &str) -> Section {
                 == Some(&r.case.amplitude_deg)
         })
         .collect();
-    for (quantity, label) in [
-        ("osc_omega_n_rad_s", "oscillatory mode ωn, rad/s"),
-        ("osc_zeta", "oscillatory mode ζ"),
-    ] {
-        for (axis, axis_label) in [
-            ("speed", "true airspeed, kts"),
-            ("altitude", "altitude, ft"),
+    // one plot per aircraft (their ranges differ by an order of magnitude), one series per configuration and
+    // method joining its flight conditions
+    let aircraft: std::collections::BTreeSet<&str> =
+        picked.iter().map(|r| r.case.aircraft.as_str()).collect();
+    for ac in aircraft {
+        for (quantity, label) in [
+            ("osc_omega_n_rad_s", "oscillatory mode ωn, rad/s"),
+            ("osc_zeta", "oscillatory mode ζ"),
         ] {
-            let mut series: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
-            for r in &picked {
-                for id in r.identifications.iter().filter(|i| i.noise_std_deg == 0.0) {
-                    let Some(v) = id.modal.get(quantity) else {
-                        continue;
-                    };
-                    let (x, other) = if axis == "speed" {
-                        (r.case.speed_kts, format!("{} ft", r.case.altitude_ft))
-                    } else {
-                        (r.case.altitude_ft, format!("{} kts", r.case.speed_kts))
-                    };
-                    series
-                        .entry(format!("{} {} @ {other}", r.case.configuration, id.method))
-                        .or_default()
-                        .push((x, *v));
+            for (axis, axis_label) in [
+                ("speed", "true airspeed, kts"),
+                ("altitude", "altitude, ft"),
+            ] {
+                let mut series: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+                for r in picked.iter().filter(|r| r.case.aircraft == ac) {
+                    for id in r.identifications.iter().filter(|i| i.noise_std_deg == 0.0) {
+                        let Some(v) = id.modal.get(quantity) else {
+                            continue;
+                        };
+                        let x = if axis == "speed" {
+                            r.case.speed_kts
+                        } else {
+                            r.case.altitude_ft
+                        };
+                        series
+                            .entry(format!("{} {}", r.case.configuration, id.method))
+                            .or_default()
+                            .push((x, *v));
+                    }
                 }
+                if series.is_empty() {
+                    continue;
+                }
+                plots.push((
+                    format!("{stem}_{ac}_{quantity}_vs_{axis}"),
+                    LinePlot {
+                        title: format!("{ac} {key}: {label} vs {axis}"),
+                        x_label: axis_label.into(),
+                        y_label: label.into(),
+                        series: series
+                            .into_iter()
+                            .map(|(name, mut pts)| {
+                                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                                Series::new(
+                                    name,
+                                    pts.iter().map(|p| p.0).collect(),
+                                    pts.iter().map(|p| p.1).collect(),
+                                )
+                            })
+                            .collect(),
+                        log_x: false,
+                    },
+                ));
             }
-            if series.is_empty() {
-                continue;
-            }
-            plots.push((
-                format!("{stem}_{quantity}_vs_{axis}"),
-                LinePlot {
-                    title: format!("{key}: {label} vs {axis}"),
-                    x_label: axis_label.into(),
-                    y_label: label.into(),
-                    series: series
-                        .into_iter()
-                        .map(|(name, mut pts)| {
-                            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                            Series::new(
-                                name,
-                                pts.iter().map(|p| p.0).collect(),
-                                pts.iter().map(|p| p.1).collect(),
-                            )
-                        })
-                        .collect(),
-                    log_x: false,
-                },
-            ));
         }
     }
     for r in results.iter().filter(|r| r.case.tf_key == key) {
@@ -193,9 +199,12 @@ fn modal_section(results: &[CaseResult], key: &str) -> Section {
         }
     }
     Section {
-        heading: format!("{key}"),
+        heading: key.to_string(),
         paragraphs: vec![
-            "Plots: noise-free identifications at each family's smallest amplitude.".into(),
+            "Plots: noise-free identifications at each family's smallest amplitude, one plot per aircraft; each \
+             curve joins one configuration's flight conditions (which may change speed and altitude together), \
+             a single marker is a configuration flown at one condition."
+                .into(),
         ],
         tables: vec![Table {
             caption: format!("{key}: identified modal parameters"),

@@ -105,7 +105,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
         CampaignAction::Report { dir, report } => {
             let (rep, json) = campaign::campaign_report(dir).map_err(classify)?;
             let target = report.clone().unwrap_or_else(|| dir.join("report"));
-            let index = crate::report::write_report(&target, &rep, &json)?;
+            let index = crate::report::write_report_dir(&target, &rep, &json)?;
             println!("report: {}", index.display());
             Ok(())
         }

@@ -41,6 +41,14 @@ pub struct CompareCmd {
     pub json: Option<String>,
 }
 
+/// Bad comparison options are usage errors (exit 2); simulator failures are failures (exit 1).
+pub fn classify(e: compare::CompareError) -> anyhow::Error {
+    match e {
+        compare::CompareError::Options(m) => anyhow::Error::new(UsageError(m)),
+        other => anyhow::Error::new(other),
+    }
+}
+
 /// Runs `flightid compare`.
 pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
     let cfg = args.trim.config()?;
@@ -50,20 +58,6 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
         .iter()
         .map(|m| m.parse::<Method>().map_err(|e| UsageError(e.to_string())))
         .collect::<Result<_, _>>()?;
-    if !(args.amplitude_deg.is_finite() && args.amplitude_deg > 0.0 && args.amplitude_deg <= 30.0) {
-        return Err(UsageError(format!(
-            "--amplitude-deg must be within (0, 30], got {}",
-            args.amplitude_deg
-        ))
-        .into());
-    }
-    if args
-        .sweep_deg
-        .iter()
-        .any(|a| !(a.is_finite() && *a > 0.0 && *a <= 30.0))
-    {
-        return Err(UsageError("--sweep-deg values must be within (0, 30]".into()).into());
-    }
     let opts = CompareOptions {
         point,
         amplitude_deg: args.amplitude_deg,
@@ -71,15 +65,13 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
         duration_s: args.duration_s,
         methods,
         sweep_amplitudes_deg: args.sweep_deg.clone(),
+        rate_hz: args.trim.rate_hz,
     };
-    let mut sim = JsbsimSim::start(&cfg, 120.0)
+    let mut sim = JsbsimSim::start(&cfg, args.trim.rate_hz)
         .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
-    let (outcome, report) = compare::run_compare(&mut sim, &opts).map_err(|e| match e {
-        compare::CompareError::Options(m) => anyhow::Error::new(UsageError(m)),
-        other => anyhow::Error::new(other),
-    })?;
+    let (outcome, report) = compare::run_compare(&mut sim, &opts).map_err(classify)?;
     let json = compare::outcome_json(&outcome);
-    let index = crate::report::write_report(&args.report, &report, &json)?;
+    let index = crate::report::write_report_dir(&args.report, &report, &json)?;
     if let Some(target) = &args.json {
         emit_json(target, &json)?;
     }

@@ -8,21 +8,27 @@ use super::common::{emit_json, write_atomic};
 use super::UsageError;
 use crate::aircraft;
 use crate::data::{read_csv, FlightRecord};
+use crate::diagnose::model::{write_model, ExtendedModel};
+use crate::diagnose::replay::LinearReplay;
 use crate::diagnose::search::Worker;
-use crate::diagnose::{diagnose, DiagnoseError, DiagnoseOptions, Diagnosis};
+use crate::diagnose::{diagnose, report, DiagnoseError, DiagnoseOptions, Diagnosis};
 use crate::sim::JsbsimSim;
 
 /// Replay measured data on the aircraft's simulation, fit the catalogue of model extensions (signal path,
-/// sensors, aerodynamic derivative scales), name the significant cause(s) and measure the gain on a
-/// validation record.
+/// sensors, aerodynamic derivative scales, added nonlinear terms), name the significant cause(s) and measure the
+/// gain on a validation record.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example:\n  flightid diagnose --aircraft c172x --data train.csv --validate valid.csv --json out.json"
+    after_help = "Examples:\n  flightid diagnose --aircraft c172x --data train.csv --validate valid.csv --json out.json --report rep --model-out model\n  flightid diagnose --linear lin.json --data train.csv --validate valid.csv"
 )]
 pub struct DiagnoseCmd {
     /// Aircraft configuration (c172x, 737, f16, or a path to an aircraft .toml).
     #[arg(long, default_value = "c172x")]
     pub aircraft: String,
+    /// Use a linear model (`flightid linearize --json` output) as the simulation instead of JSBSim
+    /// (signal-path and sensor effects only).
+    #[arg(long, value_name = "LIN.json")]
+    pub linear: Option<PathBuf>,
     /// Training record (flight-data CSV).
     #[arg(long)]
     pub data: PathBuf,
@@ -32,11 +38,15 @@ pub struct DiagnoseCmd {
     /// Write the JSON result (DESIGN.md §7) to this file (`-` for stdout).
     #[arg(long)]
     pub json: Option<String>,
-    /// Write the extended model (fitted effects, JSON, loadable by `flightid replay --extension`) here.
+    /// Write the fitted effects as an extension file (JSON, loadable by `flightid replay --extension`).
     #[arg(long)]
     pub extension_out: Option<PathBuf>,
-    /// Write a report directory (summary JSON and the extension file).
-    #[arg(long)]
+    /// Write the extended model: the aircraft with the fitted terms in its XML plus extension.json
+    /// (loadable by `flightid fly --model DIR` and `flightid replay --model DIR`).
+    #[arg(long, value_name = "DIR")]
+    pub model_out: Option<PathBuf>,
+    /// Write a report directory (index.html with overlays and residual plots, report.md, report.json).
+    #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
     /// Parallel simulations (one JSBSim process each).
     #[arg(long, default_value_t = 2)]
@@ -51,19 +61,44 @@ pub fn read_record(path: &Path) -> anyhow::Result<FlightRecord> {
 /// Maps diagnose errors on the user's input to exit code 2.
 pub fn classify(e: DiagnoseError) -> anyhow::Error {
     match e {
-        DiagnoseError::Sim { .. } => e.into(),
+        DiagnoseError::Sim { .. } | DiagnoseError::Report(_) => e.into(),
         other => UsageError(other.to_string()).into(),
     }
 }
 
-/// Starts `n` JSBSim workers at the record's rate.
-pub fn start_workers(aircraft: &str, rate_hz: f64, n: usize) -> anyhow::Result<Vec<Worker>> {
-    let cfg = aircraft::load(aircraft).map_err(|e| UsageError(e.to_string()))?;
+/// Where the simulation comes from: the aircraft's JSBSim model, an exported extended model, or a linear model.
+pub enum SimSource<'a> {
+    /// JSBSim's stock aircraft of the configuration.
+    Aircraft(&'a str),
+    /// An exported model directory (aircraft configuration named in its extension.json).
+    Model(&'a ExtendedModel),
+    /// `flightid linearize --json` output.
+    Linear(&'a Path),
+}
+
+/// Starts `n` simulation workers at the record's rate.
+pub fn start_workers(source: &SimSource, rate_hz: f64, n: usize) -> anyhow::Result<Vec<Worker>> {
     (0..n.max(1))
-        .map(|_| {
-            JsbsimSim::start(&cfg, rate_hz)
-                .map(|s| Worker::new(Box::new(s)))
-                .with_context(|| format!("starting JSBSim for {}", cfg.name))
+        .map(|_| -> anyhow::Result<Worker> {
+            Ok(match source {
+                SimSource::Aircraft(name) => {
+                    let cfg = aircraft::load(name).map_err(|e| UsageError(e.to_string()))?;
+                    let sim = JsbsimSim::start(&cfg, rate_hz)
+                        .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
+                    Worker::new(Box::new(sim))
+                }
+                SimSource::Model(m) => {
+                    let cfg = aircraft::load(&m.extension.aircraft)
+                        .map_err(|e| UsageError(e.to_string()))?;
+                    let sim = m.start(&cfg, rate_hz).with_context(|| {
+                        format!("starting JSBSim on the model in {}", m.dir.display())
+                    })?;
+                    Worker::new(Box::new(sim))
+                }
+                SimSource::Linear(p) => {
+                    Worker::new(Box::new(LinearReplay::from_json(p).map_err(classify)?))
+                }
+            })
         })
         .collect()
 }
@@ -80,7 +115,11 @@ fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
 pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     let train = read_record(&args.data)?;
     let valid = args.validate.as_deref().map(read_record).transpose()?;
-    let mut workers = start_workers(&args.aircraft, rate_of(&train)?, args.workers)?;
+    let source = match &args.linear {
+        Some(p) => SimSource::Linear(p),
+        None => SimSource::Aircraft(&args.aircraft),
+    };
+    let mut workers = start_workers(&source, rate_of(&train)?, args.workers)?;
     let d = diagnose(
         &mut workers,
         &train,
@@ -92,21 +131,36 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     if let Some(target) = &args.json {
         emit_json(target, &d)?;
     }
-    let ext = d.extension_file(&args.aircraft);
+    let mut ext = d.extension_file(&args.aircraft);
+    ext.notes
+        .insert("data".into(), args.data.display().to_string());
     if let Some(p) = &args.extension_out {
         write_atomic(p, serde_json::to_string_pretty(&ext)?.as_bytes())?;
     }
+    if let Some(dir) = &args.model_out {
+        if args.linear.is_some() {
+            return Err(UsageError(
+                "--model-out needs a JSBSim aircraft; with --linear use --extension-out".into(),
+            )
+            .into());
+        }
+        let m = write_model(workers[0].sim.as_mut(), &ext, dir).map_err(classify)?;
+        println!(
+            "extended model written to {} (load with `flightid fly --model {0}` or `flightid replay --model {0}`)",
+            m.dir.display()
+        );
+    }
     if let Some(dir) = &args.report {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        write_atomic(
-            &dir.join("diagnose.json"),
-            serde_json::to_string_pretty(&d)?.as_bytes(),
-        )?;
-        write_atomic(
-            &dir.join("extension.json"),
-            serde_json::to_string_pretty(&ext)?.as_bytes(),
-        )?;
-        eprintln!("report written to {}", dir.display());
+        let index = report::write_report(
+            &mut workers,
+            &d,
+            &args.aircraft,
+            &train,
+            valid.as_ref(),
+            dir,
+        )
+        .map_err(classify)?;
+        eprintln!("report written to {}", index.display());
     }
     Ok(())
 }
@@ -115,7 +169,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
 fn summary(d: &Diagnosis) {
     if d.named_cause.is_empty() {
         println!(
-            "no significant model error found (no extension passes the BIC and significance tests)"
+            "no significant model error found (no extension passes the BIC, significance and validation tests)"
         );
     }
     for c in &d.named_cause {
@@ -148,6 +202,11 @@ fn summary(d: &Diagnosis) {
             let after = v.fit_percent_after.get(c).copied().unwrap_or(f64::NAN);
             println!("  {c:<13} fit {before:6.1} % -> {after:6.1} %");
         }
+    } else {
+        println!("no validation record (--validate): the gain on unseen data is not measured");
+    }
+    for w in &d.warnings {
+        println!("warning: {w}");
     }
     for s in &d.skipped {
         if s.effect != "aero_derivative" {

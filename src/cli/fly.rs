@@ -155,13 +155,22 @@ pub struct FlyCmd {
     /// Also print a JSON summary (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     pub json: Option<String>,
+    /// Fly an extended model written by `flightid diagnose --model-out DIR` (its aircraft XML and the signal-path
+    /// and sensor effects of its extension.json) instead of the stock aircraft.
+    #[arg(long, value_name = "DIR")]
+    pub model: Option<PathBuf>,
 }
 
 /// Runs `flightid fly`.
 pub fn run(args: &FlyCmd) -> anyhow::Result<()> {
-    let plan = args.maneuver.plan(args.trim.rate_hz)?;
-    let (mut sim, trim) = args.trim.start_and_trim()?;
-    let mut rec = sim.fly(&plan)?;
+    let mut plan = args.maneuver.plan(args.trim.rate_hz)?;
+    let (mut rec, trim) = match &args.model {
+        None => {
+            let (mut sim, trim) = args.trim.start_and_trim()?;
+            (sim.fly(&plan)?, trim)
+        }
+        Some(dir) => fly_model(args, dir, &mut plan)?,
+    };
     rec.metadata.push(format!(
         "maneuver: {:?} on {} amplitude {} deg, start {} s",
         args.maneuver.maneuver,
@@ -187,4 +196,32 @@ pub fn run(args: &FlyCmd) -> anyhow::Result<()> {
         ),
     }
     Ok(())
+}
+
+/// Flies the extended model in `dir`: its exported aircraft, with its signal-path effects on the plan and its
+/// sensor effects on the record.
+fn fly_model(
+    args: &FlyCmd,
+    dir: &std::path::Path,
+    plan: &mut crate::sim::FlightPlan,
+) -> anyhow::Result<(data::FlightRecord, crate::sim::TrimState)> {
+    use crate::diagnose::model::{apply_to_plan, apply_to_record, ExtendedModel};
+    use anyhow::Context as _;
+    let model = ExtendedModel::read(dir).map_err(|e| UsageError(e.to_string()))?;
+    let cfg =
+        crate::aircraft::load(&model.extension.aircraft).map_err(|e| UsageError(e.to_string()))?;
+    let point = args.trim.point(&cfg)?;
+    let mut sim = model
+        .start(&cfg, args.trim.rate_hz)
+        .with_context(|| format!("starting JSBSim on the model in {}", dir.display()))?;
+    let effects = model
+        .effects(&sim.coefficient_knobs)
+        .map_err(|e| UsageError(e.to_string()))?;
+    apply_to_plan(&effects, plan);
+    let trim = sim.trim(&point)?;
+    let mut rec = sim.fly(plan)?;
+    apply_to_record(&effects, &mut rec);
+    rec.metadata
+        .push(format!("extended model: {}", dir.display()));
+    Ok((rec, trim))
 }

@@ -160,6 +160,9 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
             })
         }
     };
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
     if args.json.as_deref() != Some("-") {
         print_result(args, &data_path.display().to_string(), &in_col, &r);
     }

@@ -10,6 +10,7 @@ pub mod check;
 pub mod common;
 pub mod compare;
 pub mod demo;
+pub mod derivatives;
 pub mod diagnose;
 pub mod fly;
 pub mod identify;
@@ -60,6 +61,8 @@ pub enum Command {
     Identify(identify::IdentifyCmd),
     /// Reproduce Section 4 of Sahin & Kalyon 2021 (coefficients, ISE table, response overlays).
     Paper(paper::PaperCmd),
+    /// Aerodynamic derivatives from identified TFs and by equation error, scored against the model (Tables 1, 3).
+    Derivatives(derivatives::DerivativesCmd),
 }
 
 /// An error caused by the user's input (bad file, unknown name): exit code 2.
@@ -91,6 +94,7 @@ pub fn main() -> i32 {
         Command::Replay(a) => replay::run(a),
         Command::Identify(a) => identify::run(a),
         Command::Paper(a) => paper::run(a),
+        Command::Derivatives(a) => derivatives::run(a),
     };
     match result {
         Ok(()) => 0,

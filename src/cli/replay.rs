@@ -4,10 +4,11 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use super::common::emit_json;
-use super::diagnose::{classify, read_record, start_workers};
+use super::diagnose::{classify, read_record, start_workers, SimSource};
 use super::UsageError;
 use crate::diagnose::analyse_replay;
 use crate::diagnose::extension::ExtensionFile;
+use crate::diagnose::model::ExtendedModel;
 use crate::diagnose::replay::ReplayCase;
 
 /// Replay a measured record on the aircraft's simulation (trimmed at the measured initial condition, surfaces
@@ -23,9 +24,15 @@ pub struct ReplayCmd {
     /// Measured record (flight-data CSV).
     #[arg(long)]
     pub data: PathBuf,
-    /// Extension file written by `flightid diagnose`.
+    /// Extension file written by `flightid diagnose --extension-out`.
     #[arg(long)]
     pub extension: Option<PathBuf>,
+    /// Extended model directory written by `flightid diagnose --model-out` (its aircraft and its extension.json).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["linear", "extension"])]
+    pub model: Option<PathBuf>,
+    /// Use a linear model (`flightid linearize --json` output) as the simulation.
+    #[arg(long, value_name = "LIN.json")]
+    pub linear: Option<PathBuf>,
     /// Print the comparison as JSON (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     pub json: Option<String>,
@@ -35,12 +42,25 @@ pub struct ReplayCmd {
 pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
     let rec = read_record(&args.data)?;
     let case = ReplayCase::new(&rec).map_err(classify)?;
-    let mut workers = start_workers(&args.aircraft, case.rate_hz, 1)?;
-    let exts = match &args.extension {
-        Some(p) => ExtensionFile::read(p)
-            .and_then(|f| f.build(&workers[0].sim.coefficient_names()))
+    let model = args
+        .model
+        .as_deref()
+        .map(ExtendedModel::read)
+        .transpose()
+        .map_err(classify)?;
+    let source = match (&model, &args.linear) {
+        (Some(m), _) => SimSource::Model(m),
+        (None, Some(p)) => SimSource::Linear(p),
+        (None, None) => SimSource::Aircraft(&args.aircraft),
+    };
+    let mut workers = start_workers(&source, case.rate_hz, 1)?;
+    let names = workers[0].sim.coefficient_names();
+    let exts = match (&model, &args.extension) {
+        (Some(m), _) => m.effects(&names).map_err(classify)?,
+        (None, Some(p)) => ExtensionFile::read(p)
+            .and_then(|f| f.build(&names))
             .map_err(|e| UsageError(e.to_string()))?,
-        None => Vec::new(),
+        (None, None) => Vec::new(),
     };
     let refs: Vec<_> = exts
         .iter()

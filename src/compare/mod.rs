@@ -136,6 +136,8 @@ pub struct CompareOptions {
     pub methods: Vec<Method>,
     /// Amplitudes of the sweep, deg.
     pub sweep_amplitudes_deg: Vec<f64>,
+    /// Simulation and sampling rate, Hz.
+    pub rate_hz: f64,
 }
 
 /// One model's agreement with the nonlinear flight.
@@ -195,10 +197,30 @@ pub fn run_compare<S: Simulator>(
             opts.duration_s, opts.pulse_s
         )));
     }
+    let amplitude_ok = |a: f64| a.is_finite() && a > 0.0 && a <= 30.0;
+    if !amplitude_ok(opts.amplitude_deg) {
+        return Err(CompareError::Options(format!(
+            "doublet amplitude must be within (0, 30] deg, got {}",
+            opts.amplitude_deg
+        )));
+    }
+    if opts.sweep_amplitudes_deg.is_empty()
+        || !opts.sweep_amplitudes_deg.iter().all(|a| amplitude_ok(*a))
+    {
+        return Err(CompareError::Options(
+            "sweep amplitudes must be given, each within (0, 30] deg".into(),
+        ));
+    }
+    if !(opts.rate_hz.is_finite() && (10.0..=2000.0).contains(&opts.rate_hz)) {
+        return Err(CompareError::Options(format!(
+            "rate must be within 10..2000 Hz, got {}",
+            opts.rate_hz
+        )));
+    }
     let trim = sim.trim(&opts.point).map_err(sim_err("trim"))?;
     let lin = sim.linearize().map_err(sim_err("linearize"))?;
     let truth = paper_transfer_functions(&lin).map_err(sim_err("linearization reduction"))?;
-    let rate_hz = 120.0;
+    let rate_hz = opts.rate_hz;
     let dt_s = 1.0 / rate_hz;
     let doublet = Maneuver::Doublet {
         pulse_s: opts.pulse_s,
@@ -258,27 +280,30 @@ pub fn run_compare<S: Simulator>(
             error: None,
         }];
         let deg = |v: &[f64]| v.iter().map(|x| x.to_degrees()).collect::<Vec<_>>();
+        let reference = |label: &str, x: &[f64], y: Vec<f64>| Series {
+            reference: true,
+            ..Series::new(label, x.to_vec(), y)
+        };
         let mut time_series = vec![
             Series::new("JSBSim nonlinear", t.clone(), deg(&dy)),
-            Series {
-                reference: true,
-                ..Series::new("JSBSim linearization", t.clone(), deg(&lin_y))
-            },
+            reference("JSBSim linearization", &t, deg(&lin_y)),
         ];
         let (mag, ph) = lti::bode(lin_tf, &omega);
-        let mut bode_mag = vec![Series::new("JSBSim linearization", omega.clone(), mag)];
-        let mut bode_phase = vec![Series::new("JSBSim linearization", omega.clone(), ph)];
+        let mut bode_mag = vec![reference("JSBSim linearization", &omega, mag)];
+        let mut bode_phase = vec![reference("JSBSim linearization", &omega, ph)];
         let mut identified: Vec<(String, TransferFunction)> = Vec::new();
         for &method in &opts.methods {
             match ident::identify(&du, &dy, dt_s, &paper_options(method)) {
                 Ok(r) => {
                     let y_hat = lti::lsim(&r.tf, &du, dt_s);
                     fits.push(model_fit(&r, &lin_modal, &dy, &y_hat, dt_s));
-                    time_series.push(Series::new(
-                        method.name(),
-                        t.clone(),
-                        clip(&deg(&y_hat), 3.0 * max_abs(&deg(&dy))),
-                    ));
+                    let limit = 3.0 * max_abs(&deg(&dy));
+                    let label = if max_abs(&deg(&y_hat)) > limit {
+                        format!("{} (clipped)", method.name())
+                    } else {
+                        method.name().to_string()
+                    };
+                    time_series.push(Series::new(label, t.clone(), clip(&deg(&y_hat), limit)));
                     let (mag, ph) = lti::bode(&r.tf, &omega);
                     bode_mag.push(Series::new(method.name(), omega.clone(), mag));
                     bode_phase.push(Series::new(method.name(), omega.clone(), ph));
@@ -339,6 +364,7 @@ pub fn run_compare<S: Simulator>(
         models.insert(key.to_string(), fits);
         sweep.insert(key.to_string(), curves);
     }
+    report.sections.insert(1, overview_section(&models));
     let outcome = CompareOutcome {
         aircraft: trim.aircraft.clone(),
         trim,
@@ -445,11 +471,19 @@ fn tf_section(
     let sweep_series = curves
         .iter()
         .map(|(name, pts)| {
-            Series::new(
-                name.clone(),
-                pts.iter().map(|p| p.0).collect(),
-                pts.iter().map(|p| p.1.max(-50.0)).collect(),
-            )
+            let label = if name == "jsbsim_linearization" {
+                "JSBSim linearization"
+            } else {
+                name.as_str()
+            };
+            Series {
+                reference: name == "jsbsim_linearization",
+                ..Series::new(
+                    label,
+                    pts.iter().map(|p| p.0).collect(),
+                    pts.iter().map(|p| p.1.max(-50.0)).collect(),
+                )
+            }
         })
         .collect();
     Section {
@@ -515,6 +549,52 @@ fn tf_section(
                 },
             ),
         ],
+    }
+}
+
+/// One table of every model of every transfer function: the headline numbers before the details.
+fn overview_section(models: &BTreeMap<String, Vec<ModelFit>>) -> Section {
+    let rows = models
+        .iter()
+        .flat_map(|(key, fits)| {
+            fits.iter().map(move |f| {
+                vec![
+                    key.clone(),
+                    f.model.clone(),
+                    fmt(f.modal.get("osc_omega_n_rad_s"), 4),
+                    fmt(f.modal.get("osc_zeta"), 4),
+                    fmt(f.modal.get("real_pole_rad_s"), 4),
+                    fmt(Some(&f.fit_percent), 2),
+                    f.error.clone().unwrap_or_default(),
+                ]
+            })
+        })
+        .collect();
+    Section {
+        heading: "Overview".into(),
+        paragraphs: vec![
+            "Fastest oscillatory mode and fastest real pole of each model, and how well each model's simulated \
+             response fits the nonlinear JSBSim flight (NRMSE fit, 100 % = exact). Details per transfer function \
+             below."
+                .into(),
+        ],
+        tables: vec![Table {
+            caption: "Modal parameters and fit per model".into(),
+            header: [
+                "transfer function",
+                "model",
+                "ωn osc, rad/s",
+                "ζ osc",
+                "real pole, rad/s",
+                "fit %",
+                "note",
+            ]
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+            rows,
+        }],
+        plots: vec![],
     }
 }
 

@@ -78,6 +78,37 @@ pub struct AeroDerivative {
     pub knob: String,
 }
 
+/// An added aerodynamic term the simulation's model lacks, e.g. `Cm_alpha2`: ΔC_m = k α² (α in rad).
+/// Value: the coefficient k.
+pub struct AeroNonlinearity(pub String);
+
+impl Extension for AeroNonlinearity {
+    fn effect(&self) -> &'static str {
+        "aero_nonlinearity"
+    }
+    fn target(&self) -> &str {
+        &self.0
+    }
+    fn stage(&self) -> Stage {
+        Stage::Model
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        // |k| ≤ 100: at α = 0.2 rad that is a ΔC of 4, far beyond any plausible correction.
+        vec![ParamSpec {
+            null: 0.0,
+            min: -100.0,
+            max: 100.0,
+            fd_step: 0.2,
+        }]
+    }
+    fn required_columns(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError> {
+        sim.set_added_term(&self.0, p[0])
+    }
+}
+
 fn surface_column(surface: &str) -> String {
     if surface == "throttle" {
         "throttle".into()
@@ -155,16 +186,13 @@ impl Extension for ActuatorLag {
         if surface != self.0 || p[0] <= 0.0 {
             return;
         }
-        // τ ẋ = δ − x with δ linear between samples (first-order-hold discretisation,
-        // Franklin, Powell & Workman, Digital Control of Dynamic Systems, §6.3.2).
+        // τ ẋ = δ − x, discretised exactly for the input the simulation applies: sample k is held over the
+        // step that ends at it (zero-order hold; Franklin, Powell & Workman, Digital Control of Dynamic
+        // Systems, §6.3.1): x_k = a x_{k−1} + (1 − a) δ_k, a = e^{−Δt/τ}.
         let a = (-dt_s / p[0]).exp();
-        let b = 1.0 - p[0] / dt_s * (1.0 - a); // weight of the newer sample
         let mut x = 0.0;
-        let mut prev = 0.0;
         for v in dev.iter_mut() {
-            let u = *v;
-            x = a * x + (1.0 - a) * prev + b * (u - prev);
-            prev = u;
+            x = a * x + (1.0 - a) * *v;
             *v = x;
         }
     }
@@ -358,10 +386,11 @@ pub fn make(
                 knob,
             })
         }
+        "aero_nonlinearity" => Box::new(AeroNonlinearity(target.to_string())),
         other => {
             return Err(DiagnoseError::UnknownExtension(format!(
             "unknown effect '{other}' (known: input_delay, actuator_lag, control_effectiveness, \
-                 sensor_bias, sensor_scale, aero_derivative)"
+                 sensor_bias, sensor_scale, aero_derivative, aero_nonlinearity)"
         )))
         }
     })
@@ -372,6 +401,7 @@ pub fn make(
 pub fn catalogue(
     record: &FlightRecord,
     coefficient_names: &[String],
+    added_terms: &[String],
 ) -> (Vec<Box<dyn Extension>>, Vec<(String, String, String)>) {
     let mut all: Vec<Box<dyn Extension>> = Vec::new();
     for s in ["elevator", "aileron", "rudder", "throttle"] {
@@ -398,6 +428,9 @@ pub fn catalogue(
             ));
         }
     }
+    for t in added_terms {
+        all.push(Box::new(AeroNonlinearity(t.clone())));
+    }
     let mut usable = Vec::new();
     for e in all {
         let missing: Vec<String> = e
@@ -417,6 +450,9 @@ pub fn catalogue(
     }
     (usable, skipped)
 }
+
+/// Extensions built from a file, each with its parameter values.
+pub type BuiltEffects = Vec<(Box<dyn Extension>, Vec<f64>)>;
 
 /// A fitted effect as written to and read from an extension file.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -439,6 +475,9 @@ pub struct ExtensionFile {
     pub aircraft: String,
     /// The effects, applied in this order.
     pub effects: Vec<FittedEffect>,
+    /// Effects already written into an exported aircraft's XML (documentation only: never applied again).
+    #[serde(default)]
+    pub model_effects: Vec<FittedEffect>,
     /// Free-form provenance (data file, date).
     #[serde(default)]
     pub notes: BTreeMap<String, String>,
@@ -458,10 +497,7 @@ impl ExtensionFile {
     }
 
     /// Builds the extensions with their values.
-    pub fn build(
-        &self,
-        coefficient_names: &[String],
-    ) -> Result<Vec<(Box<dyn Extension>, Vec<f64>)>, DiagnoseError> {
+    pub fn build(&self, coefficient_names: &[String]) -> Result<BuiltEffects, DiagnoseError> {
         self.effects
             .iter()
             .map(|f| {

@@ -5,7 +5,9 @@
 //! ([`search`]) → forward selection by BIC → re-simulate the validation record with the chosen effects.
 
 pub mod extension;
+pub mod model;
 pub mod replay;
+pub mod report;
 pub mod residual;
 pub mod search;
 
@@ -35,6 +37,9 @@ pub enum DiagnoseError {
     /// An extension file that cannot be read.
     #[error("extension file {path}: {message}")]
     ExtensionFile { path: String, message: String },
+    /// The report could not be written.
+    #[error("report: {0}")]
+    Report(String),
     /// The simulation failed (trim at the measured condition, bridge error).
     #[error("simulation during {during}: {source}")]
     Sim { during: String, source: SimError },
@@ -53,6 +58,12 @@ pub struct DiagnoseOptions {
     pub min_z: f64,
     /// Minimum relative cost reduction for a named effect (guards against coloured residuals).
     pub min_relative_reduction: f64,
+    /// Floor of the noise-normalised residual variance in the criterion: a cost below `floor · n` (the
+    /// residual already at the measurement-noise level) earns no further credit.
+    pub residual_floor: f64,
+    /// Minimum relative reduction of the validation ISE for a named effect (when a validation record is given):
+    /// an effect that does not predict unseen data better is not a cause.
+    pub min_validation_gain: f64,
     /// Correlation of sensitivities above which near-equal candidates form an ambiguous group.
     pub ambiguity_correlation: f64,
 }
@@ -65,6 +76,8 @@ impl Default for DiagnoseOptions {
             bic_threshold: -10.0,
             min_z: 5.0,
             min_relative_reduction: 0.02,
+            residual_floor: 1.0,
+            min_validation_gain: 0.05,
             ambiguity_correlation: 0.9,
         }
     }
@@ -79,7 +92,7 @@ pub struct Candidate {
     pub target: String,
     /// Fitted value.
     pub value: f64,
-    /// Cramér–Rao standard error.
+    /// Standard error (coloured-residual sandwich, at least the Cramér–Rao bound).
     pub std_error: f64,
     /// Noise-weighted cost before (current model).
     pub cost_before: f64,
@@ -87,8 +100,16 @@ pub struct Candidate {
     pub cost_after: f64,
     /// `BIC`.
     pub criterion: String,
-    /// ΔBIC = n ln(cost_after / cost_before) + ln n.
+    /// ΔBIC = n_eff ln(max(J₁, f·n) / max(J₀, f·n)) + ln n_eff (f: residual floor, n_eff: effective sample count).
     pub criterion_delta: f64,
+    /// |value − null| / std_error.
+    pub z: f64,
+    /// Effective number of independent residuals after the fit.
+    pub n_eff: f64,
+    /// Relative reduction of the validation ISE, when it was evaluated.
+    pub validation_gain: Option<f64>,
+    /// Why a fully fitted candidate was not named (None for the named one and the cheap-pass ones).
+    pub rejected_because: Option<String>,
     /// Selection round (0 = first).
     pub round: usize,
     /// Fully fitted (true) or only the cheap 1-D pass.
@@ -155,6 +176,8 @@ pub struct Diagnosis {
     pub trim_mismatch: Vec<TrimMismatch>,
     /// Catalogue entries not evaluated.
     pub skipped: Vec<Skipped>,
+    /// Conditions that limit what the verdict can be trusted for (e.g. a surface column missing).
+    pub warnings: Vec<String>,
     /// Noise standard deviation estimated per channel (the cost weights).
     pub noise_std: BTreeMap<String, f64>,
     /// Number of residual values (samples × channels).
@@ -180,6 +203,7 @@ impl Diagnosis {
                     std_error: c.std_error,
                 })
                 .collect(),
+            model_effects: Vec::new(),
             notes: BTreeMap::new(),
         }
     }
@@ -187,7 +211,14 @@ impl Diagnosis {
 
 fn sim_err(during: &str) -> impl FnOnce(SimError) -> DiagnoseError + '_ {
     move |source| DiagnoseError::Sim {
-        during: during.to_string(),
+        during: match source {
+            SimError::TrimFailed(_) => {
+                format!(
+                    "{during}: the model cannot trim at the record's measured initial condition"
+                )
+            }
+            _ => during.to_string(),
+        },
         source,
     }
 }
@@ -256,13 +287,26 @@ pub fn diagnose(
             )));
         }
     }
+    // A surface without a column is held at its trim in the replay: if it moved in flight, its effect is
+    // unmodelled and any cause named on the axes it drives is suspect.
+    let warnings: Vec<String> = replay::INPUTS
+        .iter()
+        .filter(|(_, c)| train.column(c).is_none())
+        .map(|(s, c)| {
+            format!(
+                "no {c} column: the replay holds the {s} at its trim value; if it moved in flight, \
+                 causes named on the axes it drives are not trustworthy"
+            )
+        })
+        .collect();
     let w = Weighted {
         case: &case,
         sigma: weights(&case),
     };
     let n = w.n();
     let coeffs = workers[0].sim.coefficient_names();
-    let (catalogue, skipped_raw) = extension::catalogue(&case.record, &coeffs);
+    let added = workers[0].sim.added_term_names();
+    let (catalogue, skipped_raw) = extension::catalogue(&case.record, &coeffs, &added);
     let mut skipped: Vec<Skipped> = skipped_raw
         .into_iter()
         .map(|(effect, target, reason)| Skipped {
@@ -297,13 +341,23 @@ pub fn diagnose(
 
     let (_, residuals_before, trim_mismatch) = analyse_replay(&mut workers[0], &case, &[])?;
     let simulations = AtomicCounter::default();
-    let ln_n = (n as f64).ln();
     let mut selected: Vec<Active> = Vec::new();
     let mut named: Vec<NamedCause> = Vec::new();
     let mut candidates = Vec::new();
     let mut base_cost = {
         let r = residuals(&mut workers[0], &w, &[]).map_err(sim_err("replay"))?;
         r.iter().map(|v| v * v).sum::<f64>()
+    };
+    let vweights = vcase.as_ref().map(|v| Weighted {
+        case: v,
+        sigma: weights(v),
+    });
+    let mut valid_cost = match &vweights {
+        Some(vw) => {
+            let r = residuals(&mut workers[0], vw, &[]).map_err(sim_err("validation replay"))?;
+            Some(r.iter().map(|v| v * v).sum::<f64>())
+        }
+        None => None,
     };
     for round in 0..opts.max_effects {
         let pool: Vec<&dyn Extension> = catalogue
@@ -342,36 +396,15 @@ pub fn diagnose(
             }
             out.map(|o| (o, a))
         });
-        for (i, r) in quick.iter().enumerate() {
-            if top.contains(&i) {
-                continue;
-            }
-            if let Ok(o) = r {
-                let k = o.values.len() - 1;
-                candidates.push(Candidate {
-                    effect: pool[i].effect().into(),
-                    target: pool[i].target().into(),
-                    value: o.values[k],
-                    std_error: o.std_errors[k],
-                    cost_before: base_cost,
-                    cost_after: o.cost_after,
-                    criterion: "BIC".into(),
-                    criterion_delta: n as f64 * (o.cost_after / base_cost).ln() + ln_n,
-                    round,
-                    full_fit: false,
-                });
-            }
-        }
-        // Significance of each fully fitted candidate.
-        let mut sig: Vec<(usize, f64)> = Vec::new(); // (index in top, cost)
-        for (t, r) in full.iter().enumerate() {
-            let Ok((o, _)) = r else { continue };
-            let e = top_exts[t];
+        let floor = opts.residual_floor * n as f64;
+        // One more parameter per candidate (the selected effects are counted in the base model).
+        let bic = |e: &dyn Extension, o: &search::FitOutcome| {
+            let k = e.params().len() as f64;
+            o.n_eff * (o.cost_after.max(floor) / base_cost.max(floor)).ln() + k * o.n_eff.ln()
+        };
+        let candidate = |e: &dyn Extension, o: &search::FitOutcome, full_fit: bool| {
             let k = o.values.len() - 1;
-            let null = e.params()[0].null;
-            let delta = n as f64 * (o.cost_after / base_cost).ln() + ln_n;
-            let z = (o.values[k] - null).abs() / o.std_errors[k].max(1e-300);
-            candidates.push(Candidate {
+            Candidate {
                 effect: e.effect().into(),
                 target: e.target().into(),
                 value: o.values[k],
@@ -379,18 +412,83 @@ pub fn diagnose(
                 cost_before: base_cost,
                 cost_after: o.cost_after,
                 criterion: "BIC".into(),
-                criterion_delta: delta,
+                criterion_delta: bic(e, o),
+                z: (o.values[k] - e.params()[0].null).abs() / o.std_errors[k].max(1e-300),
+                n_eff: o.n_eff,
+                validation_gain: None,
+                rejected_because: None,
                 round,
-                full_fit: true,
-            });
-            let rel = 1.0 - o.cost_after / base_cost;
-            if delta < opts.bic_threshold && z > opts.min_z && rel > opts.min_relative_reduction {
-                sig.push((t, o.cost_after));
+                full_fit,
+            }
+        };
+        for (i, r) in quick.iter().enumerate() {
+            if top.contains(&i) {
+                continue;
+            }
+            if let Ok(o) = r {
+                candidates.push(candidate(pool[i], o, false));
             }
         }
-        let Some(&(best, best_cost)) = sig.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+        // Significance of each fully fitted candidate: strong BIC evidence with the effective sample count,
+        // a value many (sandwich) standard errors from "no effect", and a real share of the cost explained.
+        let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
+        for (t, r) in full.iter().enumerate() {
+            let Ok((o, _)) = r else { continue };
+            let mut c = candidate(top_exts[t], o, true);
+            let rel = 1.0 - o.cost_after / base_cost;
+            let spec = top_exts[t].params()[0];
+            let at_bound = (c.value - spec.min).abs() <= 1e-9 * spec.min.abs().max(1.0)
+                || (c.value - spec.max).abs() <= 1e-9 * spec.max.abs().max(1.0);
+            c.rejected_because = if at_bound {
+                // No interior optimum: the effect explains something else (a missing input, another effect).
+                Some(format!(
+                    "value at the bound of its range [{}, {}]",
+                    spec.min, spec.max
+                ))
+            } else if c.criterion_delta >= opts.bic_threshold {
+                Some(format!(
+                    "ΔBIC {:.1} ≥ {}",
+                    c.criterion_delta, opts.bic_threshold
+                ))
+            } else if c.z <= opts.min_z {
+                Some(format!("|z| {:.1} ≤ {}", c.z, opts.min_z))
+            } else if rel <= opts.min_relative_reduction {
+                Some(format!("explains {:.1} % of the cost", 100.0 * rel))
+            } else {
+                None
+            };
+            if c.rejected_because.is_none() {
+                sig.push((t, o.cost_after, candidates.len()));
+            }
+            candidates.push(c);
+        }
+        sig.sort_by(|a, b| a.1.total_cmp(&b.1));
+        // Prediction: the best significant candidate that also predicts the validation record better.
+        let mut chosen = None;
+        for &(t, cost_t, ci) in &sig {
+            let Ok((_, a)) = &full[t] else { continue };
+            if let (Some(vw), Some(before)) = (&vweights, valid_cost) {
+                let r = residuals(&mut workers[0], vw, a).map_err(sim_err("validation replay"))?;
+                simulations.add(1);
+                let gain = 1.0 - r.iter().map(|v| v * v).sum::<f64>() / before;
+                candidates[ci].validation_gain = Some(gain);
+                if gain < opts.min_validation_gain {
+                    candidates[ci].rejected_because = Some(format!(
+                        "validation ISE {:.1} % lower (needs {:.0} %)",
+                        100.0 * gain,
+                        100.0 * opts.min_validation_gain
+                    ));
+                    continue;
+                }
+                valid_cost = Some(before * (1.0 - gain));
+            }
+            chosen = Some((t, cost_t));
+            break;
+        }
+        let Some((best, best_cost)) = chosen else {
             break;
         };
+        let sig: Vec<(usize, f64)> = sig.iter().map(|&(t, c, _)| (t, c)).collect();
         let Ok((best_fit, best_active)) = &full[best] else {
             break;
         };
@@ -405,7 +503,9 @@ pub fn diagnose(
                 &best_fit.sensitivities[kb],
                 &o.sensitivities[o.values.len() - 1],
             );
-            if n as f64 * (c / best_cost).ln() < 10.0 && rho.abs() > opts.ambiguity_correlation {
+            if best_fit.n_eff * (c / best_cost).ln() < 10.0
+                && rho.abs() > opts.ambiguity_correlation
+            {
                 ambiguous_with.push(format!("{}/{}", top_exts[t].effect(), top_exts[t].target()));
             }
         }
@@ -470,6 +570,7 @@ pub fn diagnose(
         residuals_after,
         trim_mismatch,
         skipped,
+        warnings,
         noise_std: case
             .outputs
             .iter()

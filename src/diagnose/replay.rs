@@ -18,6 +18,23 @@ pub trait ReplaySim: Simulator + Send {
     fn coefficient_names(&self) -> Vec<String>;
     /// Sets the factor on a coefficient function from the next trim on.
     fn set_coefficient_scale(&mut self, name: &str, factor: f64) -> Result<(), SimError>;
+    /// Names of the added aerodynamic terms the simulation offers (e.g. `Cm_alpha2`).
+    fn added_term_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Sets the coefficient of an added term from the next trim on.
+    fn set_added_term(&mut self, name: &str, _coefficient: f64) -> Result<(), SimError> {
+        Err(SimError::Usage(format!(
+            "this simulation has no added aerodynamic term '{name}'"
+        )))
+    }
+    /// Writes the model with the current coefficient factors and added terms in it to `dir`.
+    fn export_model(&mut self, dir: &std::path::Path) -> Result<std::path::PathBuf, SimError> {
+        Err(SimError::Usage(format!(
+            "this simulation cannot be exported as a model ({})",
+            dir.display()
+        )))
+    }
 }
 
 impl ReplaySim for JsbsimSim {
@@ -27,16 +44,14 @@ impl ReplaySim for JsbsimSim {
     fn set_coefficient_scale(&mut self, name: &str, factor: f64) -> Result<(), SimError> {
         JsbsimSim::set_coefficient_scale(self, name, factor)
     }
-}
-
-impl ReplaySim for LinearSim {
-    fn coefficient_names(&self) -> Vec<String> {
-        Vec::new()
+    fn added_term_names(&self) -> Vec<String> {
+        self.added_terms.clone()
     }
-    fn set_coefficient_scale(&mut self, name: &str, _factor: f64) -> Result<(), SimError> {
-        Err(SimError::Usage(format!(
-            "a linear model has no coefficient knob '{name}'"
-        )))
+    fn set_added_term(&mut self, name: &str, coefficient: f64) -> Result<(), SimError> {
+        JsbsimSim::set_added_term(self, name, coefficient)
+    }
+    fn export_model(&mut self, dir: &std::path::Path) -> Result<std::path::PathBuf, SimError> {
+        self.export_aircraft(dir)
     }
 }
 
@@ -155,7 +170,13 @@ impl ReplayCase {
         let mean0 = |x: &[f64]| x[..quiet].iter().sum::<f64>() / quiet as f64;
         let mut initial = BTreeMap::new();
         for (name, col) in &rec.columns {
-            initial.insert(name.clone(), mean0(col));
+            // Heading wraps at 2π: an arithmetic mean of samples on both sides of north points south.
+            let v = if name == "psi_rad" {
+                circular_mean(&col[..quiet])
+            } else {
+                mean0(col)
+            };
+            initial.insert(name.clone(), v);
         }
         let inputs = present_inputs
             .iter()
@@ -243,6 +264,14 @@ impl ReplayCase {
     }
 }
 
+/// Mean direction of angles, atan2(Σ sin θ, Σ cos θ) (Mardia & Jupp, Directional Statistics, §2.2.1), rad.
+pub fn circular_mean(angles_rad: &[f64]) -> f64 {
+    let (s, c) = angles_rad
+        .iter()
+        .fold((0.0, 0.0), |(s, c), a| (s + a.sin(), c + a.cos()));
+    s.atan2(c)
+}
+
 /// Replays the case on `sim` with extensions (each with its parameter values). Returns the simulated record
 /// (same grid as the measured one) and the model trim.
 pub fn replay(
@@ -252,6 +281,9 @@ pub fn replay(
 ) -> Result<(FlightRecord, TrimState), SimError> {
     for name in sim.coefficient_names() {
         sim.set_coefficient_scale(&name, 1.0)?;
+    }
+    for name in sim.added_term_names() {
+        sim.set_added_term(&name, 0.0)?;
     }
     for (e, p) in extensions {
         if e.stage() == Stage::Model {
@@ -289,4 +321,101 @@ pub fn replay(
         }
     }
     Ok((rec, trim))
+}
+
+/// A linear model as the replay simulation: `flightid linearize --json` output (A, B, C, D and the `trim` it
+/// was taken at). It is valid only near its own trim point, so the measured initial condition must lie within
+/// [`LinearReplay::SPEED_TOLERANCE`] of its airspeed and [`LinearReplay::ALTITUDE_TOLERANCE_FT`] of its altitude;
+/// the replay then runs at the model's own point. It has no coefficient knobs: only signal-path and sensor
+/// effects can be fitted on it.
+pub struct LinearReplay {
+    sim: LinearSim,
+    point: TrimPoint,
+    input_names: Vec<String>,
+}
+
+impl LinearReplay {
+    /// Largest relative airspeed difference between the record and the model's trim.
+    pub const SPEED_TOLERANCE: f64 = 0.1;
+    /// Largest altitude difference between the record and the model's trim, ft.
+    pub const ALTITUDE_TOLERANCE_FT: f64 = 1000.0;
+
+    /// Reads `flightid linearize --json` output.
+    pub fn from_json(path: &std::path::Path) -> Result<Self, DiagnoseError> {
+        let err = |m: String| DiagnoseError::ExtensionFile {
+            path: path.display().to_string(),
+            message: m,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| err(e.to_string()))?;
+        let trim: TrimState = serde_json::from_value(v["trim"].clone()).map_err(|e| {
+            err(format!(
+                "no usable 'trim' object ({e}); expected `flightid linearize --json` output"
+            ))
+        })?;
+        let lin: crate::sim::Linearization =
+            serde_json::from_value(v).map_err(|e| err(format!("not a linearization: {e}")))?;
+        Ok(LinearReplay {
+            point: trim.point,
+            input_names: lin.inputs.clone(),
+            sim: LinearSim::new(lin, trim),
+        })
+    }
+}
+
+impl Simulator for LinearReplay {
+    fn trim(&mut self, point: &TrimPoint) -> Result<TrimState, SimError> {
+        let dv = (point.speed_kts - self.point.speed_kts).abs() / self.point.speed_kts;
+        let dh = (point.altitude_ft - self.point.altitude_ft).abs();
+        if dv > Self::SPEED_TOLERANCE || dh > Self::ALTITUDE_TOLERANCE_FT {
+            return Err(SimError::TrimFailed(format!(
+                "the record starts at {:.1} kts, {:.0} ft, but the linear model holds only near its trim point \
+                 {:.1} kts, {:.0} ft (±{:.0} %, ±{:.0} ft)",
+                point.speed_kts,
+                point.altitude_ft,
+                self.point.speed_kts,
+                self.point.altitude_ft,
+                100.0 * Self::SPEED_TOLERANCE,
+                Self::ALTITUDE_TOLERANCE_FT
+            )));
+        }
+        self.sim.trim(&self.point)
+    }
+    fn linearize(&mut self) -> Result<crate::sim::Linearization, SimError> {
+        self.sim.linearize()
+    }
+    fn fly(&mut self, plan: &FlightPlan) -> Result<FlightRecord, SimError> {
+        // JSBSim's linearization names the throttle input ThtlCmd (normalised command, as the CSV's throttle);
+        // a model without a throttle input can still replay a record whose throttle does not move.
+        let mut plan = plan.clone();
+        let has = |n: &str| self.input_names.iter().any(|i| i == n);
+        let mut kept = Vec::new();
+        for mut input in plan.inputs.drain(..) {
+            if input.surface == "throttle" && !has("throttle") {
+                if has("ThtlCmd") {
+                    input.surface = "ThtlCmd".into();
+                } else if input.deflection_rad.iter().all(|v| v.abs() < 1e-9) {
+                    continue;
+                } else {
+                    return Err(SimError::Usage(
+                        "the throttle moves in the record but the linear model has no throttle input".into(),
+                    ));
+                }
+            }
+            kept.push(input);
+        }
+        plan.inputs = kept;
+        self.sim.fly(&plan)
+    }
+}
+
+impl ReplaySim for LinearReplay {
+    fn coefficient_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn set_coefficient_scale(&mut self, name: &str, _factor: f64) -> Result<(), SimError> {
+        Err(SimError::Usage(format!(
+            "a linear model has no coefficient knob '{name}'"
+        )))
+    }
 }

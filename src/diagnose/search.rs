@@ -3,7 +3,11 @@
 //! Output error: minimise J(θ) = Σ_c Σ_k (y_c[k] − ŷ_c[k](θ))² / σ_c², with σ_c the measurement-noise
 //! standard deviation of channel c, by Levenberg–Marquardt with finite-difference output sensitivities;
 //! standard errors from the Cramér–Rao bound s² (SᵀS)⁻¹ (Morelli & Klein, Aircraft System Identification,
-//! 2nd ed., §6.2–6.3, eqs. 6.19–6.27). Selection: BIC = n ln(J/n) + k ln n (Schwarz 1978), forward selection.
+//! 2nd ed., §6.2–6.3, eqs. 6.19–6.27). Modelling error leaves coloured residuals, for which the Cramér–Rao
+//! bound is far too optimistic; the reported standard errors are therefore the heteroscedasticity-and-
+//! autocorrelation-consistent sandwich (SᵀS)⁻¹ (Σ_l w_l Γ_l) (SᵀS)⁻¹ with Bartlett weights (Newey & West 1987,
+//! Econometrica 55; Morelli & Klein §6.3 "colored residuals"). Selection: BIC = n ln(J/n) + k ln n
+//! (Schwarz 1978) with the effective number of independent residuals n_eff, forward selection.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -123,8 +127,12 @@ pub struct FitOutcome {
     pub cost_after: f64,
     /// Fitted values of the free parameters (in order of `active`).
     pub values: Vec<f64>,
-    /// Cramér–Rao standard errors of the free parameters.
+    /// Standard errors of the free parameters: the coloured-residual sandwich (never below the Cramér–Rao bound).
     pub std_errors: Vec<f64>,
+    /// Cramér–Rao standard errors s² (SᵀS)⁻¹ (white-residual assumption).
+    pub crb_std_errors: Vec<f64>,
+    /// Effective number of independent residuals at the fitted values (see [`effective_n`]).
+    pub n_eff: f64,
     /// Output sensitivity column (∂r/∂θ) of each free parameter at the fitted values.
     pub sensitivities: Vec<Vec<f64>>,
     /// Simulations run.
@@ -285,18 +293,40 @@ pub fn fit(
     let (a, _) = normal(&cols, &r);
     let n = r.len() as f64;
     let s2 = c / (n - free.len() as f64).max(1.0);
-    let std_errors = match inverse(&a) {
-        Some(inv) => (0..free.len())
-            .map(|i| (s2 * inv[i][i]).max(0.0).sqrt())
-            .collect(),
-        None => vec![f64::INFINITY; free.len()],
+    let m = w.case.len();
+    let lags = hac_lags(w.case.dt_s(), m);
+    let (crb_std_errors, std_errors) = match inverse(&a) {
+        Some(inv) => {
+            let meat = hac_meat(&cols, &r, m, lags);
+            let p = free.len();
+            let crb: Vec<f64> = (0..p).map(|i| (s2 * inv[i][i]).max(0.0).sqrt()).collect();
+            let sandwich = (0..p)
+                .map(|i| {
+                    let mut v = 0.0;
+                    for j in 0..p {
+                        for k in 0..p {
+                            v += inv[i][j] * meat[j][k] * inv[k][i];
+                        }
+                    }
+                    v.max(0.0).sqrt().max(crb[i])
+                })
+                .collect();
+            (crb, sandwich)
+        }
+        None => (
+            vec![f64::INFINITY; free.len()],
+            vec![f64::INFINITY; free.len()],
+        ),
     };
+    let n_eff = effective_n(&r, m, lags);
     // Restore the cache to the fitted values (the last simulation was a perturbed one).
     Ok(FitOutcome {
         cost_before,
         cost_after: c,
         values: free.iter().map(|&(i, j)| active[i].params[j]).collect(),
         std_errors,
+        crb_std_errors,
+        n_eff,
         sensitivities: cols,
         evaluations,
     })
@@ -342,4 +372,69 @@ pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
     } else {
         ab / (aa * bb).sqrt()
     }
+}
+
+/// Lag window for coloured residuals: one second of samples, at most a quarter of the record.
+fn hac_lags(dt_s: f64, samples_per_channel: usize) -> usize {
+    ((1.0 / dt_s).round() as usize).clamp(1, (samples_per_channel / 4).max(1))
+}
+
+/// The "meat" Σ_c Σ_{|l|≤L} (1 − |l|/(L+1)) Σ_k g_c[k] g_c[k+l]ᵀ of the sandwich, with the score
+/// g_c[k] = s_c[k] r_c[k] per channel c (channel-major vectors of `m` samples each; Newey & West 1987, eq. 2).
+fn hac_meat(cols: &[Vec<f64>], r: &[f64], m: usize, lags: usize) -> Vec<Vec<f64>> {
+    let p = cols.len();
+    let mut meat = vec![vec![0.0; p]; p];
+    let channels = r.len() / m.max(1);
+    let g: Vec<Vec<f64>> = cols
+        .iter()
+        .map(|s| s.iter().zip(r).map(|(a, b)| a * b).collect())
+        .collect();
+    for c in 0..channels {
+        let base = c * m;
+        for i in 0..p {
+            for j in 0..p {
+                let (gi, gj) = (&g[i][base..base + m], &g[j][base..base + m]);
+                let mut v: f64 = gi.iter().zip(gj).map(|(x, y)| x * y).sum();
+                for l in 1..=lags.min(m - 1) {
+                    let w = 1.0 - l as f64 / (lags + 1) as f64;
+                    let cross: f64 = (0..m - l)
+                        .map(|k| gi[k] * gj[k + l] + gi[k + l] * gj[k])
+                        .sum();
+                    v += w * cross;
+                }
+                meat[i][j] += v;
+            }
+        }
+    }
+    meat
+}
+
+/// Effective number of independent residuals: Σ_c m / (1 + 2 Σ_{l=1}^{L} (1 − l/(L+1)) ρ_c(l)), with ρ_c
+/// the autocorrelation of channel c's residual (the variance-inflation factor of a mean of correlated
+/// samples, Bartlett 1946; Box, Jenkins & Reinsel, Time Series Analysis, §2.1.6). Clamped to [1, m] per channel.
+pub fn effective_n(r: &[f64], m: usize, lags: usize) -> f64 {
+    if m == 0 {
+        return 0.0;
+    }
+    r.chunks(m)
+        .map(|e| {
+            let n = e.len();
+            let mean = e.iter().sum::<f64>() / n as f64;
+            let c0: f64 = e.iter().map(|v| (v - mean).powi(2)).sum();
+            if c0 <= 0.0 {
+                return n as f64;
+            }
+            let mut inflation = 1.0;
+            for l in 1..=lags.min(n.saturating_sub(1)) {
+                let cl: f64 = (l..n).map(|k| (e[k] - mean) * (e[k - l] - mean)).sum();
+                inflation += 2.0 * (1.0 - l as f64 / (lags + 1) as f64) * cl / c0;
+            }
+            (n as f64 / inflation.max(1.0)).clamp(1.0, n as f64)
+        })
+        .sum()
+}
+
+/// Lag window used for a case (exposed for the selection criterion).
+pub fn lag_window(case: &ReplayCase) -> usize {
+    hac_lags(case.dt_s(), case.len())
 }

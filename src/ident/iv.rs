@@ -1,68 +1,37 @@
-//! `iv` — discrete-time instrumental variables with instruments from an auxiliary model's
-//! simulated output (Söderström & Stoica 1989, *System Identification*, §8.2 and the
-//! multistep IV4 idea of §8.4 / Ljung 1999 §15.3), then a ZOH conversion to continuous time.
+//! `iv` — discrete-time instrumental variables in the δ-operator, with instruments from an
+//! auxiliary model's simulated output (Söderström & Stoica 1989, *System Identification*, §8.2;
+//! the refined-IV prefilter of Young 1976), then a ZOH conversion to continuous time.
 //!
-//! Start: the ARX least-squares fit of eq. 59 (see `ls.rs`) and, because at fast sampling
-//! with noise that fit can be wild, also the SVF least-squares model (see `srivc.rs`)
-//! discretised by ZOH; the run whose final model simulates best is kept. Each iteration with estimate
-//! (Â, B̂): the auxiliary model `x̂(k) = B̂(q)/Â(q) u(k)` is simulated; every signal is
-//! prefiltered by `1/Â(q)` (the simplified refined IV of Young 1976, which makes the estimate
-//! approach the optimal-IV variance for white output noise); the instruments
-//! `ζ(k) = [−x̂_f(k−1) … −x̂_f(k−n), u_f(k−1) … u_f(k−nb)]` replace the noisy output lags in
-//! `Σ ζ φᵀ θ = Σ ζ y_f`. The instruments are uncorrelated with the output noise, so the
-//! estimate is consistent where plain LS is not. Unstable Â are reflected inside the unit
-//! circle before simulation and filtering.
+//! Why the δ-operator: at fast sampling the poles of the shift-operator (q) model crowd at
+//! z = 1 and the regression on `y(k−1) … y(k−n)` is nearly singular; with 1 % output noise the
+//! q-domain IV iterations of the paper's φ/δa and φ/δr diverged. The δ-operator
+//! `δ = (q − 1)/h` (Middleton & Goodwin 1990, *Digital Control and Estimation: A Unified
+//! Approach*, ch. 2) has poles `γ = (z − 1)/h` that tend to the continuous poles as h → 0, so
+//! its coefficients are as well conditioned as the continuous ones. The model is the ZOH
+//! equivalent of the continuous system, exact on noise-free data:
+//! `A(δ) y(k) = B(δ) u(k − d)`, `A(δ) = δⁿ + α₁ δⁿ⁻¹ + … + αₙ`, `B(δ) = β₀ δⁿ⁻¹ + … + βₙ₋₁`.
 //!
-//! To continuous time: poles by `p = ln z / h`; the numerator is re-estimated with those
-//! poles fixed by linear least squares on the simulated basis responses `s^j/A(s) · u`, which
-//! fits the requested continuous structure directly (the dropped-term d2c of `ls` would
-//! discard a non-negligible highest numerator term once the data are noisy).
+//! Each iteration, with the current continuous estimate (poles `p`, numerator):
+//! 1. prefilter y, u and the auxiliary output `x̂` (the estimate's simulated response) by
+//!    `1/Â(δ)`, `Â` from the stabilised poles `γ = (e^{p h} − 1)/h`, which gives every
+//!    filtered δ-derivative `δ^i v_f` as a state of one well-conditioned recursion;
+//! 2. solve `Σ ζ φᵀ θ = Σ ζ δⁿy_f` with `φ = [−δⁿ⁻¹y_f … −y_f, δⁿ⁻¹u_f … u_f]` and the
+//!    instruments `ζ` = the same with `x̂_f` for `y_f` (uncorrelated with the output noise);
+//! 3. continuous poles `p = ln(1 + h γ)/h`, numerator re-estimated with those poles fixed
+//!    ([`refit_numerator`]).
+//!
+//! Start: the SRIVC estimate (the ARX least-squares fit of `ls` when SRIVC fails). The iterate
+//! that simulates best is returned; when no iterate simulates within a point of the start's
+//! fit, the start is returned with a warning.
 
 use faer::Mat;
+use num_complex::Complex64;
 
 use super::filter::{simulate, Hold, Svf};
-use super::linalg::{
-    lstsq_qr, poly_from_roots, roots, solve_square, stabilize_continuous, stabilize_discrete,
-};
-use super::ls::{arx_ls, continuous_poles};
+use super::linalg::{lstsq_qr, poly_from_roots, roots, solve_square, stabilize_continuous};
 use super::{nrmse_fit, ContinuousModel, IdentError};
 
 const MAX_ITER: usize = 20;
-
-/// Output of `B(q)/A(q)` (b on u(k−1−d)…, a monic in q⁻¹) from rest.
-fn sim_discrete(a: &[f64], b: &[f64], u: &[f64], d: usize) -> Vec<f64> {
-    let mut x = vec![0.0; u.len()];
-    for k in 0..u.len() {
-        let mut s = 0.0;
-        for (j, bj) in b.iter().enumerate() {
-            if k > j + d {
-                s += bj * u[k - 1 - j - d];
-            }
-        }
-        for (i, ai) in a.iter().enumerate().skip(1) {
-            if k >= i {
-                s -= ai * x[k - i];
-            }
-        }
-        x[k] = s;
-    }
-    x
-}
-
-/// `v / A(q)` from rest.
-fn prefilter(a: &[f64], v: &[f64]) -> Vec<f64> {
-    let mut f = vec![0.0; v.len()];
-    for k in 0..v.len() {
-        let mut s = v[k];
-        for (i, ai) in a.iter().enumerate().skip(1) {
-            if k >= i {
-                s -= ai * f[k - i];
-            }
-        }
-        f[k] = s;
-    }
-    f
-}
 
 /// Continuous numerator with `m` zeros for fixed poles `den`, by least squares of `y` on the
 /// basis responses `s^j/A(s) · e^{−τs} u` (ZOH-exact SVF states). Highest power first.
@@ -81,7 +50,104 @@ pub(crate) fn refit_numerator(
     lstsq_qr(&mat, y, "numerator re-estimation")
 }
 
-/// Discrete IV estimate converted to a continuous model with `n` poles and `m` zeros.
+/// States `[v_f, δv_f, …, δⁿ⁻¹v_f]` of `v_f = v / A(δ)` (A monic, `alpha` = [α₁ … αₙ]) from
+/// rest, row-major N × n, and the top derivative `δⁿ v_f(k) = v(k) − Σ αᵢ δⁿ⁻ⁱ v_f(k)`.
+/// Exact for the δ-operator: `ξᵢ(k+1) = ξᵢ(k) + h δξᵢ(k)`.
+fn delta_filter(alpha: &[f64], v: &[f64], h: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = alpha.len();
+    let mut xi = vec![0.0; n];
+    let mut states = vec![0.0; v.len() * n];
+    let mut top = vec![0.0; v.len()];
+    for (k, vk) in v.iter().enumerate() {
+        states[k * n..(k + 1) * n].copy_from_slice(&xi);
+        let t = vk
+            - alpha
+                .iter()
+                .enumerate()
+                .map(|(i, a)| a * xi[n - 1 - i])
+                .sum::<f64>();
+        top[k] = t;
+        for i in 0..n - 1 {
+            xi[i] += h * xi[i + 1];
+        }
+        xi[n - 1] += h * t;
+    }
+    (states, top)
+}
+
+/// `v(k − d)`, zero before the record.
+fn delayed(v: &[f64], d: usize) -> Vec<f64> {
+    (0..v.len())
+        .map(|k| if k >= d { v[k - d] } else { 0.0 })
+        .collect()
+}
+
+/// δ-domain denominator `[α₁ … αₙ]` whose poles are `(e^{p h} − 1)/h` for the continuous poles
+/// `p` reflected into the left half plane (a stable prefilter).
+fn delta_den(den: &[f64], h: f64) -> Vec<f64> {
+    let gammas: Vec<Complex64> = roots(&stabilize_continuous(den))
+        .iter()
+        .map(|p| ((p * h).exp() - 1.0) / h)
+        .collect();
+    poly_from_roots(&gammas)[1..].to_vec()
+}
+
+/// Continuous poles of the δ-model `[α₁ … αₙ]`: `ln(1 + hγ)/h`.
+fn continuous_den(alpha: &[f64], h: f64) -> Result<Vec<f64>, IdentError> {
+    let mut a = vec![1.0];
+    a.extend_from_slice(alpha);
+    let mut poles = Vec::with_capacity(alpha.len());
+    for g in roots(&a) {
+        let z = 1.0 + g * h;
+        if z.norm() < 1e-12 || !z.norm().is_finite() {
+            return Err(IdentError::Failed {
+                method: "iv".into(),
+                reason: format!("discrete pole {z} has no continuous equivalent"),
+            });
+        }
+        poles.push(z.ln() / h);
+    }
+    Ok(poly_from_roots(&poles))
+}
+
+/// Simulation fit (%) of a model; −∞ when the simulation overflows.
+fn fit_of(model: &ContinuousModel, u: &[f64], y: &[f64], dt_s: f64) -> (f64, Vec<f64>) {
+    let y_sim = simulate(&model.num, &model.den, u, dt_s, model.delay_s);
+    let f = nrmse_fit(y, &y_sim);
+    (if f.is_finite() { f } else { f64::NEG_INFINITY }, y_sim)
+}
+
+/// One δ-IV step: prefilter by the current poles, instruments from `x_hat`; returns `[α…, β…]`.
+fn iv_step(u_d: &[f64], y: &[f64], x_hat: &[f64], den: &[f64], h: f64) -> Option<Vec<f64>> {
+    let n = den.len() - 1;
+    let alpha_f = delta_den(den, h);
+    let (sy, ty) = delta_filter(&alpha_f, y, h);
+    let (su, _) = delta_filter(&alpha_f, u_d, h);
+    let (sx, _) = delta_filter(&alpha_f, x_hat, h);
+    let p = 2 * n;
+    let mut zphi = vec![0.0; p * p];
+    let mut zy = vec![0.0; p];
+    let mut phi = vec![0.0; p];
+    let mut zeta = vec![0.0; p];
+    for (k, target) in ty.iter().enumerate() {
+        let row = k * n;
+        for i in 0..n {
+            phi[i] = -sy[row + n - 1 - i];
+            zeta[i] = -sx[row + n - 1 - i];
+            phi[n + i] = su[row + n - 1 - i];
+            zeta[n + i] = phi[n + i];
+        }
+        for r in 0..p {
+            zy[r] += zeta[r] * target;
+            for c in 0..p {
+                zphi[r * p + c] += zeta[r] * phi[c];
+            }
+        }
+    }
+    solve_square(&zphi, &zy).filter(|t| t.iter().all(|v| v.is_finite()))
+}
+
+/// δ-operator IV estimate with `n` poles, `m` zeros and `d` samples of input delay.
 pub(crate) fn iv(
     u: &[f64],
     y: &[f64],
@@ -90,126 +156,65 @@ pub(crate) fn iv(
     m: usize,
     d: usize,
 ) -> Result<ContinuousModel, IdentError> {
-    let nb = n;
-    let arx = arx_ls(u, y, n, nb, d)?;
     let delay_s = d as f64 * dt_s;
+    let (start, start_name) = match super::srivc::srivc(u, y, dt_s, n, m, delay_s) {
+        Ok(s) => (s, "srivc"),
+        Err(_) => (super::ls::ls(u, y, dt_s, n, m, d)?.0, "ls"),
+    };
+    let u_d = delayed(u, d);
+    let (start_fit, mut y_sim) = fit_of(&start, u, y, dt_s);
+    let mut current = start.clone();
     let mut best: Option<(ContinuousModel, f64)> = None;
-    let mut last_err = None;
-    let mut starts = vec![(arx.a, arx.b)];
-    if let Some((num_c, den_c)) = super::srivc::svf_ls_start(u, y, dt_s, n, m, delay_s) {
-        let den_c = stabilize_continuous(&den_c);
-        let zd: Vec<_> = roots(&den_c).iter().map(|p| (p * dt_s).exp()).collect();
-        let a_d = poly_from_roots(&zd);
-        let b_d = c2d_numerator(&num_c, &den_c, &a_d, dt_s, nb);
-        starts.push((a_d, b_d));
-    }
-    for start in starts {
-        match iv_from(u, y, dt_s, n, m, d, start) {
-            Ok(model) => {
-                let y_sim = simulate(&model.num, &model.den, u, dt_s, delay_s);
-                let fit = nrmse_fit(y, &y_sim);
-                let fit = if fit.is_finite() {
-                    fit
-                } else {
-                    f64::NEG_INFINITY
-                };
-                if best.as_ref().is_none_or(|b| fit > b.1) {
-                    best = Some((model, fit));
-                }
-            }
-            Err(e) => last_err = Some(e),
-        }
-    }
-    match (best, last_err) {
-        (Some((model, _)), _) => Ok(model),
-        (None, Some(e)) => Err(e),
-        (None, None) => Err(IdentError::Failed {
-            method: "iv".into(),
-            reason: "no starting model".into(),
-        }),
-    }
-}
-
-/// ZOH discrete numerator (on u(k−1)…u(k−nb)) of the continuous `num/den`, given the discrete
-/// denominator `a_d` of the same poles: `b_i = Σ_{l<i} a_l h_{i−l}` from the Markov parameters.
-fn c2d_numerator(num: &[f64], den: &[f64], a_d: &[f64], dt_s: f64, nb: usize) -> Vec<f64> {
-    let svf = Svf::new(den, dt_s, Hold::Zoh { delay_s: 0.0 });
-    let mut impulse = vec![0.0; nb + 1];
-    impulse[0] = 1.0;
-    let h = super::filter::combine(&svf.run(&impulse), svf.n, num, nb + 1);
-    (1..=nb)
-        .map(|i| {
-            (0..i)
-                .map(|l| a_d.get(l).copied().unwrap_or(0.0) * h[i - l])
-                .sum()
-        })
-        .collect()
-}
-
-/// The IV iterations from a discrete starting model `(a, b)`, then the continuous conversion.
-fn iv_from(
-    u: &[f64],
-    y: &[f64],
-    dt_s: f64,
-    n: usize,
-    m: usize,
-    d: usize,
-    start: (Vec<f64>, Vec<f64>),
-) -> Result<ContinuousModel, IdentError> {
-    let nb = n;
-    let (mut a, mut b) = start;
-    let first = n.max(nb + d);
-    let p = n + nb;
+    let mut failure = None;
     for _ in 0..MAX_ITER {
-        let af = stabilize_discrete(&a);
-        let xhat = sim_discrete(&af, &b, u, d);
-        let yf = prefilter(&af, y);
-        let uf = prefilter(&af, u);
-        let xf = prefilter(&af, &xhat);
-        let mut zphi = vec![0.0; p * p];
-        let mut zy = vec![0.0; p];
-        let mut phi = vec![0.0; p];
-        let mut zeta = vec![0.0; p];
-        for k in first..y.len() {
-            for i in 0..n {
-                phi[i] = -yf[k - 1 - i];
-                zeta[i] = -xf[k - 1 - i];
-            }
-            for j in 0..nb {
-                phi[n + j] = uf[k - 1 - j - d];
-                zeta[n + j] = phi[n + j];
-            }
-            for r in 0..p {
-                zy[r] += zeta[r] * yf[k];
-                for c in 0..p {
-                    zphi[r * p + c] += zeta[r] * phi[c];
-                }
-            }
-        }
-        let Some(theta) = solve_square(&zphi, &zy) else {
-            return Err(IdentError::SingularRegression {
-                method: "iv".into(),
-                rank: 0,
-                n_params: p,
-            });
+        let Some(theta) = iv_step(&u_d, y, &y_sim, &current.den, dt_s) else {
+            failure = Some("singular instrument matrix".to_string());
+            break;
         };
-        let mut a_new = vec![1.0];
-        a_new.extend_from_slice(&theta[..n]);
-        let b_new = theta[n..].to_vec();
-        let change = a_new
+        let den = match continuous_den(&theta[..n], dt_s) {
+            Ok(den) => den,
+            Err(e) => {
+                failure = Some(e.to_string());
+                break;
+            }
+        };
+        let num = match refit_numerator(u, y, dt_s, &den, m, delay_s) {
+            Ok(num) => num,
+            Err(e) => {
+                failure = Some(e.to_string());
+                break;
+            }
+        };
+        let change = den
             .iter()
-            .zip(&a)
-            .map(|(x, y)| (x - y).abs())
+            .zip(&current.den)
+            .map(|(a, b)| (a - b).abs() / (1e-6 + b.abs()))
             .fold(0.0_f64, f64::max);
-        a = a_new;
-        b = b_new;
-        if change < 1e-12 {
+        current = ContinuousModel::new(num, den, delay_s);
+        let (fit, sim) = fit_of(&current, u, y, dt_s);
+        y_sim = sim;
+        if best.as_ref().is_none_or(|b| fit > b.1) {
+            best = Some((current.clone(), fit));
+        }
+        if change < 1e-10 || fit == f64::NEG_INFINITY {
             break;
         }
     }
-    let poles = continuous_poles(&a, dt_s)?;
-    let den = poly_from_roots(&poles);
-    let delay_s = d as f64 * dt_s;
-    let num = refit_numerator(u, y, dt_s, &den, m, delay_s)?;
-    Ok(ContinuousModel::new(num, den, delay_s))
+    match best {
+        Some((model, fit)) if fit >= start_fit - 1.0 => Ok(model),
+        other => {
+            let why = match (other, failure) {
+                (Some((_, fit)), _) => format!(
+                    "its best iterate simulates at {fit:.2} % against the start's {start_fit:.2} %"
+                ),
+                (None, Some(f)) => f,
+                (None, None) => "no iterate".into(),
+            };
+            let mut model = start;
+            model.warnings.push(format!(
+                "iv did not converge ({why}); returning its starting estimate ({start_name})"
+            ));
+            Ok(model)
+        }
+    }
 }

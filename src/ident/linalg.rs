@@ -220,23 +220,3 @@ pub(crate) fn stabilize_continuous(den_monic: &[f64]) -> Vec<f64> {
         .collect();
     poly_from_roots(&refl)
 }
-
-/// Reflects roots outside the unit circle to 1/z̄ (discrete counterpart of
-/// [`stabilize_continuous`], Söderström & Stoica 1989 §8.2).
-pub(crate) fn stabilize_discrete(den_monic: &[f64]) -> Vec<f64> {
-    let r = roots(den_monic);
-    if r.iter().all(|z| z.norm() < 1.0) {
-        return den_monic.to_vec();
-    }
-    let refl: Vec<Complex64> = r
-        .iter()
-        .map(|z| {
-            if z.norm() >= 1.0 {
-                (1.0 - 1e-9) / z.conj()
-            } else {
-                *z
-            }
-        })
-        .collect();
-    poly_from_roots(&refl)
-}

@@ -214,5 +214,6 @@ pub(crate) fn build_result(
         dt_s,
         u_offset,
         y_offset: y_offset + model.y_bias,
+        warnings: model.warnings,
     }
 }

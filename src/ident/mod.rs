@@ -214,9 +214,13 @@ pub struct IdentResult {
     pub dt_s: f64,
     /// Input trim removed before identification (input units).
     pub u_offset: f64,
-    /// Output trim removed before identification (output units); for `oe` it includes the
+    /// Output trim removed before identification (output units); for `srivc` and `oe` it includes the
     /// constant output offset estimated beside the model.
     pub y_offset: f64,
+    /// What the user should know about this estimate (e.g. an estimator that fell back to its
+    /// starting model); empty when all went as designed.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 /// A continuous model inside `ident`: monic `den`, `num` highest power first, optional full
@@ -229,6 +233,8 @@ pub(crate) struct ContinuousModel {
     /// Constant output offset estimated beside the model (added to the simulated output).
     pub y_bias: f64,
     pub cov: Option<Vec<f64>>,
+    /// Notes for [`IdentResult::warnings`].
+    pub warnings: Vec<String>,
 }
 
 impl ContinuousModel {
@@ -240,6 +246,7 @@ impl ContinuousModel {
             delay_s,
             y_bias: 0.0,
             cov: None,
+            warnings: Vec::new(),
         }
     }
 }
@@ -328,6 +335,17 @@ pub fn identify(
     };
     if opts.method == Method::Srivc && model.cov.is_none() {
         model.cov = oe::covariance(&u, &y, dt_s, &model);
+    }
+    let record_s = u.len() as f64 * dt_s;
+    if let Some(p) = linalg::roots(&model.den)
+        .into_iter()
+        .find(|p| p.re * record_s > 3.0)
+    {
+        model.warnings.push(format!(
+            "pole {p:.4} grows {:.1e}-fold over the {record_s:.1} s record: the model does not describe these \
+             data (wrong order, an input that does not drive this output, or direct feedthrough?)",
+            (p.re * record_s).exp()
+        ));
     }
     Ok(metrics::build_result(
         opts.method,

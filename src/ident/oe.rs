@@ -253,6 +253,7 @@ pub(crate) fn oe(
         delay_s,
         y_bias: c,
         cov,
+        warnings: start.warnings,
     })
 }
 

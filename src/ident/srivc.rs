@@ -3,15 +3,19 @@
 //! analysis, Part III: extensions", IJC 31(4); the algorithm of Garnier's CONTSID toolbox,
 //! Garnier, Gilson & Huselstein 2003, IFAC SYSID).
 //!
-//! Model: `A(s) y(t) = B(s) u(t − τ) + A(s) e(t)`, A monic of degree n, B of degree m.
-//! Each iteration j, with the previous estimate (Â, B̂):
+//! Model: `A(s) y(t) = B(s) u(t − τ) + A(s) (e(t) + c)`, A monic of degree n, B of degree m,
+//! `c` a constant output offset (the residual trim). Each iteration j, with the previous estimate (Â, B̂):
 //! 1. prefilter every signal with the SVF bank `s^i / Â(s)` (i = 0..n) — the optimal prefilter
 //!    for white output noise;
 //! 2. auxiliary-model output `x̂ = B̂/Â · u` (the instrument source);
 //! 3. solve the IV normal equations `Σ ζ̂_f φ_fᵀ θ = Σ ζ̂_f y_f^{(n)}` with
-//!    `φ_f = [−y_f^{(n−1)} … −y_f, u_f^{(m)} … u_f]` and `ζ̂_f` the same with `x̂_f` for `y_f`.
-//! Unstable Â are reflected into the left half plane before filtering (as CONTSID does);
-//! this changes only the efficiency, not the consistency, of the estimate.
+//!    `φ_f = [−y_f^{(n−1)} … −y_f, u_f^{(m)} … u_f, 1]` and `ζ̂_f` the same with `x̂_f` for
+//!    `y_f` (the last entry estimates `c`, see [`iv_step`]).
+//!
+//! Unstable Â are reflected into the left half plane before filtering (as CONTSID does) only
+//! when they would grow more than 20-fold over the record; a slow physical instability (the
+//! spiral) is kept, see [`stabilize_if_wild`]. Reflection changes only the efficiency, not the
+//! consistency, of the estimate.
 //!
 //! Initialisation: the plain SVF least-squares estimate (instruments = regressors) with the
 //! fixed prefilter `(s + λ)^n`, tried for several λ; the one with the best simulation fit
@@ -26,6 +30,11 @@ use num_complex::Complex64;
 const MAX_ITER: usize = 30;
 
 /// One IV step with prefilter `den_f`; `aux_num` = None means plain LS (instruments = regressors).
+/// With `with_offset` a constant output offset `c` is estimated too: for `y = B/A·u + c`, the
+/// filtered equation gains the term `c·A(s)/Â(s)·1(t)`, which is `c` itself once `Â = A`, so `c`
+/// enters as one more regressor (and instrument) equal to 1 (Young 2011, *Recursive Estimation
+/// and Time-Series Analysis*, §8.6, offset parameters). Returns `(num, den, c)`.
+#[allow(clippy::too_many_arguments)]
 fn iv_step(
     u: &[f64],
     y: &[f64],
@@ -34,7 +43,8 @@ fn iv_step(
     m: usize,
     den_f: &[f64],
     aux_num: Option<&[f64]>,
-) -> Option<(Vec<f64>, Vec<f64>)> {
+    with_offset: bool,
+) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     let n = den_f.len() - 1;
     let len = y.len();
     let svf_u = Svf::new(den_f, dt_s, Hold::Zoh { delay_s });
@@ -46,7 +56,7 @@ fn iv_step(
         let s = svf_y.run(&xhat);
         (xhat, s)
     });
-    let p = n + m + 1;
+    let p = n + m + 1 + usize::from(with_offset);
     let mut zphi = vec![0.0; p * p];
     let mut zy = vec![0.0; p];
     let mut phi = vec![0.0; p];
@@ -57,6 +67,9 @@ fn iv_step(
         }
         for j in 0..=m {
             phi[n + j] = xu[k * n + m - j];
+        }
+        if with_offset {
+            phi[p - 1] = 1.0;
         }
         let target = svf_y.top_derivative(&xy, k, y[k]);
         match &xx {
@@ -79,13 +92,24 @@ fn iv_step(
     let theta = solve_square(&zphi, &zy)?;
     let mut den = vec![1.0];
     den.extend_from_slice(&theta[..n]);
-    Some((theta[n..].to_vec(), den))
+    let c = if with_offset { theta[p - 1] } else { 0.0 };
+    Some((theta[n..=n + m].to_vec(), den, c))
 }
 
-/// Simulation fit (%) of a candidate model, with the unstable part reflected so a wild
-/// candidate cannot overflow.
-fn candidate_fit(num: &[f64], den: &[f64], u: &[f64], y: &[f64], dt_s: f64, delay_s: f64) -> f64 {
-    let y_sim = super::filter::simulate(num, den, u, dt_s, delay_s);
+/// Simulation fit (%) of a candidate model plus output offset `c`; the caller reflects wild
+/// unstable poles first so a candidate cannot overflow.
+#[allow(clippy::too_many_arguments)]
+fn candidate_fit(
+    num: &[f64],
+    den: &[f64],
+    c: f64,
+    u: &[f64],
+    y: &[f64],
+    dt_s: f64,
+    delay_s: f64,
+) -> f64 {
+    let mut y_sim = super::filter::simulate(num, den, u, dt_s, delay_s);
+    y_sim.iter_mut().for_each(|v| *v += c);
     let f = nrmse_fit(y, &y_sim);
     if f.is_finite() {
         f
@@ -94,7 +118,15 @@ fn candidate_fit(num: &[f64], den: &[f64], u: &[f64], y: &[f64], dt_s: f64, dela
     }
 }
 
+/// An SRIVC iterate: numerator, denominator, output offset, simulation fit (%).
+type Iterate = (Vec<f64>, Vec<f64>, f64, f64);
+
 /// SRIVC iterations from a starting estimate; returns the iterate with the best simulation fit.
+///
+/// A constant output offset `c` (ŷ = B/A·u + c) is estimated beside the model (see [`iv_step`]),
+/// as in `oe`: the trim removed by [`super::identify`] is the mean of the few samples before the
+/// input moves, and its noise, left unmodelled, biases the slow poles (the spiral of the paper's
+/// φ/δa landed 5σ off).
 fn iterate(
     u: &[f64],
     y: &[f64],
@@ -102,14 +134,15 @@ fn iterate(
     delay_s: f64,
     m: usize,
     start: (Vec<f64>, Vec<f64>),
-) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+) -> Option<Iterate> {
     let (mut num, mut den) = start;
-    let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
+    let record_s = y.len() as f64 * dt_s;
+    let mut best: Option<Iterate> = None;
     for _ in 0..MAX_ITER {
-        let den_f = stabilize_continuous(&den);
+        let den_f = stabilize_if_wild(&den, record_s);
         let aux_num = num.clone();
-        let (num_new, den_new) = iv_step(u, y, dt_s, delay_s, m, &den_f, Some(&aux_num))?;
-        if num_new.iter().chain(den_new.iter()).any(|v| !v.is_finite()) {
+        let (num_new, den_new, c) = iv_step(u, y, dt_s, delay_s, m, &den_f, Some(&aux_num), true)?;
+        if num_new.iter().chain(den_new.iter()).any(|v| !v.is_finite()) || !c.is_finite() {
             break;
         }
         let change = den_new
@@ -120,9 +153,17 @@ fn iterate(
             .fold(0.0_f64, f64::max);
         num = num_new;
         den = den_new;
-        let fit = candidate_fit(&num, &stabilize_if_wild(&den), u, y, dt_s, delay_s);
-        if best.as_ref().is_none_or(|b| fit > b.2) {
-            best = Some((num.clone(), den.clone(), fit));
+        let fit = candidate_fit(
+            &num,
+            &stabilize_if_wild(&den, record_s),
+            c,
+            u,
+            y,
+            dt_s,
+            delay_s,
+        );
+        if best.as_ref().is_none_or(|b| fit > b.3) {
+            best = Some((num.clone(), den.clone(), c, fit));
         }
         if change < 1e-9 {
             break;
@@ -131,11 +172,14 @@ fn iterate(
     best
 }
 
-/// Reflects only poles fast and unstable enough to overflow a simulation; slow unstable poles
-/// (an aircraft's spiral mode) are physical and kept.
-fn stabilize_if_wild(den: &[f64]) -> Vec<f64> {
+/// Reflects the poles only if one is unstable enough to grow more than e³ ≈ 20-fold over the
+/// record (`record_s` seconds): slow unstable poles (an aircraft's spiral mode) are physical and
+/// kept, both in the simulation and in the prefilter and auxiliary model. Reflecting a slow
+/// spiral there leaves instruments that no longer resemble the noise-free output over a long
+/// record: on the paper's φ/δa, 300 s doublet, the spiral then came out 10σ off.
+fn stabilize_if_wild(den: &[f64], record_s: f64) -> Vec<f64> {
     let r = super::linalg::roots(den);
-    if r.iter().all(|p| p.re < 0.5) {
+    if r.iter().all(|p| p.re * record_s < 3.0) {
         den.to_vec()
     } else {
         stabilize_continuous(den)
@@ -152,11 +196,20 @@ pub(crate) fn svf_ls_start(
     m: usize,
     delay_s: f64,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
+    let record_s = y.len() as f64 * dt_s;
     let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
     for lambda in lambdas(dt_s) {
         let den_f = poly_from_roots(&vec![Complex64::new(-lambda, 0.0); n]);
-        if let Some((num, den)) = iv_step(u, y, dt_s, delay_s, m, &den_f, None) {
-            let fit = candidate_fit(&num, &stabilize_if_wild(&den), u, y, dt_s, delay_s);
+        if let Some((num, den, _)) = iv_step(u, y, dt_s, delay_s, m, &den_f, None, false) {
+            let fit = candidate_fit(
+                &num,
+                &stabilize_if_wild(&den, record_s),
+                0.0,
+                u,
+                y,
+                dt_s,
+                delay_s,
+            );
             if best.as_ref().is_none_or(|b| fit > b.2) {
                 best = Some((num, den, fit));
             }
@@ -187,7 +240,10 @@ pub(crate) fn srivc(
     let best = svf_ls_start(u, y, dt_s, n, m, delay_s)
         .and_then(|start| iterate(u, y, dt_s, delay_s, m, start));
     match best {
-        Some((num, den, _)) => Ok(ContinuousModel::new(num, den, delay_s)),
+        Some((num, den, y_bias, _)) => Ok(ContinuousModel {
+            y_bias,
+            ..ContinuousModel::new(num, den, delay_s)
+        }),
         None => Err(IdentError::SingularRegression {
             method: "srivc".into(),
             rank: 0,

@@ -9,7 +9,7 @@ use super::tf::TransferFunction;
 /// Continuous: the input is held between samples (ZOH) and the model discretised exactly, so the
 /// output samples are exact for that input (`scipy.signal.lsim(..., interp=False)`). Unstable poles
 /// are simulated as they are (the response grows). Discrete: the difference equation
-/// a₀y[k] = Σ bⱼ u[k − r − j] − Σ_{i≥1} aᵢ y[k − i] with r the relative degree; the model's own
+/// `a₀y[k] = Σ bⱼ u[k − r − j] − Σ_{i≥1} aᵢ y[k − i]` with r the relative degree; the model's own
 /// `dt_s` applies. An improper discrete model keeps only its proper part.
 pub fn lsim(tf: &TransferFunction, u: &[f64], dt_s: f64) -> Vec<f64> {
     if tf.is_discrete() {

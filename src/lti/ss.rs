@@ -8,7 +8,7 @@ use super::poly::{poly_add, strip_leading};
 use super::tf::TransferFunction;
 use super::LtiError;
 
-/// ẋ = A x + B u, y = C x + D u (continuous) or x[k+1] = A x[k] + B u[k] (discrete).
+/// `ẋ = A x + B u, y = C x + D u` (continuous) or `x[k+1] = A x[k] + B u[k]` (discrete).
 ///
 /// Serialises as row lists `{"a": [[..]], "b": .., "c": .., "d": .., "dt_s": ..}`.
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -29,7 +29,7 @@ pub struct Series {
     pub x: Vec<f64>,
     /// Ordinate values (non-finite points are skipped).
     pub y: Vec<f64>,
-    /// Dashed look for reference curves (drawn thinner and lighter).
+    /// Reference curve (e.g. the JSBSim linearization): drawn as a wide translucent band under the others.
     pub reference: bool,
 }
 
@@ -60,14 +60,50 @@ pub struct LinePlot {
     pub log_x: bool,
 }
 
-const PALETTE: [RGBColor; 6] = [
+const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(255, 127, 14),
     RGBColor(148, 103, 189),
     RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(188, 189, 34),
 ];
+
+/// Fixed colours of the models every report shows, so a model looks the same in every plot.
+const MODEL_COLORS: [(&str, RGBColor); 7] = [
+    ("JSBSim nonlinear", RGBColor(0, 0, 0)),
+    ("JSBSim linearization", RGBColor(120, 120, 120)),
+    ("jsbsim_linearization", RGBColor(120, 120, 120)),
+    ("ls", RGBColor(214, 39, 40)),
+    ("iv", RGBColor(148, 103, 189)),
+    ("srivc", RGBColor(31, 119, 180)),
+    ("oe", RGBColor(255, 127, 14)),
+];
+
+/// Plot size in px: the chart on the left, the legend column on the right (legends never cover curves).
+const PLOT_W: u32 = 960;
+const PLOT_H: u32 = 420;
+const LEGEND_W: u32 = 210;
+
+/// A series drawn with fewer points than this gets a marker on each point (sparse data: sweeps, campaigns).
+const MARKER_BELOW_POINTS: usize = 40;
+
+/// The colour of series `i`: the model's fixed colour when the label names a known model (optionally followed by
+/// a note in parentheses, `ls (clipped)`), else the palette.
+fn series_color(label: &str, i: usize) -> RGBColor {
+    MODEL_COLORS
+        .iter()
+        .find(|(name, _)| {
+            label == *name
+                || label
+                    .strip_prefix(name)
+                    .is_some_and(|rest| rest.starts_with(" ("))
+        })
+        .map(|(_, c)| *c)
+        .unwrap_or(PALETTE[i % PALETTE.len()])
+}
 
 fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
@@ -78,7 +114,7 @@ fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     (lo <= hi).then_some((lo, hi))
 }
 
-/// Renders a line plot to SVG text (800 × 420 px).
+/// Renders a line plot to SVG text (960 × 420 px: chart, then a legend column on the right).
 pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
     let err = |e: String| ReportError::Plot {
         title: plot.title.clone(),
@@ -100,12 +136,25 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
     };
     y0 -= pad;
     y1 += pad;
-    let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+    let (x0, x1) = if x1 > x0 {
+        (x0, x1)
+    } else if plot.log_x {
+        (x0 / 2.0, x0 * 2.0)
+    } else {
+        (x0 - 1.0, x0 + 1.0)
+    };
+    let colors: Vec<RGBColor> = plot
+        .series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| series_color(&s.label, i))
+        .collect();
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (800, 420)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (PLOT_W, PLOT_H)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-        let mut builder = ChartBuilder::on(&root);
+        let (chart_area, legend_area) = root.split_horizontally(PLOT_W - LEGEND_W);
+        let mut builder = ChartBuilder::on(&chart_area);
         builder
             .caption(&plot.title, ("sans-serif", 18))
             .margin(12)
@@ -121,10 +170,11 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
                     .label_style(("sans-serif", 12))
                     .draw()
                     .map_err(|e| err(e.to_string()))?;
-                for (i, s) in plot.series.iter().enumerate() {
-                    let color = PALETTE[i % PALETTE.len()];
+                for (s, &color) in plot.series.iter().zip(&colors) {
+                    // a reference curve is a wide translucent band, so it stays visible under models that
+                    // lie on it
                     let style = if s.reference {
-                        color.mix(0.6).stroke_width(1)
+                        color.mix(0.45).stroke_width(7)
                     } else {
                         color.stroke_width(2)
                     };
@@ -136,22 +186,15 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
                             })
                             .map(|(x, y)| (*x, *y))
                             .collect();
+                    if points.len() < MARKER_BELOW_POINTS {
+                        chart
+                            .draw_series(points.iter().map(|p| Circle::new(*p, 4, color.filled())))
+                            .map_err(|e| err(e.to_string()))?;
+                    }
                     chart
                         .draw_series(LineSeries::new(points, style))
-                        .map_err(|e| err(e.to_string()))?
-                        .label(s.label.as_str())
-                        .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                        });
+                        .map_err(|e| err(e.to_string()))?;
                 }
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .label_font(("sans-serif", 12))
-                    .position(SeriesLabelPosition::UpperRight)
-                    .draw()
-                    .map_err(|e| err(e.to_string()))?;
             }};
         }
         if plot.log_x {
@@ -163,9 +206,47 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
                 .build_cartesian_2d(x0..x1, y0..y1)
                 .map_err(|e| err(e.to_string()))?);
         }
+        draw_legend(&legend_area, plot, &colors).map_err(err)?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
     Ok(svg)
+}
+
+/// The legend column: one swatch (line, plus a marker for sparse series) and label per series.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    plot: &LinePlot,
+    colors: &[RGBColor],
+) -> Result<(), String> {
+    let font = ("sans-serif", 12).into_font();
+    let row_h = 20;
+    let top = 46;
+    for (k, (s, &color)) in plot.series.iter().zip(colors).enumerate() {
+        let y = top + row_h * k as i32;
+        if y + row_h > PLOT_H as i32 {
+            break;
+        }
+        let swatch = if s.reference {
+            color.mix(0.45).stroke_width(7)
+        } else {
+            color.stroke_width(2)
+        };
+        area.draw(&PathElement::new(vec![(6, y), (30, y)], swatch))
+            .map_err(|e| e.to_string())?;
+        if s.x.len() < MARKER_BELOW_POINTS {
+            area.draw(&Circle::new((18, y), 4, color.filled()))
+                .map_err(|e| e.to_string())?;
+        }
+        let max_chars = 28;
+        let label: String = if s.label.chars().count() > max_chars {
+            s.label.chars().take(max_chars - 1).collect::<String>() + "…"
+        } else {
+            s.label.clone()
+        };
+        area.draw(&Text::new(label, (36, y - 6), font.clone().color(&BLACK)))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }
 
 /// A table: header and rows of already formatted cells.
@@ -320,6 +401,56 @@ pub fn write_report(
     Ok(index)
 }
 
+/// Writes a whole report directory atomically: [`write_report`] fills a sibling temporary directory, which then
+/// takes the place of `dir` by rename, so a reader sees the old report or the new one, never a mix or a partial
+/// one. An existing `dir` is replaced only when it is empty or is itself a report (holds `report.json`).
+/// Returns the path of `index.html`.
+pub fn write_report_dir(
+    dir: &Path,
+    report: &Report,
+    json: &serde_json::Value,
+) -> Result<PathBuf, ReportError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| ReportError::Io { path, source }
+    };
+    if dir.exists() {
+        let mut entries = std::fs::read_dir(dir).map_err(io(dir))?;
+        if entries.next().is_some() && !dir.join("report.json").exists() {
+            return Err(ReportError::Io {
+                path: dir.to_path_buf(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::AlreadyExists,
+                    "exists and is not a flightid report; choose a new or empty directory",
+                ),
+            });
+        }
+    }
+    let parent = dir
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(io(parent))?;
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_else(|| "report".into());
+    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
+    let old = parent.join(format!(".{name}.old-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp); // a leftover of an earlier process with the same id
+    let _ = std::fs::remove_dir_all(&old);
+    if let Err(e) = write_report(&tmp, report, json) {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(e);
+    }
+    if dir.exists() {
+        std::fs::rename(dir, &old).map_err(io(dir))?;
+    }
+    std::fs::rename(&tmp, dir).map_err(io(dir))?;
+    let _ = std::fs::remove_dir_all(&old);
+    Ok(dir.join("index.html"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -389,5 +520,43 @@ mod tests {
         };
         assert!(write_report(dir.path(), &report, &serde_json::json!({})).is_err());
         assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none());
+    }
+
+    #[test]
+    fn report_directory_is_replaced_whole_and_a_foreign_directory_is_refused() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("out");
+        let plot = |title: &str| LinePlot {
+            title: title.into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            series: vec![Series::new("ls", vec![0.0, 1.0], vec![1.0, 2.0])],
+            log_x: false,
+        };
+        let report = |stem: &str| Report {
+            title: "t".into(),
+            sections: vec![Section {
+                plots: vec![(stem.into(), plot(stem))],
+                ..Default::default()
+            }],
+        };
+        write_report_dir(&dir, &report("first"), &serde_json::json!({})).unwrap();
+        assert!(dir.join("first.svg").exists());
+        // a second report replaces the first whole: no stale plot of the first survives
+        let index = write_report_dir(&dir, &report("second"), &serde_json::json!({})).unwrap();
+        assert!(index.exists() && dir.join("second.svg").exists());
+        assert!(!dir.join("first.svg").exists());
+        // no temporary directories are left beside it
+        let names: Vec<String> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+            .collect();
+        assert_eq!(names, vec!["out".to_string()]);
+        // a directory holding something else is never replaced
+        let foreign = tmp.path().join("home");
+        std::fs::create_dir(&foreign).unwrap();
+        std::fs::write(foreign.join("notes.txt"), "keep").unwrap();
+        assert!(write_report_dir(&foreign, &report("x"), &serde_json::json!({})).is_err());
+        assert!(foreign.join("notes.txt").exists());
     }
 }

@@ -37,6 +37,8 @@ pub struct JsbsimSim {
     knob_values: BTreeMap<String, f64>,
     /// Names of the aerodynamic coefficient functions that carry a scale knob (`flightid/knob/NAME`).
     pub coefficient_knobs: Vec<String>,
+    /// Added aerodynamic terms the private copy offers (`flightid/added/NAME`, default 0), e.g. `Cm_alpha2`.
+    pub added_terms: Vec<String>,
 }
 
 fn surface_property(surface: &str) -> String {
@@ -46,6 +48,16 @@ fn surface_property(surface: &str) -> String {
 impl JsbsimSim {
     /// Starts a bridge and loads the aircraft (a private copy, see `scripts/jsbsim_bridge.py`) at `rate_hz`.
     pub fn start(config: &AircraftConfig, rate_hz: f64) -> Result<Self, SimError> {
+        Self::start_with_model(config, rate_hz, None)
+    }
+
+    /// Like [`JsbsimSim::start`], with the aircraft XML taken from `model_dir` (an exported model, see
+    /// [`JsbsimSim::export_aircraft`]) instead of JSBSim's own.
+    pub fn start_with_model(
+        config: &AircraftConfig,
+        rate_hz: f64,
+        model_dir: Option<&std::path::Path>,
+    ) -> Result<Self, SimError> {
         if !(rate_hz.is_finite() && rate_hz > 0.0) {
             return Err(SimError::Usage(format!(
                 "simulation rate must be positive, got {rate_hz} Hz"
@@ -62,24 +74,24 @@ impl JsbsimSim {
                 )
             })
             .collect();
-        let req = json!({
+        let mut req = json!({
             "cmd": "load", "aircraft": config.model, "dt_s": 1.0 / rate_hz, "surfaces": surfaces,
             "engine_running": config.engine_running, "gear_up": config.gear_up, "engines": config.engines,
         });
+        if let Some(dir) = model_dir {
+            let abs = std::fs::canonicalize(dir).map_err(|e| {
+                SimError::UnknownModel(format!("model directory {}: {e}", dir.display()))
+            })?;
+            req["aircraft_dir"] = json!(abs.display().to_string());
+        }
         let resp = bridge.request(req, &[]).map_err(|e| match e {
             SimError::Bridge { kind, message } if kind == "unknown_aircraft" => {
                 SimError::UnknownModel(message)
             }
             other => other,
         })?;
-        let coefficient_knobs = resp.header["knobs"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(|v| v.as_str().map(String::from))
-                    .collect()
-            })
-            .unwrap_or_default();
+        let coefficient_knobs = string_list(&resp.header["knobs"]);
+        let added_terms = string_list(&resp.header["added_terms"]);
         Ok(JsbsimSim {
             bridge,
             config: config.clone(),
@@ -87,6 +99,7 @@ impl JsbsimSim {
             trim: None,
             knob_values: BTreeMap::new(),
             coefficient_knobs,
+            added_terms,
         })
     }
 
@@ -123,6 +136,19 @@ impl JsbsimSim {
         Ok(())
     }
 
+    /// Sets a JSBSim property before every trim, after the models are reset (a mass/CG variant such as
+    /// `inertia/pointmass-weight-lbs[4]` or `propulsion/tank[0]/contents-lbs`). Unknown properties are refused.
+    pub fn set_pre_trim_property(&mut self, property: &str, value: f64) -> Result<(), SimError> {
+        if !value.is_finite() {
+            return Err(SimError::Usage(format!(
+                "property '{property}': value {value} is not finite"
+            )));
+        }
+        self.get_properties(&[property])?;
+        self.knob_values.insert(property.to_string(), value);
+        Ok(())
+    }
+
     /// Reads arbitrary JSBSim properties (current state).
     pub fn get_properties(&mut self, names: &[&str]) -> Result<BTreeMap<String, f64>, SimError> {
         let resp = self
@@ -130,6 +156,17 @@ impl JsbsimSim {
             .request(json!({"cmd": "get", "properties": names}), &[])?;
         Ok(values_map(&resp.header["values"]))
     }
+}
+
+/// The strings of a JSON array (empty for anything else).
+fn string_list(v: &Value) -> Vec<String> {
+    v.as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|v| v.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 fn values_map(v: &Value) -> BTreeMap<String, f64> {
@@ -413,6 +450,9 @@ pub struct AeroTruth {
     pub chord_m: f64,
     /// Trim angle of attack, rad.
     pub alpha_rad: f64,
+    /// Gravitational acceleration at the trim altitude, m/s².
+    #[serde(default)]
+    pub g_m_s2: f64,
 }
 
 impl JsbsimSim {
@@ -442,6 +482,14 @@ impl JsbsimSim {
             "metrics/Sw-sqft",
             "metrics/bw-ft",
             "metrics/cbarw-ft",
+            "aero/beta-rad",
+            "accelerations/gravity-ft_sec2",
+            "metrics/aero-rp-x-in",
+            "metrics/aero-rp-y-in",
+            "metrics/aero-rp-z-in",
+            "inertia/cg-x-in",
+            "inertia/cg-y-in",
+            "inertia/cg-z-in",
         ];
         let extra = [
             "moments/m-aero-lbsft",
@@ -494,6 +542,38 @@ impl JsbsimSim {
             "YAW" => Some("moments/n-aero-lbsft"),
             _ => None,
         };
+        // Force turn: the probe changes what the coefficient functions read, but JSBSim rotates the wind-axis
+        // forces into body axes with the *unperturbed* α and β, so `moments/*-aero-lbsft` miss the moment of
+        // the force vector turning with α (β) about the CG. In flight the lift vector turns with α; with the
+        // c172x reference point ~2 ft above the CG that is worth −0.19 in Cm_α (−1.345 without, −1.535 with,
+        // the value `scripts/oracle_aero.py` gets from run_ic states). Add r × (∂T_w2b/∂x) F_w.
+        let arm_ft = [
+            -(c("metrics/aero-rp-x-in") - c("inertia/cg-x-in")) / 12.0,
+            (c("metrics/aero-rp-y-in") - c("inertia/cg-y-in")) / 12.0,
+            -(c("metrics/aero-rp-z-in") - c("inertia/cg-z-in")) / 12.0,
+        ];
+        let force_wind_lbs = [
+            -base.get("DRAG").copied().unwrap_or(0.0),
+            base.get("SIDE").copied().unwrap_or(0.0),
+            -base.get("LIFT").copied().unwrap_or(0.0),
+        ];
+        let (alpha0, beta0) = (trim.alpha_rad, c("aero/beta-rad"));
+        let force_turn = |var: &str, axis: &str| -> f64 {
+            let step = 1e-6;
+            let moment = |a: f64, b: f64| cross(arm_ft, wind_to_body(a, b, force_wind_lbs));
+            let (plus, minus) = match var {
+                "alpha" => (moment(alpha0 + step, beta0), moment(alpha0 - step, beta0)),
+                "beta" => (moment(alpha0, beta0 + step), moment(alpha0, beta0 - step)),
+                _ => return 0.0,
+            };
+            let k = match axis {
+                "ROLL" => 0,
+                "PITCH" => 1,
+                "YAW" => 2,
+                _ => return 0.0,
+            };
+            (plus[k] - minus[k]) / (2.0 * step) / norm(axis)
+        };
         let mut d = BTreeMap::new();
         let mut d_arp = BTreeMap::new();
         for (name, var, axis, scale) in [
@@ -523,7 +603,7 @@ impl JsbsimSim {
         ] {
             d_arp.insert(name.to_string(), slope(var, axis) * scale);
             let about_cg = match cg_axis(axis) {
-                Some(prop) => slope_of(var, prop, norm(axis)),
+                Some(prop) => slope_of(var, prop, norm(axis)) + force_turn(var, axis),
                 None => slope(var, axis),
             };
             d.insert(name.to_string(), about_cg * scale);
@@ -567,6 +647,67 @@ impl JsbsimSim {
             span_m: b_ft * FT_TO_M,
             chord_m: cbar_ft * FT_TO_M,
             alpha_rad: trim.alpha_rad,
+            g_m_s2: c("accelerations/gravity-ft_sec2") * FT_TO_M,
         })
+    }
+}
+
+/// JSBSim's wind-to-body rotation (`FGAuxiliary::Tw2b`) applied to a wind-axis vector.
+fn wind_to_body(alpha_rad: f64, beta_rad: f64, v: [f64; 3]) -> [f64; 3] {
+    let (sa, ca) = alpha_rad.sin_cos();
+    let (sb, cb) = beta_rad.sin_cos();
+    [
+        ca * cb * v[0] - ca * sb * v[1] - sa * v[2],
+        sb * v[0] + cb * v[1],
+        sa * cb * v[0] - sa * sb * v[1] + ca * v[2],
+    ]
+}
+
+/// Cross product r × f.
+fn cross(r: [f64; 3], f: [f64; 3]) -> [f64; 3] {
+    [
+        r[1] * f[2] - r[2] * f[1],
+        r[2] * f[0] - r[0] * f[2],
+        r[0] * f[1] - r[1] * f[0],
+    ]
+}
+
+impl JsbsimSim {
+    /// Sets the coefficient of an added aerodynamic term (e.g. `Cm_alpha2`: ΔC_m = k α²), from the next trim on.
+    pub fn set_added_term(&mut self, term: &str, coefficient: f64) -> Result<(), SimError> {
+        if !self.added_terms.iter().any(|t| t == term) {
+            return Err(SimError::Usage(format!(
+                "no added aerodynamic term '{term}' (known: {})",
+                self.added_terms.join(", ")
+            )));
+        }
+        self.knob_values
+            .insert(format!("flightid/added/{term}"), coefficient);
+        Ok(())
+    }
+
+    /// Writes the aircraft with the current coefficient factors and added terms written into its XML to
+    /// `dir/<model>.xml` (plus the aircraft directory's other files), loadable by [`JsbsimSim::start_with_model`].
+    pub fn export_aircraft(
+        &mut self,
+        dir: &std::path::Path,
+    ) -> Result<std::path::PathBuf, SimError> {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| SimError::Usage(format!("creating {}: {e}", dir.display())))?;
+        let abs = std::fs::canonicalize(dir)
+            .map_err(|e| SimError::Usage(format!("{}: {e}", dir.display())))?;
+        let pick = |prefix: &str| -> serde_json::Map<String, Value> {
+            self.knob_values
+                .iter()
+                .filter_map(|(k, v)| k.strip_prefix(prefix).map(|n| (n.to_string(), json!(v))))
+                .collect()
+        };
+        let req = json!({"cmd": "export", "dir": abs.display().to_string(),
+                         "knobs": pick("flightid/knob/"), "added": pick("flightid/added/")});
+        let resp = self.bridge.request(req, &[])?;
+        Ok(resp.header["path"]
+            .as_str()
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| abs.join(format!("{}.xml", self.config.model))))
     }
 }

@@ -1,0 +1,357 @@
+//! The whole derivative study behind `flightid derivatives`: truth from the JSBSim trim, the model check against
+//! JSBSim's linearization, estimates by the transfer-function route and by equation error, and their scores.
+
+use serde::Serialize;
+use serde_json::{json, Value};
+
+use super::fit::{estimate_derivatives, FitOptions, IdentifiedTfs};
+use super::model::TfOutput;
+use super::params::Derivative as D;
+use super::score::{score_equation_error, score_tf_fit, table1, table3, Scorecard};
+use super::spec::{
+    apply_overrides, identified_tfs_from_json, model_from_truth, truth_derivatives, Structure,
+};
+use super::trials::{
+    equation_error_flights, equation_error_on, fly_doublets, identify_paper_tfs, TrialOptions,
+};
+use super::{AeroError, Mode};
+use crate::data;
+use crate::report::{Report, Section, Table};
+use crate::sim::jsbsim::AeroTruth;
+use crate::sim::linear::submodel_modes;
+use crate::sim::{JsbsimSim, Simulator, TrimPoint};
+
+/// Where the estimates come from.
+#[derive(Debug, Clone)]
+pub enum Source {
+    /// Fly the doublets on JSBSim (the default run).
+    Fly(TrialOptions),
+    /// Identified transfer functions (`flightid identify --json` documents, with their file names).
+    Identified(Vec<(String, Value)>),
+    /// A flight-data CSV, read by equation error.
+    Data(data::FlightRecord),
+}
+
+/// What to estimate and how.
+#[derive(Debug, Clone)]
+pub struct StudyOptions {
+    /// Data source.
+    pub source: Source,
+    /// Model structure of the transfer-function route.
+    pub structure: Structure,
+    /// Free derivatives of the transfer-function route (`None`: the pitching-moment and roll/yaw derivatives
+    /// the paper's transfer functions determine, [`default_free`]).
+    pub free: Option<Vec<D>>,
+    /// Start of the free derivatives as a factor on the truth (1.2: 20 % off, like a handbook estimate).
+    pub start_factor: f64,
+}
+
+/// The default free derivatives: C_mα, C_mq, C_mα̇, C_mδe from θ/δe; C_lβ, C_lp, C_lδa, C_nβ, C_nr from φ/δa.
+/// Lift, drag and side force stay at the model's values (they come from performance and trim tests, and the
+/// attitude transfer functions see them only in combination with the moment derivatives).
+pub fn default_free() -> Vec<D> {
+    vec![
+        D::Cmalpha,
+        D::Cmq,
+        D::Cmalphadot,
+        D::Cmde,
+        D::Clbeta,
+        D::Clp,
+        D::Clda,
+        D::Cnbeta,
+        D::Cnr,
+    ]
+}
+
+/// ωn and ζ of the short period and the Dutch roll: (label, model, JSBSim).
+#[derive(Debug, Clone, Serialize)]
+pub struct ModalCheck {
+    /// `short period ωn` etc.
+    pub quantity: String,
+    /// The paper-structure model from the truth derivatives.
+    pub paper: f64,
+    /// The full-structure model.
+    pub full: f64,
+    /// JSBSim's linearization (decoupled 4-state submodels).
+    pub jsbsim: f64,
+}
+
+/// Everything the study found.
+#[derive(Debug, Clone, Serialize)]
+pub struct Study {
+    /// The aircraft's own values at trim.
+    pub truth: AeroTruth,
+    /// Model check against JSBSim's linearization.
+    pub modal_check: Vec<ModalCheck>,
+    /// Identified transfer functions: (label, num, den, simulation fit %).
+    pub identified: Vec<(String, Vec<f64>, Vec<f64>, Option<f64>)>,
+    /// One scorecard per route.
+    pub scorecards: Vec<Scorecard>,
+    /// The identifiability analysis of the transfer-function route, in words.
+    pub identifiability: String,
+    /// Statements the reader needs (what was dropped and why, what the data cannot give).
+    pub notes: Vec<String>,
+}
+
+fn fastest(modes: &[Mode]) -> Option<(f64, f64)> {
+    modes
+        .iter()
+        .filter_map(|m| match *m {
+            Mode::Oscillatory {
+                omega_n_rad_s,
+                zeta,
+            } => Some((omega_n_rad_s, zeta)),
+            Mode::Real { .. } => None,
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+fn modal_check(sim: &mut JsbsimSim, truth: &AeroTruth) -> Result<Vec<ModalCheck>, AeroError> {
+    let lin = sim.linearize()?;
+    let jsb = submodel_modes(&lin)?;
+    let osc = |k: &str| {
+        jsb.get(k)
+            .into_iter()
+            .flatten()
+            .filter(|m| m.zeta < 1.0 && m.omega_n_rad_s > 0.0 && m.period_s.is_some())
+            .map(|m| (m.omega_n_rad_s, m.zeta))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .unwrap_or((f64::NAN, f64::NAN))
+    };
+    let (sp_j, dr_j) = (osc("longitudinal"), osc("lateral"));
+    let mut per = Vec::new();
+    for s in [Structure::Paper, Structure::Full] {
+        let m = model_from_truth(truth, s.assumptions())?;
+        let sp = fastest(&m.longitudinal()?.modes()?).unwrap_or((f64::NAN, f64::NAN));
+        let dr = fastest(&m.lateral()?.modes()?).unwrap_or((f64::NAN, f64::NAN));
+        per.push((sp, dr));
+    }
+    let row = |q: &str, f: &dyn Fn(((f64, f64), (f64, f64))) -> f64, j: f64| ModalCheck {
+        quantity: q.into(),
+        paper: f(per[0]),
+        full: f(per[1]),
+        jsbsim: j,
+    };
+    Ok(vec![
+        row("short period ωn, rad/s", &|p| p.0 .0, sp_j.0),
+        row("short period ζ", &|p| p.0 .1, sp_j.1),
+        row("Dutch roll ωn, rad/s", &|p| p.1 .0, dr_j.0),
+        row("Dutch roll ζ", &|p| p.1 .1, dr_j.1),
+    ])
+}
+
+/// Runs the study on a trimmed simulator (`point` is re-trimmed before each flight).
+pub fn run(
+    sim: &mut JsbsimSim,
+    point: &TrimPoint,
+    opts: &StudyOptions,
+) -> Result<Study, AeroError> {
+    sim.trim(point)?;
+    let truth = sim.aero_truth()?;
+    let modal_check = modal_check(sim, &truth)?;
+    let mut notes = vec![
+        "Truth: the derivatives the JSBSim model itself uses at this trim (its coefficient functions, tables \
+         included, differenced; moments about the CG). TF-route scores are in stability axes, \
+         equation-error scores in body axes."
+            .to_string(),
+    ];
+    let free = match &opts.free {
+        Some(f) => f.clone(),
+        None => default_free(),
+    };
+    let mut tfs = IdentifiedTfs::default();
+    let mut identified = Vec::new();
+    let mut ee = None;
+    match &opts.source {
+        Source::Fly(trial) => {
+            let flights = fly_doublets(sim, point, trial)?;
+            let (all, results) = identify_paper_tfs(&flights, trial)?;
+            for (o, r) in &results {
+                identified.push((
+                    o.label(),
+                    r.tf.num.clone(),
+                    r.tf.den.clone(),
+                    Some(r.fit_sim_percent),
+                ));
+            }
+            // φ/δa and φ/δr share the lateral poles; a rudder doublet barely excites the roll mode, so its
+            // 4-pole fit often trades it for a zero. Use φ/δr only when its poles agree with φ/δa's.
+            let den_of = |o: TfOutput| {
+                all.tfs
+                    .iter()
+                    .find(|(w, _)| *w == o)
+                    .map(|(_, t)| t.den.clone())
+            };
+            let agree = match (den_of(TfOutput::PHI_AILERON), den_of(TfOutput::PHI_RUDDER)) {
+                (Some(a), Some(r)) => a
+                    .iter()
+                    .zip(&r)
+                    .skip(1)
+                    .take(3)
+                    .all(|(x, y)| (x - y).abs() <= 0.1 * x.abs().max(1e-3)),
+                _ => false,
+            };
+            tfs.tfs = all
+                .tfs
+                .into_iter()
+                .filter(|(o, _)| agree || *o != TfOutput::PHI_RUDDER)
+                .collect();
+            if !agree {
+                notes.push(
+                    "φ/δr left out of the derivative fit: its identified denominator disagrees with φ/δa's by \
+                     more than 10 % (the rudder doublet hardly excites the roll mode, so the 4-pole fit loses it)"
+                        .into(),
+                );
+            }
+            ee = Some(equation_error_flights(&flights, &truth)?);
+        }
+        Source::Identified(docs) => {
+            identified_tfs_from_json(docs, &mut tfs)?;
+            for (_, d) in docs {
+                apply_overrides_note(d, &mut notes);
+            }
+            for (o, t) in &tfs.tfs {
+                identified.push((o.label(), t.num.clone(), t.den.clone(), None));
+            }
+        }
+        Source::Data(rec) => {
+            ee = Some(equation_error_on(rec, &truth)?);
+        }
+    }
+    let mut scorecards = Vec::new();
+    let mut identifiability = String::new();
+    if !tfs.tfs.is_empty() {
+        let mut model = model_from_truth(&truth, opts.structure.assumptions())?;
+        if let Source::Identified(docs) = &opts.source {
+            for (source, d) in docs {
+                apply_overrides(d, source, truth.alpha_rad, &mut model)?;
+            }
+        }
+        let axes: Vec<_> = tfs.tfs.iter().map(|(o, _)| o.axis).collect();
+        let free: Vec<D> = free
+            .into_iter()
+            .filter(|d| {
+                axes.iter()
+                    .any(|a| d.is_longitudinal() == (*a == super::Axis::Longitudinal))
+            })
+            .collect();
+        let mut prior = model.clone();
+        for &d in &free {
+            prior
+                .derivatives
+                .set(d, opts.start_factor * model.derivatives.get(d));
+        }
+        let est = estimate_derivatives(&prior, &tfs, &free, FitOptions::default())?;
+        identifiability = est.identifiability.to_text();
+        scorecards.push(score_tf_fit(&est, &model.derivatives, opts.structure));
+        notes.push(format!(
+            "TF route: free derivatives start at {:.0} % of the truth; the others are held at the model's values.",
+            100.0 * opts.start_factor
+        ));
+    }
+    if let Some(ee) = &ee {
+        let model = model_from_truth(&truth, Structure::Full.assumptions())?;
+        scorecards.push(score_equation_error(
+            &[ee],
+            &truth_derivatives(&truth),
+            &model,
+        ));
+        for (c, why) in &ee.skipped {
+            notes.push(format!("equation error: {c} skipped: {why}"));
+        }
+    }
+    notes.push(
+        "Drag polar: C_D0 and C_D_CL² are not recoverable from these flights. They enter θ/δe only through the \
+         phugoid coefficients, where the model's constant-thrust assumption is wrong for a propeller (thrust \
+         falls with speed), so a fit moves C_D0 and K to absorb the missing thrust derivative (measured on \
+         c172x doublets: C_D0 +80 to +130 %, C_D_CL² of the wrong sign). This is the paper's failure to estimate \
+         C_D_CL², explained; a thrust model (ThrustModel::ConstantPower) or a throttle input would separate them."
+            .into(),
+    );
+    Ok(Study {
+        truth,
+        modal_check,
+        identified,
+        scorecards,
+        identifiability,
+        notes,
+    })
+}
+
+fn apply_overrides_note(doc: &Value, notes: &mut Vec<String>) {
+    if doc.get("mass").is_some() || doc.get("geometry").is_some() {
+        notes.push(
+            "mass/geometry taken from the identified-TF file, not from the JSBSim model".into(),
+        );
+    }
+}
+
+impl Study {
+    /// The model-check table.
+    pub fn modal_table(&self) -> Table {
+        let pct = |a: f64, b: f64| format!("{:+.2} %", 100.0 * (a / b - 1.0));
+        Table {
+            caption: "Model check: paper-structure and full model from the truth derivatives vs JSBSim's linearization"
+                .into(),
+            header: ["quantity", "JSBSim", "paper", "error", "full", "error"]
+                .map(String::from)
+                .to_vec(),
+            rows: self
+                .modal_check
+                .iter()
+                .map(|m| {
+                    vec![
+                        m.quantity.clone(),
+                        format!("{:.4}", m.jsbsim),
+                        format!("{:.4}", m.paper),
+                        pct(m.paper, m.jsbsim),
+                        format!("{:.4}", m.full),
+                        pct(m.full, m.jsbsim),
+                    ]
+                })
+                .collect(),
+        }
+    }
+
+    /// Table 1 and Table 3 of every route.
+    pub fn tables(&self) -> Vec<Table> {
+        let mut out = vec![self.modal_table()];
+        for c in &self.scorecards {
+            out.push(table1(c, "derivatives"));
+            out.push(table3(c, "derivatives"));
+        }
+        out
+    }
+
+    /// JSON form.
+    pub fn to_json(&self) -> Value {
+        json!({
+            "truth": self.truth,
+            "modal_check": self.modal_check,
+            "identified": self.identified.iter().map(|(l, n, d, f)| json!({"tf": l, "num": n, "den": d, "fit_sim_percent": f})).collect::<Vec<_>>(),
+            "scorecards": self.scorecards,
+            "identifiability": self.identifiability,
+            "notes": self.notes,
+        })
+    }
+
+    /// The report (index.html, report.md).
+    pub fn report(&self) -> Report {
+        let mut main = Section {
+            heading: "Derivatives: truth vs estimate".into(),
+            paragraphs: self.notes.clone(),
+            tables: self.tables(),
+            plots: Vec::new(),
+        };
+        if !self.identifiability.is_empty() {
+            main.paragraphs.push(format!(
+                "Identifiability of the TF route:\n{}",
+                self.identifiability
+            ));
+        }
+        Report {
+            title: "flightid derivatives".into(),
+            sections: vec![main],
+        }
+    }
+}

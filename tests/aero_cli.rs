@@ -1,0 +1,129 @@
+//! `flightid derivatives` from the command line: the default run prints the paper's tables, and bad input is a
+//! clear error with exit code 2.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn flightid(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_flightid"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn scratch(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("flightid-aero-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn assert_bad_input(out: &Output, needle: &str) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    assert!(err.contains(needle), "expected '{needle}' in: {err}");
+}
+
+/// An identified θ/δe in the shape `flightid identify --json` writes, with a denominator of `den`.
+fn identified(den: &str, extra: &str) -> String {
+    format!(
+        r#"{{"input": "elevator_rad", "output": "theta_rad", {extra}
+            "result": {{"tf": {{"num": [-18.9, -79.4, -7.2], "den": {den}, "dt_s": null}},
+                        "num_std": [], "den_std": []}}}}"#
+    )
+}
+
+#[test]
+fn default_run_prints_tables_1_and_3_and_writes_json() {
+    let dir = std::env::temp_dir().join(format!("flightid-aero-cli-run-{}", std::process::id()));
+    let json = dir.join("out.json");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = flightid(&[
+        "derivatives",
+        "--aircraft",
+        "c172x",
+        "--json",
+        json.to_str().unwrap(),
+        "--report",
+        dir.join("report").to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for needle in [
+        "Table 1",
+        "Table 3",
+        "Cm_q+Cm_alphadot",
+        "Model check",
+        "Drag polar",
+    ] {
+        assert!(text.contains(needle), "missing '{needle}' in:\n{text}");
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // Two routes: the transfer functions and equation error, each with Cm_de scored.
+    let cards = v["scorecards"].as_array().unwrap();
+    assert_eq!(cards.len(), 2);
+    for c in cards {
+        assert!(c["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|r| r["name"] == "Cm_de"));
+    }
+    assert!(dir.join("report/index.html").exists());
+}
+
+#[test]
+fn unknown_derivative_name_is_bad_input() {
+    let out = flightid(&["derivatives", "--free", "Cm_alpha,Cm_foo"]);
+    assert_bad_input(&out, "unknown derivative name `Cm_foo`");
+}
+
+#[test]
+fn transfer_function_of_the_wrong_order_is_bad_input() {
+    // A 2nd-order θ/δe (short period only) cannot be matched to the 4-state longitudinal model.
+    let p = scratch("second_order.json", &identified("[1.0, 7.2, 37.0]", ""));
+    let out = flightid(&["derivatives", "--from", p.to_str().unwrap()]);
+    assert_bad_input(&out, "needs degree 4");
+}
+
+#[test]
+fn missing_mass_field_is_bad_input() {
+    let p = scratch(
+        "no_inertia.json",
+        &identified(
+            "[1.0, 7.15, 38.3, 2.27, 1.70]",
+            r#""mass": {"mass_kg": 1100.0},"#,
+        ),
+    );
+    let out = flightid(&["derivatives", "--from", p.to_str().unwrap()]);
+    assert_bad_input(&out, "ixx_kg_m2");
+}
+
+#[test]
+fn non_positive_wing_area_is_bad_input() {
+    let p = scratch(
+        "no_area.json",
+        &identified(
+            "[1.0, 7.15, 38.3, 2.27, 1.70]",
+            r#""geometry": {"wing_area_m2": 0.0, "span_m": 11.0, "chord_m": 1.5},"#,
+        ),
+    );
+    let out = flightid(&["derivatives", "--from", p.to_str().unwrap()]);
+    assert_bad_input(&out, "wing_area_m2");
+}
+
+#[test]
+fn unsupported_transfer_function_is_bad_input() {
+    let p = scratch(
+        "q.json",
+        r#"{"input": "elevator_rad", "output": "q_rad_s", "result": {"tf": {"num": [1.0], "den": [1.0, 1.0]}}}"#,
+    );
+    let out = flightid(&["derivatives", "--from", p.to_str().unwrap()]);
+    assert_bad_input(&out, "not one of the model's transfer functions");
+}

@@ -1,0 +1,187 @@
+//! Aerodynamic derivatives from real JSBSim c172x doublet flights (4000 ft, 100 KTAS), scored against the
+//! derivatives the model itself uses (issue 4 acceptance). Each test flies its own doublets (~1 s of work).
+
+use flightid::aero::score::{score_equation_error, score_tf_fit, Scorecard, CMQ_SUM};
+use flightid::aero::spec::{model_from_truth, truth_derivatives, Structure};
+use flightid::aero::study::default_free;
+use flightid::aero::trials::{
+    equation_error_flights, fly_doublets, identify_paper_tfs, SensorNoise, TrialOptions,
+};
+use flightid::aero::{estimate_derivatives, Assumptions, FitOptions, Mode, TfOutput};
+use flightid::aircraft;
+use flightid::sim::jsbsim::AeroTruth;
+use flightid::sim::linear::submodel_modes;
+use flightid::sim::{JsbsimSim, Simulator, TrimPoint};
+
+const POINT: (f64, f64) = (4000.0, 100.0);
+
+fn trimmed(rate_hz: f64) -> (JsbsimSim, TrimPoint, AeroTruth) {
+    let mut sim = JsbsimSim::start(&aircraft::load("c172x").unwrap(), rate_hz).unwrap();
+    let point = TrimPoint::level(POINT.0, POINT.1);
+    sim.trim(&point).unwrap();
+    let truth = sim.aero_truth().unwrap();
+    (sim, point, truth)
+}
+
+fn options(noisy: bool) -> TrialOptions {
+    TrialOptions {
+        noise: noisy.then(SensorNoise::realistic),
+        ..TrialOptions::default()
+    }
+}
+
+fn fastest(modes: &[Mode]) -> (f64, f64) {
+    modes
+        .iter()
+        .filter_map(|m| match *m {
+            Mode::Oscillatory {
+                omega_n_rad_s,
+                zeta,
+            } => Some((omega_n_rad_s, zeta)),
+            Mode::Real { .. } => None,
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .unwrap()
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    a / b - 1.0
+}
+
+/// Every targeted row meets its target, and every row either covers the truth with its 3σ interval or says why.
+fn assert_targets(card: &Scorecard, names: &[&str], label: &str) {
+    for name in names {
+        let r = card
+            .row(name)
+            .unwrap_or_else(|| panic!("{label}: no row {name}"));
+        assert_eq!(
+            r.meets_target(),
+            Some(true),
+            "{label}: {name} {:+.1} % (target {:?})",
+            r.error_percent,
+            r.target_percent
+        );
+    }
+    for r in &card.rows {
+        assert!(
+            r.covered_3sigma != Some(false) || !r.note.is_empty(),
+            "{label}: {} misses its 3σ interval without an explanation",
+            r.name
+        );
+    }
+}
+
+/// Model check (issue acceptance): the model built from the truth derivatives against JSBSim's own linearization.
+/// Full structure: short period within 0.5 %, Dutch roll ωn 0.5 %, ζ 5 % (measured +0.07/−0.07, −0.1/−2.5 %).
+/// Paper structure: short period and Dutch-roll ωn within 5 %; its Dutch-roll ζ misses 5 % by a fraction of a point
+/// (measured −5.2 %), and the term responsible is C_Yβ taken in stability axes: switching that one assumption
+/// back brings it inside 5 %.
+#[test]
+fn c172x_model_from_truth_matches_jsbsim_linearization() {
+    let (mut sim, _, truth) = trimmed(120.0);
+    let jsb = submodel_modes(&sim.linearize().unwrap()).unwrap();
+    let osc = |k: &str| {
+        jsb[k]
+            .iter()
+            .filter(|m| m.period_s.is_some())
+            .map(|m| (m.omega_n_rad_s, m.zeta))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .unwrap()
+    };
+    let (sp_j, dr_j) = (osc("longitudinal"), osc("lateral"));
+    let modes = |a: Assumptions| {
+        let m = model_from_truth(&truth, a).unwrap();
+        (
+            fastest(&m.longitudinal().unwrap().modes().unwrap()),
+            fastest(&m.lateral().unwrap().modes().unwrap()),
+        )
+    };
+    let (sp, dr) = modes(Structure::Full.assumptions());
+    println!("full: SP {sp:?} DR {dr:?} vs JSBSim {sp_j:?} {dr_j:?}");
+    assert!(rel(sp.0, sp_j.0).abs() < 0.005 && rel(sp.1, sp_j.1).abs() < 0.005);
+    assert!(rel(dr.0, dr_j.0).abs() < 0.005 && rel(dr.1, dr_j.1).abs() < 0.05);
+    let (sp, dr) = modes(Assumptions::paper());
+    println!("paper: SP {sp:?} DR {dr:?}");
+    assert!(rel(sp.0, sp_j.0).abs() < 0.05 && rel(sp.1, sp_j.1).abs() < 0.05);
+    assert!(rel(dr.0, dr_j.0).abs() < 0.05);
+    assert!(rel(dr.1, dr_j.1).abs() < 0.10, "paper DR ζ {}", dr.1);
+    let (_, dr) = modes(Assumptions {
+        side_force_in_wind_axes: true,
+        ..Assumptions::paper()
+    });
+    assert!(
+        rel(dr.1, dr_j.1).abs() < 0.05,
+        "paper + wind-axis C_Yβ: DR ζ {}",
+        dr.1
+    );
+}
+
+/// Equation error on the full state (α, β, p, q, r, surfaces), noise-free and with realistic sensor noise:
+/// C_mδe within 10 %, C_mq + C_mα̇ within 15 %, C_lp, C_lδa, C_nβ, C_nδr within 15 % (measured: 2–3 %, 4–11 %,
+/// ≤ 2.5 %). C_mα is aliased with C_mα̇ when α̇ is not a regressor (+15 to +20 %); the report names the alias and
+/// C_mα + C_mα̇·c̄/(2V)·Z_α is recovered within 10 %.
+#[test]
+fn equation_error_on_doublets_meets_the_targets() {
+    let (mut sim, point, truth) = trimmed(60.0);
+    let model = model_from_truth(&truth, Structure::Full.assumptions()).unwrap();
+    for noisy in [false, true] {
+        let flights = fly_doublets(&mut sim, &point, &options(noisy)).unwrap();
+        let ee = equation_error_flights(&flights, &truth).unwrap();
+        let card = score_equation_error(&[&ee], &truth_derivatives(&truth), &model);
+        let label = if noisy { "EE noisy" } else { "EE clean" };
+        assert_targets(
+            &card,
+            &["Cm_de", CMQ_SUM, "Cl_p", "Cl_da", "Cn_beta", "Cn_dr"],
+            label,
+        );
+        let cm_alpha = card.row("Cm_alpha").unwrap();
+        assert!(cm_alpha.note.contains("α̇ not a regressor"), "{label}");
+        let alias = flightid::aero::score::cm_alpha_alias(&model);
+        let corrected = cm_alpha.truth + alias;
+        assert!(
+            (cm_alpha.estimate / corrected - 1.0).abs() < 0.10,
+            "{label}: Cm_alpha {} vs aliased truth {corrected}",
+            cm_alpha.estimate
+        );
+    }
+}
+
+/// The paper's route: θ/δe and φ/δa identified (SRIVC) and the moment derivatives backed out through the
+/// full-structure model, free derivatives starting 20 % off. Measured (60 Hz), clean/noisy: C_mδe +5/+6 %,
+/// C_mα +10/+18 %, C_mq + C_mα̇ +23/+19 %, C_lp −10/−11 %, C_lδa +6/+6 %, C_nβ +5/+6 %. Asserted: C_mδe within 10 % in both; noise-free C_mα within 10 %; every miss of a target or of the
+/// 3σ interval carries the structure term held responsible.
+#[test]
+fn transfer_function_route_on_doublets() {
+    let (mut sim, point, truth) = trimmed(60.0);
+    for noisy in [false, true] {
+        let opts = options(noisy);
+        let flights = fly_doublets(&mut sim, &point, &opts).unwrap();
+        let (mut tfs, _) = identify_paper_tfs(&flights, &opts).unwrap();
+        tfs.tfs.retain(|(o, _)| *o != TfOutput::PHI_RUDDER);
+        let model = model_from_truth(&truth, Structure::Full.assumptions()).unwrap();
+        let free = default_free();
+        let mut prior = model.clone();
+        for &d in &free {
+            prior.derivatives.set(d, 1.2 * model.derivatives.get(d));
+        }
+        let est = estimate_derivatives(&prior, &tfs, &free, FitOptions::default()).unwrap();
+        let card = score_tf_fit(&est, &model.derivatives, Structure::Full);
+        let label = if noisy { "TF noisy" } else { "TF clean" };
+        for r in &card.rows {
+            println!(
+                "{label} {:<18} {:+7.1} % covered {:?}",
+                r.name, r.error_percent, r.covered_3sigma
+            );
+        }
+        let mut meets = vec!["Cm_de"];
+        if !noisy {
+            meets.push("Cm_alpha");
+        }
+        assert_targets(&card, &meets, label);
+        for r in &card.rows {
+            if r.meets_target() == Some(false) {
+                assert!(!r.note.is_empty(), "{label}: {} misses silently", r.name);
+            }
+        }
+    }
+}
