@@ -921,6 +921,42 @@ mod tests {
         assert!(j.result.den_std.len() == 3 && j.result.den_std[2] > 0.0);
     }
 
+    /// `v` shifted late by `k` samples, its first sample repeated in front.
+    fn shifted(v: &[f64], k: usize) -> Vec<f64> {
+        std::iter::repeat_n(v[0], k)
+            .chain(v.iter().copied())
+            .take(v.len())
+            .collect()
+    }
+
+    #[test]
+    fn a_whole_sample_delay_is_found_jointly() {
+        // Output of both records 3 samples (60 ms) late: the joint search must return exactly
+        // that delay and still the model (whole samples are all it searches). Input and output
+        // shifted together carry no delay: 0 must come back.
+        let mut o = opts(Method::Srivc);
+        o.estimate_delay = true;
+        let mut recs = two_records(0.0);
+        for r in &mut recs {
+            r.u = shifted(&r.u, 3);
+            r.y = shifted(&r.y, 3);
+        }
+        let j0 = identify_joint(&recs, &o).expect("joint with delay search");
+        assert_eq!(j0.result.delay_s, Some(0.0));
+        for r in &mut recs {
+            r.y = shifted(&r.y, 3);
+        }
+        let j = identify_joint(&recs, &o).expect("joint with delay search");
+        let delay = j.result.delay_s.expect("delay requested");
+        assert!((delay - 0.06).abs() < 1e-9, "delay {delay}");
+        // 1 %: the repeated first samples are not quite the free response they replace.
+        assert!(
+            (j.result.tf.den[2] - 36.0).abs() < 0.36,
+            "{:?}",
+            j.result.tf.den
+        );
+    }
+
     #[test]
     fn records_at_different_rates_are_refused() {
         let mut recs = two_records(0.0);
