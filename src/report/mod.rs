@@ -60,15 +60,14 @@ pub struct LinePlot {
     pub log_x: bool,
 }
 
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
+/// Colours of series that are not a known model: none of them is a model's fixed colour below.
+const PALETTE: [RGBColor; 6] = [
     RGBColor(44, 160, 44),
-    RGBColor(255, 127, 14),
-    RGBColor(148, 103, 189),
-    RGBColor(23, 190, 207),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
     RGBColor(188, 189, 34),
+    RGBColor(0, 0, 128),
 ];
 
 /// Fixed colours of the models every report shows, so a model looks the same in every plot.
@@ -90,19 +89,22 @@ const LEGEND_W: u32 = 210;
 /// A series drawn with fewer points than this gets a marker on each point (sparse data: sweeps, campaigns).
 const MARKER_BELOW_POINTS: usize = 40;
 
-/// The colour of series `i`: the model's fixed colour when the label names a known model (optionally followed by
-/// a note in parentheses, `ls (clipped)`), else the palette.
-fn series_color(label: &str, i: usize) -> RGBColor {
-    MODEL_COLORS
-        .iter()
-        .find(|(name, _)| {
-            label == *name
-                || label
-                    .strip_prefix(name)
-                    .is_some_and(|rest| rest.starts_with(" ("))
-        })
-        .map(|(_, c)| *c)
-        .unwrap_or(PALETTE[i % PALETTE.len()])
+/// The colour of a series: the model's fixed colour when the label names a known model (optionally followed by
+/// a note in parentheses, `ls (clipped)`, or after `ours: `), else light grey for a reference curve, else the
+/// palette by position.
+fn series_color(series: &Series, i: usize) -> RGBColor {
+    let label = series.label.strip_prefix("ours: ").unwrap_or(&series.label);
+    let fixed = MODEL_COLORS.iter().find(|(name, _)| {
+        label == *name
+            || label
+                .strip_prefix(name)
+                .is_some_and(|rest| rest.starts_with(" ("))
+    });
+    match fixed {
+        Some((_, c)) => *c,
+        None if series.reference => RGBColor(150, 150, 150),
+        None => PALETTE[i % PALETTE.len()],
+    }
 }
 
 fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
@@ -143,11 +145,18 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
     } else {
         (x0 - 1.0, x0 + 1.0)
     };
+    // sparse series get markers: keep the end points off the axes
+    let (x0, x1) = if !plot.log_x && plot.series.iter().any(|s| s.x.len() < MARKER_BELOW_POINTS) {
+        let pad = 0.03 * (x1 - x0);
+        (x0 - pad, x1 + pad)
+    } else {
+        (x0, x1)
+    };
     let colors: Vec<RGBColor> = plot
         .series
         .iter()
         .enumerate()
-        .map(|(i, s)| series_color(&s.label, i))
+        .map(|(i, s)| series_color(s, i))
         .collect();
     let mut svg = String::new();
     {
