@@ -236,19 +236,19 @@ fn weights(case: &ReplayCase) -> Vec<f64> {
         .collect()
 }
 
+/// A replayed record, its residual statistics per channel and the trim comparison.
+pub type ReplayAnalysis = (
+    FlightRecord,
+    BTreeMap<String, ChannelResidual>,
+    Vec<TrimMismatch>,
+);
+
 /// Replays a case with extensions and analyses every channel.
 pub fn analyse_replay(
     worker: &mut Worker,
     case: &ReplayCase,
     extensions: &[(&dyn Extension, &[f64])],
-) -> Result<
-    (
-        FlightRecord,
-        BTreeMap<String, ChannelResidual>,
-        Vec<TrimMismatch>,
-    ),
-    DiagnoseError,
-> {
+) -> Result<ReplayAnalysis, DiagnoseError> {
     let (rec, trim) =
         replay::replay(worker.sim.as_mut(), case, extensions).map_err(sim_err("replay"))?;
     let stats = case
