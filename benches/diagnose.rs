@@ -99,7 +99,7 @@ fn main() {
     );
     for c in &d.named_cause {
         println!(
-            "  named {}/{} = {:.4} ± {:.4}",
+            "  named {}/{} = {:.5} ± {:.5}",
             c.effect, c.target, c.value, c.std_error
         );
     }

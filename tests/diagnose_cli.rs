@@ -126,6 +126,20 @@ fn linear_model_replays_near_its_trim_and_refuses_far_from_it() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let fit = v["residuals"]["q_rad_s"]["fit_percent"].as_f64().unwrap();
     assert!(fit > 80.0, "linear replay q fit {fit} %");
+    // diagnose runs on the linear model too; the accelerations it does not produce are left out, and said so.
+    let o = flightid(&[
+        "diagnose",
+        "--linear",
+        lin.to_str().unwrap(),
+        "--data",
+        full.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("does not produce ax_m_s2, ay_m_s2, az_m_s2"),
+        "{}",
+        text(&o)
+    );
     // 30 % faster than the linear model's trim: refused, with the reason.
     rewrite(&full, &fast, 400, &[], Some(("airspeed_m_s", |v| v * 1.3)));
     let o = flightid(&[

@@ -396,13 +396,16 @@ pub fn make(
     })
 }
 
+/// A catalogue entry left out: (effect, target, reason).
+pub type SkippedEntry = (String, String, String);
+
 /// The full catalogue for a record and a simulation: signal path per surface, sensors per column,
 /// derivative scales the simulation offers. Returns the usable extensions and the skipped ones with the reason.
 pub fn catalogue(
     record: &FlightRecord,
     coefficient_names: &[String],
     added_terms: &[String],
-) -> (Vec<Box<dyn Extension>>, Vec<(String, String, String)>) {
+) -> (Vec<Box<dyn Extension>>, Vec<SkippedEntry>) {
     let mut all: Vec<Box<dyn Extension>> = Vec::new();
     for s in ["elevator", "aileron", "rudder", "throttle"] {
         all.push(Box::new(InputDelay(s.into())));

@@ -236,19 +236,19 @@ fn weights(case: &ReplayCase) -> Vec<f64> {
         .collect()
 }
 
+/// A replayed record, its residual statistics per channel and the trim comparison.
+pub type ReplayAnalysis = (
+    FlightRecord,
+    BTreeMap<String, ChannelResidual>,
+    Vec<TrimMismatch>,
+);
+
 /// Replays a case with extensions and analyses every channel.
 pub fn analyse_replay(
     worker: &mut Worker,
     case: &ReplayCase,
     extensions: &[(&dyn Extension, &[f64])],
-) -> Result<
-    (
-        FlightRecord,
-        BTreeMap<String, ChannelResidual>,
-        Vec<TrimMismatch>,
-    ),
-    DiagnoseError,
-> {
+) -> Result<ReplayAnalysis, DiagnoseError> {
     let (rec, trim) =
         replay::replay(worker.sim.as_mut(), case, extensions).map_err(sim_err("replay"))?;
     let stats = case
@@ -277,8 +277,8 @@ pub fn diagnose(
     if workers.is_empty() {
         return Err(DiagnoseError::BadData("no simulation worker".into()));
     }
-    let case = ReplayCase::new(train)?;
-    let vcase = valid.map(ReplayCase::new).transpose()?;
+    let mut case = ReplayCase::new(train)?;
+    let mut vcase = valid.map(ReplayCase::new).transpose()?;
     if let Some(v) = &vcase {
         if (v.rate_hz - case.rate_hz).abs() > 1e-6 * case.rate_hz {
             return Err(DiagnoseError::BadData(format!(
@@ -289,7 +289,7 @@ pub fn diagnose(
     }
     // A surface without a column is held at its trim in the replay: if it moved in flight, its effect is
     // unmodelled and any cause named on the axes it drives is suspect.
-    let warnings: Vec<String> = replay::INPUTS
+    let mut warnings: Vec<String> = replay::INPUTS
         .iter()
         .filter(|(_, c)| train.column(c).is_none())
         .map(|(s, c)| {
@@ -299,6 +299,24 @@ pub fn diagnose(
             )
         })
         .collect();
+    // Compare only the channels the simulation produces (a linear model may lack accelerations).
+    let (probe, _) =
+        replay::replay(workers[0].sim.as_mut(), &case, &[]).map_err(sim_err("replay"))?;
+    let missing: Vec<String> = case
+        .outputs
+        .iter()
+        .filter(|c| probe.column(c).is_none())
+        .cloned()
+        .collect();
+    if !missing.is_empty() {
+        warnings.push(format!(
+            "the simulation does not produce {}: not compared",
+            missing.join(", ")
+        ));
+        for c in [Some(&mut case), vcase.as_mut()].into_iter().flatten() {
+            c.outputs.retain(|o| !missing.contains(o));
+        }
+    }
     let w = Weighted {
         case: &case,
         sigma: weights(&case),
