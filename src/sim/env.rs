@@ -210,15 +210,21 @@ pub fn bridge_script() -> Result<PathBuf, EnvError> {
     })?;
     let path = dir.join(format!("jsbsim_bridge-{}.py", fnv1a(BRIDGE_SOURCE)));
     if !path.exists() {
-        let tmp = dir.join(format!(".bridge-{}.py", std::process::id()));
+        // Unique per process *and* call: threads of one process (parallel tests, campaign workers) may
+        // write the script at the same time; the last rename wins and every content is identical.
+        static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let tmp = dir.join(format!(".bridge-{}-{n}.py", std::process::id()));
         std::fs::write(&tmp, BRIDGE_SOURCE).map_err(|source| EnvError::Io {
             dir: dir.clone(),
             source,
         })?;
-        std::fs::rename(&tmp, &path).map_err(|source| EnvError::Io {
-            dir: dir.clone(),
-            source,
-        })?;
+        if let Err(source) = std::fs::rename(&tmp, &path) {
+            let _ = std::fs::remove_file(&tmp);
+            if !path.exists() {
+                return Err(EnvError::Io { dir, source });
+            }
+        }
     }
     Ok(path)
 }
