@@ -112,6 +112,11 @@ pub fn run(args: &PaperCmd) -> anyhow::Result<()> {
             }
         }
         println!("{}", text_table(&run.ise_table()));
+        println!(
+            "{}",
+            text_table(&paper::derivatives::derivative_table(&run))
+        );
+        println!("{}\n", paper::derivatives::PAPER_OMITS);
         println!("{}", text_table(&run.fit_table()));
         for v in run.verdicts() {
             println!("{v}");

@@ -8,6 +8,8 @@
 //! Beyond the paper: white output noise (`noise_rel` × std of the noise-free output) and the
 //! consistent estimators `srivc` / `oe` beside `ls`, to show where plain least squares collapses.
 
+pub mod derivatives;
+
 use crate::ident::{self, IdentOptions, IdentResult, Method};
 use crate::lti::{self, TransferFunction};
 use crate::report::{LinePlot, Report, Section, Series, Table};
@@ -464,6 +466,7 @@ impl PaperRun {
             o.insert("ise".into(), Value::Object(ise));
             top.insert(t.tf.key.into(), Value::Object(o));
         }
+        top.insert("derivatives".into(), derivatives::derivatives_json(self));
         Value::Object(top)
     }
 
@@ -766,6 +769,12 @@ impl PaperRun {
             heading: "Integral square error and fits".into(),
             paragraphs: self.verdicts(),
             tables: vec![self.ise_table(), self.fit_table()],
+            plots: vec![],
+        });
+        sections.push(Section {
+            heading: "Dimensional control derivatives".into(),
+            paragraphs: vec![derivatives::PAPER_OMITS.into()],
+            tables: vec![derivatives::derivative_table(self)],
             plots: vec![],
         });
         Report {
