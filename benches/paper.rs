@@ -79,7 +79,7 @@ fn main() {
     // 1. ARX LS, 200,000 rows × 8 columns: ARX(4, 4) on a 2000 s record at 100 Hz
     let (u, y) = record(200_004, 0.01);
     let rust_ms = time_ms(7, || ident::arx_least_squares(&u, &y, 4, 4).unwrap());
-    println!("ARX LS 200,000 x 8, flightid (regressor build + Householder QR, column-pivoted only if ill-conditioned): median {rust_ms:.1} ms");
+    println!("ARX LS 200,000 x 8, flightid (regressor build + two-thread TSQR (Householder), column-pivoted QR only if ill-conditioned): median {rust_ms:.1} ms");
     match numpy_lstsq_ms() {
         Ok((lstsq_ms, build_ms)) => {
             println!(

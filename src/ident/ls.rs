@@ -61,14 +61,79 @@ pub(crate) fn arx_ls(
     nb: usize,
     delay_samples: usize,
 ) -> Result<Arx, IdentError> {
-    let (phi, target) = arx_regressor(u, y, n, nb, delay_samples);
-    let theta = lstsq_qr(&phi, &target, "ls")?;
+    let first = n.max(nb + delay_samples);
+    let rows = y.len().saturating_sub(first);
+    let theta = match (rows >= TSQR_MIN_ROWS)
+        .then(|| arx_lstsq_tsqr(u, y, n, nb, delay_samples))
+        .flatten()
+    {
+        Some(theta) => theta,
+        None => {
+            let (phi, target) = arx_regressor(u, y, n, nb, delay_samples);
+            lstsq_qr(&phi, &target, "ls")?
+        }
+    };
     let mut a = vec![1.0];
     a.extend_from_slice(&theta[..n]);
     Ok(Arx {
         a,
         b: theta[n..].to_vec(),
     })
+}
+
+/// Records at least this long are solved by two-block TSQR on two threads.
+const TSQR_MIN_ROWS: usize = 20_000;
+
+/// ARX least squares by a two-block tall-skinny QR (Demmel et al. 2012, "Communication-optimal parallel and
+/// sequential QR", §3): each half of the rows of the augmented regressor `[Φ Y]` (eq. 60–62) is built and
+/// QR-factorised on its own thread, the two triangular factors `[R_i  Q_iᵀY_i]` are stacked and factorised once
+/// more, and `θ` follows from `R θ = QᵀY` by back substitution — the same Householder least squares as
+/// [`lstsq_qr`], never the normal equations. Returns `None` when `R` is ill-conditioned (diagonal ratio below
+/// 1e-10) or not finite, so the caller falls back to column-pivoted QR with its rank diagnosis.
+fn arx_lstsq_tsqr(
+    u: &[f64],
+    y: &[f64],
+    n: usize,
+    nb: usize,
+    delay_samples: usize,
+) -> Option<Vec<f64>> {
+    let p = n + nb;
+    let first = n.max(nb + delay_samples);
+    let mid = first + (y.len() - first) / 2;
+    let block_r = |from: usize, to: usize| -> Mat<f64> {
+        let aug = Mat::<f64>::from_fn(to - from, p + 1, |r, c| {
+            let k = r + from;
+            if c < n {
+                -y[k - 1 - c]
+            } else if c < p {
+                u[k - 1 - (c - n) - delay_samples]
+            } else {
+                y[k]
+            }
+        });
+        aug.qr().thin_R().to_owned()
+    };
+    let (r1, r2) = rayon::join(|| block_r(first, mid), || block_r(mid, y.len()));
+    let stacked = Mat::<f64>::from_fn(2 * (p + 1), p + 1, |r, c| {
+        if r <= p {
+            r1[(r, c)]
+        } else {
+            r2[(r - p - 1, c)]
+        }
+    });
+    let r = stacked.qr().thin_R().to_owned();
+    let (lo, hi) = (0..p).fold((f64::INFINITY, 0.0_f64), |(lo, hi), i| {
+        (lo.min(r[(i, i)].abs()), hi.max(r[(i, i)].abs()))
+    });
+    if !(lo > 1e-10 * hi) {
+        return None;
+    }
+    let mut theta = vec![0.0; p];
+    for i in (0..p).rev() {
+        let acc: f64 = (i + 1..p).map(|j| r[(i, j)] * theta[j]).sum();
+        theta[i] = (r[(i, p)] - acc) / r[(i, i)];
+    }
+    theta.iter().all(|v| v.is_finite()).then_some(theta)
 }
 
 /// Continuous poles `ln z / h` of a discrete denominator (q⁻¹ coefficients, a₀ = 1).
@@ -153,4 +218,41 @@ pub(crate) fn arx_to_continuous(
     let den = poly_from_roots(&p);
     let num = d2c_numerator(&arx.b, &den, dt_s, zeros)?;
     Ok(ContinuousModel::new(num, den, delay_samples as f64 * dt_s))
+}
+
+#[cfg(test)]
+mod tsqr_tests {
+    use super::*;
+
+    /// Two-block TSQR and one-shot Householder QR solve the same least-squares problem: on a noisy
+    /// 4-pole ARX record of 60,000 samples the estimates agree to 1e-9 relative (both are backward
+    /// stable; the regressor's condition number here is about 1e4, so rounding differs near 1e-12).
+    #[test]
+    fn tsqr_matches_one_shot_qr_on_a_long_noisy_record() {
+        let n_samples = 60_000;
+        let mut state = 12345_u64;
+        let mut noise = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let u: Vec<f64> = (0..n_samples)
+            .map(|k| if (k / 300) % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let (a, b) = ([1.0, -2.6, 2.8, -1.45, 0.3], [0.01, 0.02, 0.015, 0.005]);
+        let mut y = vec![0.0; n_samples];
+        for k in 4..n_samples {
+            y[k] = (1..5)
+                .map(|i| -a[i] * y[k - i] + b[i - 1] * u[k - i])
+                .sum::<f64>();
+        }
+        let y: Vec<f64> = y.iter().map(|v| v + 0.01 * noise()).collect();
+        let fast = arx_lstsq_tsqr(&u, &y, 4, 4, 0).expect("well conditioned");
+        let (phi, target) = arx_regressor(&u, &y, 4, 4, 0);
+        let reference = lstsq_qr(&phi, &target, "ls").unwrap();
+        for (f, r) in fast.iter().zip(&reference) {
+            assert!((f - r).abs() <= 1e-9 * r.abs().max(1e-3), "{f} vs {r}");
+        }
+    }
 }
