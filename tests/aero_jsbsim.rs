@@ -7,7 +7,7 @@ use flightid::aero::study::default_free;
 use flightid::aero::trials::{
     equation_error_flights, fly_doublets, identify_paper_tfs, SensorNoise, TrialOptions,
 };
-use flightid::aero::{estimate_derivatives, Assumptions, FitOptions, Mode, TfOutput};
+use flightid::aero::{estimate_derivatives, Assumptions, FitOptions, TfOutput};
 use flightid::aircraft;
 use flightid::sim::jsbsim::AeroTruth;
 use flightid::sim::linear::submodel_modes;
@@ -28,20 +28,6 @@ fn options(noisy: bool) -> TrialOptions {
         noise: noisy.then(SensorNoise::realistic),
         ..TrialOptions::default()
     }
-}
-
-fn fastest(modes: &[Mode]) -> (f64, f64) {
-    modes
-        .iter()
-        .filter_map(|m| match *m {
-            Mode::Oscillatory {
-                omega_n_rad_s,
-                zeta,
-            } => Some((omega_n_rad_s, zeta)),
-            Mode::Real { .. } => None,
-        })
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-        .unwrap()
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -92,8 +78,12 @@ fn c172x_model_from_truth_matches_jsbsim_linearization() {
     let modes = |a: Assumptions| {
         let m = model_from_truth(&truth, a).unwrap();
         (
-            fastest(&m.longitudinal().unwrap().modes().unwrap()),
-            fastest(&m.lateral().unwrap().modes().unwrap()),
+            m.longitudinal()
+                .unwrap()
+                .fastest_oscillation()
+                .unwrap()
+                .unwrap(),
+            m.lateral().unwrap().fastest_oscillation().unwrap().unwrap(),
         )
     };
     let (sp, dr) = modes(Structure::Full.assumptions());

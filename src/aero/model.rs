@@ -454,13 +454,17 @@ impl LinearModel {
 
     /// The fastest oscillatory mode (short period, Dutch roll), if any.
     pub fn fastest_oscillation(&self) -> Result<Option<(f64, f64)>, AeroError> {
-        Ok(self.modes()?.into_iter().find_map(|m| match m {
-            Mode::Oscillatory {
-                omega_n_rad_s,
-                zeta,
-            } => Some((omega_n_rad_s, zeta)),
-            Mode::Real { .. } => None,
-        }))
+        Ok(self
+            .modes()?
+            .into_iter()
+            .filter_map(|m| match m {
+                Mode::Oscillatory {
+                    omega_n_rad_s,
+                    zeta,
+                } => Some((omega_n_rad_s, zeta)),
+                Mode::Real { .. } => None,
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0)))
     }
 }
 

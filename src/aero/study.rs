@@ -14,7 +14,7 @@ use super::spec::{
 use super::trials::{
     equation_error_flights, equation_error_on, fly_doublets, identify_paper_tfs, TrialOptions,
 };
-use super::{AeroError, Mode};
+use super::AeroError;
 use crate::data;
 use crate::report::{Report, Section, Table};
 use crate::sim::jsbsim::AeroTruth;
@@ -109,19 +109,6 @@ pub struct Study {
     pub notes: Vec<String>,
 }
 
-fn fastest(modes: &[Mode]) -> Option<(f64, f64)> {
-    modes
-        .iter()
-        .filter_map(|m| match *m {
-            Mode::Oscillatory {
-                omega_n_rad_s,
-                zeta,
-            } => Some((omega_n_rad_s, zeta)),
-            Mode::Real { .. } => None,
-        })
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-}
-
 fn modal_check(sim: &mut JsbsimSim, truth: &AeroTruth) -> Result<Vec<ModalCheck>, AeroError> {
     let lin = sim.linearize()?;
     let jsb = submodel_modes(&lin)?;
@@ -138,8 +125,14 @@ fn modal_check(sim: &mut JsbsimSim, truth: &AeroTruth) -> Result<Vec<ModalCheck>
     let mut per = Vec::new();
     for s in [Structure::Paper, Structure::Full] {
         let m = model_from_truth(truth, s.assumptions())?;
-        let sp = fastest(&m.longitudinal()?.modes()?).unwrap_or((f64::NAN, f64::NAN));
-        let dr = fastest(&m.lateral()?.modes()?).unwrap_or((f64::NAN, f64::NAN));
+        let sp = m
+            .longitudinal()?
+            .fastest_oscillation()?
+            .unwrap_or((f64::NAN, f64::NAN));
+        let dr = m
+            .lateral()?
+            .fastest_oscillation()?
+            .unwrap_or((f64::NAN, f64::NAN));
         per.push((sp, dr));
     }
     let row = |q: &str, f: &dyn Fn(ModePair) -> f64, j: f64| ModalCheck {

@@ -43,14 +43,19 @@ pub(crate) fn arx_regressor(
     let first = n.max(nb + delay_samples);
     let rows = y.len().saturating_sub(first);
     let phi = Mat::<f64>::from_fn(rows, n + nb, |r, c| {
-        let k = r + first;
-        if c < n {
-            -y[k - 1 - c]
-        } else {
-            u[k - 1 - (c - n) - delay_samples]
-        }
+        arx_entry(u, y, n, delay_samples, r + first, c)
     });
     (phi, y[first..].to_vec())
+}
+
+/// Entry of row k, column c of the regressor of eq. 60–62: `−y(k−1−c)` for c < n, else `u(k−1−(c−n)−d)`.
+#[inline]
+fn arx_entry(u: &[f64], y: &[f64], n: usize, delay_samples: usize, k: usize, c: usize) -> f64 {
+    if c < n {
+        -y[k - 1 - c]
+    } else {
+        u[k - 1 - (c - n) - delay_samples]
+    }
 }
 
 /// Fits the ARX model of eq. 59 by QR least squares.
@@ -103,10 +108,8 @@ fn arx_lstsq_tsqr(
     let block_r = |from: usize, to: usize| -> Mat<f64> {
         let aug = Mat::<f64>::from_fn(to - from, p + 1, |r, c| {
             let k = r + from;
-            if c < n {
-                -y[k - 1 - c]
-            } else if c < p {
-                u[k - 1 - (c - n) - delay_samples]
+            if c < p {
+                arx_entry(u, y, n, delay_samples, k, c)
             } else {
                 y[k]
             }
