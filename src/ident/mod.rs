@@ -13,7 +13,8 @@
 //! | [`Method::Oe`] | `oe.rs` | Morelli & Klein 2016, ch. 6 (output error, Cramér–Rao bounds) |
 //!
 //! Signals are treated as perturbations about the initial trim: the mean of each signal over
-//! the samples before the input first moves is removed (reported as `u_offset`/`y_offset`).
+//! the samples before the input first moves (beyond 5 σ of its own noise) is removed (reported as
+//! `u_offset`/`y_offset`).
 
 mod complex_serde;
 mod delay;
@@ -309,10 +310,42 @@ fn validate(u: &[f64], y: &[f64], dt_s: f64, opts: &IdentOptions) -> Result<(), 
 
 /// Trim offsets: means of u and y over the samples before the input first moves (at least
 /// the first sample).
+///
+/// "Moves" means leaving a band of 5 σ around the first sample, with σ the input's white
+/// measurement noise estimated from its first differences (1.4826 · MAD(Δu) / √2, robust to the
+/// few large steps of a maneuver). A noise-free input has σ = 0: the band is the first sample
+/// itself, as before. With a noisy surface transducer the trim becomes the mean of the whole
+/// quiet lead-in instead of one noisy sample, which otherwise biases every offset-free estimate.
+/// A lead-in shorter than [`MIN_NOISY_LEAD_IN`] samples is not a trim but an input that moves
+/// from the start (a multisine, a chirp): then only samples equal to the first count.
 fn trim_offsets(u: &[f64], y: &[f64]) -> (f64, f64) {
-    let still = u.iter().take_while(|x| **x == u[0]).count().max(1);
-    let y0 = y[..still].iter().sum::<f64>() / still as f64;
-    (u[0], y0)
+    let band = 5.0 * input_noise_std(u);
+    let quiet = |band: f64| u.iter().take_while(|x| (**x - u[0]).abs() <= band).count();
+    let still = match quiet(band) {
+        n if n >= MIN_NOISY_LEAD_IN => n,
+        _ => quiet(0.0).max(1),
+    };
+    let n = still as f64;
+    // u as u₀ + mean deviation: exactly u₀ when the lead-in is constant
+    let u0 = u[0] + u[..still].iter().map(|x| x - u[0]).sum::<f64>() / n;
+    (u0, y[..still].iter().sum::<f64>() / n)
+}
+
+/// Fewest samples of a noisy quiet lead-in that [`trim_offsets`] averages as the trim.
+const MIN_NOISY_LEAD_IN: usize = 10;
+
+/// White-noise standard deviation of a sampled signal from the median absolute first
+/// difference: for white noise of σ, Δu has σ√2 and MAD(Δu)·1.4826 estimates it; steps and
+/// smooth motion occupy few or small differences and leave the median alone. 0 for a signal
+/// that is piecewise constant over more than half its samples.
+fn input_noise_std(u: &[f64]) -> f64 {
+    if u.len() < 3 {
+        return 0.0;
+    }
+    let mut d: Vec<f64> = u.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    let mid = d.len() / 2;
+    let (_, median, _) = d.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    1.4826 * *median / std::f64::consts::SQRT_2
 }
 
 /// Identifies a continuous transfer function from input `u` to output `y` sampled every
