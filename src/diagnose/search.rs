@@ -151,8 +151,9 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
         b.swap(i, p);
         for j in i + 1..n {
             let f = a[j][i] / a[i][i];
-            for k in i..n {
-                a[j][k] -= f * a[i][k];
+            let (upper, lower) = a.split_at_mut(j);
+            for (ajk, aik) in lower[0][i..n].iter_mut().zip(&upper[i][i..n]) {
+                *ajk -= f * aik;
             }
             b[j] -= f * b[i];
         }

@@ -114,13 +114,10 @@ impl Svf {
                 Hold::Zoh { .. } => (at(k as isize - d as isize), at(k as isize - d as isize - 1)),
                 Hold::Foh => (v[k], v[k + 1] - v[k]),
             };
-            for i in 0..n {
+            for (i, out) in next.iter_mut().enumerate().take(n) {
                 let row = &self.phi[i * n..(i + 1) * n];
-                let mut s = self.g_now[i] * w_now + self.g_other[i] * w_other;
-                for j in 0..n {
-                    s += row[j] * x[j];
-                }
-                next[i] = s;
+                let s = self.g_now[i] * w_now + self.g_other[i] * w_other;
+                *out = s + row.iter().zip(&x).map(|(r, xj)| r * xj).sum::<f64>();
             }
             std::mem::swap(&mut x, &mut next);
         }

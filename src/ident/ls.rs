@@ -128,7 +128,8 @@ fn arx_lstsq_tsqr(
     let (lo, hi) = (0..p).fold((f64::INFINITY, 0.0_f64), |(lo, hi), i| {
         (lo.min(r[(i, i)].abs()), hi.max(r[(i, i)].abs()))
     });
-    if !(lo > 1e-10 * hi) {
+    // also rejects NaN diagonals
+    if lo.partial_cmp(&(1e-10 * hi)) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let mut theta = vec![0.0; p];
@@ -144,7 +145,7 @@ pub(crate) fn continuous_poles(a: &[f64], dt_s: f64) -> Result<Vec<Complex64>, I
     let z = roots(a);
     let mut p = Vec::with_capacity(z.len());
     for zi in z {
-        if !(zi.norm() > 0.0) || !zi.re.is_finite() {
+        if zi.norm().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !zi.re.is_finite() {
             return Err(IdentError::Failed {
                 method: "ls".into(),
                 reason: format!("discrete pole {zi} has no continuous ZOH equivalent"),

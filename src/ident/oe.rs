@@ -8,6 +8,7 @@
 //! Sensitivities by filtering (Ljung 1999 §10.3): with `ξ = e^{−τs}u / A(s)²`,
 //! - `∂ŷ/∂b_j = s^j A(s) ξ`,
 //! - `∂ŷ/∂a_i = −s^{n−i} B(s) ξ`,
+//!
 //! all linear combinations of the 2n states of one SVF run for `1/A²`; `∂ŷ/∂τ` by a central
 //! difference. Levenberg–Marquardt step `(H + μ diag H) δ = Sᵀr` with `H = SᵀS`
 //! (Marquardt 1963).

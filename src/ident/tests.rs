@@ -24,7 +24,9 @@ const PHI_DR: ([f64; 3], [f64; 5]) = (
     [0.5749, -0.2124, -4.2481],
     [1.0, 1.8683, 3.6856, 6.2648, -0.0085],
 );
-const PAPER_TFS: [(&str, ([f64; 3], [f64; 5])); 3] = [
+/// A paper transfer function: (numerator, denominator), highest power first.
+type PaperTf = ([f64; 3], [f64; 5]);
+const PAPER_TFS: [(&str, PaperTf); 3] = [
     ("theta/elevator", THETA_DE),
     ("phi/aileron", PHI_DA),
     ("phi/rudder", PHI_DR),
@@ -118,7 +120,7 @@ fn arx_regression_matches_numpy_lstsq_oracle() {
         -1.233861573196382e-03,
         1.230047026520076e-03,
         1.223451654961849e-03,
-        -1.219641719589770e-03,
+        -1.219_641_719_589_77e-3,
     ];
     let (u, y) = record(&THETA_DE, 60.0, 0.01);
     // the engine's ZOH simulation against scipy's (same script)
