@@ -9,16 +9,16 @@ What it shows (measured with JSBSim 1.3.3):
   * the first ~4 s agree to a few percent: the Dutch roll and the roll/yaw coupling are right;
   * after the doublet the nonlinear aircraft keeps a bank angle (about 0.31 deg per 0.05 of rudder command) that
     the linearization returns to ~0; the held bank scales linearly with the amplitude (0.02 -> 0.13 deg,
-    0.05 -> 0.31 deg, 0.1 -> 0.62 deg), so it is not an amplitude nonlinearity, and with no input the trim
+    0.05 -> 0.31 deg, 0.1 -> 0.62 deg), so it does not fade at small amplitude as a smooth nonlinearity
+    would (the fit % is flat), and with no input the trim
     drifts by only 0.009 deg in 20 s, so it is not a trim residual;
-  * in a step the two drift apart only slowly (bank after 20 s: -2.07 vs -2.17 deg; after 119 s: -8.5 vs
-    -6.5 deg): the difference sits in the slow lateral (spiral) dynamics, whose residue for a rudder doublet is
-    nearly cancelled in the linear model (a numerator zero close to the spiral pole), so a small error there
-    holds a visible bank in the nonlinear flight and none in the linear one.
-The fit percentage of phi/rudder is low because phi's peak response to a rudder doublet is itself small
-(~1 deg per 0.05 of command)
-next to that held bank; the identified models (srivc, oe) fit the flight at ~91 % because they fit their own slow
-pole.
+  * the held bank has the SAME sign for +A and -A doublets (per unit of command at 20 s: +6.1 deg and -5.7 deg,
+    i.e. +0.30 and +0.28 deg of bank): an even, |A|-proportional effect, which no linear model can have.
+Cause: the c172x's sideslip drag CDbeta = 0.17 |beta| (aero/mag-beta-rad). It has no derivative at beta = 0, so
+JSBSim's central-difference linearization sees none of it, while every doublet's sideslip adds drag whatever its
+sign; the speed lost couples into a held bank. With CDbeta scaled to 0 in a private copy of the model the
+linearization fits phi/rudder at ~95 % instead of ~26 % (phi/aileron 84 -> 94.5 %):
+`flightid compare --aircraft c172x --scale CDbeta=0` (asserted in tests/compare_report.rs).
 
 Usage: oracle_rudder_spiral.py   (prints the table; uses the JSBSim Python package, e.g. flightid's own venv
 under ~/.cache/flightid/venv-*/bin/python)
