@@ -364,10 +364,13 @@ class Sim:
         for coef, axis in AXIS_OF.items():
             axes.setdefault(axis, []).append(self.node("aero/coefficient/" + coef).get_double_value)
         extra = {p: self.node(p).get_double_value for p in req.get("extra", [])}
+        # each coefficient function on its own too, so one-sided slopes can show where a single term has a kink
+        coefs = {"coef:" + c: self.node("aero/coefficient/" + c).get_double_value for c in AXIS_OF}
 
         def read():
             vals = {axis: sum(g() for g in getters) for axis, getters in axes.items()}
             vals.update({k: g() for k, g in extra.items()})
+            vals.update({k: g() for k, g in coefs.items()})
             return vals
 
         fdm.suspend_integration()
@@ -391,6 +394,11 @@ class Sim:
                         fdm[f"flightid/override/{s}"] = 1.0
                     else:
                         fdm[f"flightid/probe/d-{var}"] = sign * h
+                        if var == "beta":
+                            # terms in |beta| see the same perturbation through |beta0 + dbeta| - |beta0|, so a
+                            # kink at beta = 0 (c172x CDbeta) shows in the one-sided differences
+                            beta0 = fdm["aero/beta-rad"]
+                            fdm["flightid/probe/d-beta-mag"] = abs(beta0 + sign * h) - abs(beta0)
                     fdm.run()
                     vals.append(read())
                     if var.startswith("surface:"):
@@ -398,6 +406,7 @@ class Sim:
                         fdm[f"flightid/override/{s}"] = 0.0
                     else:
                         fdm[f"flightid/probe/d-{var}"] = 0.0
+                        fdm["flightid/probe/d-beta-mag"] = 0.0
                 out[var] = {"plus": vals[0], "minus": vals[1], "h": h}
             fdm["flightid/probe/freeze"] = 0.0
             fdm.run()
@@ -406,7 +415,7 @@ class Sim:
             fdm.resume_integration()
             fdm.set_dt(self.dt_s)
         cond = {k: fdm[k] for k in req.get("condition", [])}
-        return {"base": base, "perturbed": out, "condition": cond}
+        return {"base": base, "perturbed": out, "condition": cond, "axes": dict(AXIS_OF)}
 
     def fly(self, req, payload):
         """Runs n_steps from the current (trimmed) state; returns the recorded properties, step-major."""

@@ -4,13 +4,16 @@ use super::common::{emit_json, TrimArgs};
 use crate::cli::UsageError;
 use crate::compare::{self, CompareOptions};
 use crate::ident::Method;
-use crate::sim::JsbsimSim;
+use crate::sim::{JsbsimSim, Simulator};
 use anyhow::Context;
 use std::path::PathBuf;
 
 /// Trim, linearize (JSBSim), fly elevator/aileron/rudder doublets, identify θ/δe, φ/δa, φ/δr with each method
 /// and compare with the linearization: modal parameters with errors, Bode and time overlays, ISE and fit %,
-/// and an amplitude sweep. Writes DIR/index.html (self-contained), report.md, *.svg and report.json.
+/// and an amplitude sweep. Also probes the model's coefficient functions for kinks at the trim (terms in |β|,
+/// table breakpoints) that the linearization cannot see, and where the linearization fits a response below
+/// 80 % measures each kink's share by comparing again without it. Writes DIR/index.html (self-contained),
+/// report.md, *.svg and report.json.
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples:\n  flightid compare --aircraft c172x --report out/compare\n  flightid compare --aircraft 737 --amplitude-deg 1 --method ls,srivc,oe --report out/737 --json out/737.json\n\nTesting why the linearization misses a response: scale one aerodynamic coefficient function of the model\n(both the nonlinear flight and the linearization use the scaled model). On c172x, phi/rudder fits the\nlinearization at ~26 %; without the sideslip drag CD_beta*|beta| (not differentiable at beta = 0, so the\nlinearization sees none of it) it fits at ~95 %:\n  flightid compare --aircraft c172x --scale CDbeta=0 --report out/no-cdbeta"
@@ -43,6 +46,48 @@ pub struct CompareCmd {
     /// repeatable. Names are the model's `aero/coefficient/NAME` functions; an unknown name lists them.
     #[arg(long = "scale", value_name = "NAME=FACTOR", value_parser = parse_scale)]
     pub scales: Vec<(String, f64)>,
+}
+
+/// Kinks whose share is measured (each costs a trim, a linearization and a few flights, ~1.5 s on c172x).
+const MAX_KINKS_MEASURED: usize = 4;
+
+/// The linearization's fit on each gap transfer function with `coefficient` scaled to 0 (one cheap comparison:
+/// least squares only, one sweep amplitude), then the user's scale restored.
+fn kink_share(
+    sim: &mut JsbsimSim,
+    opts: &CompareOptions,
+    user_scales: &[(String, f64)],
+    coefficient: &str,
+    gaps: &[(String, f64)],
+) -> anyhow::Result<compare::KinkShare> {
+    let restore = user_scales
+        .iter()
+        .rev()
+        .find(|(n, _)| n == coefficient)
+        .map_or(1.0, |(_, f)| *f);
+    sim.set_coefficient_scale(coefficient, 0.0)?;
+    let quick = CompareOptions {
+        methods: vec![Method::Ls],
+        sweep_amplitudes_deg: vec![opts.amplitude_deg],
+        ..opts.clone()
+    };
+    let outcome = compare::run_compare(sim, &quick).map_err(classify);
+    sim.set_coefficient_scale(coefficient, restore)?;
+    let (outcome, _) =
+        outcome.with_context(|| format!("comparing without {coefficient} to measure its share"))?;
+    let fits = outcome
+        .models
+        .iter()
+        .filter(|(k, _)| gaps.iter().any(|(g, _)| g == *k))
+        .filter_map(|(k, fits)| {
+            let lin = fits.iter().find(|f| f.model == "jsbsim_linearization")?;
+            Some((k.clone(), lin.fit_percent))
+        })
+        .collect();
+    Ok(compare::KinkShare {
+        coefficient: coefficient.to_string(),
+        fit_percent_without: fits,
+    })
 }
 
 /// `NAME=FACTOR` with a finite factor.
@@ -92,8 +137,33 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
         sim.set_coefficient_scale(name, *factor)
             .map_err(|e| UsageError(e.to_string()))?;
     }
-    let (outcome, report) = compare::run_compare(&mut sim, &opts).map_err(classify)?;
-    let json = compare::outcome_json(&outcome);
+    let (outcome, mut report) = compare::run_compare(&mut sim, &opts).map_err(classify)?;
+    let mut json = compare::outcome_json(&outcome);
+    // the model's kinks at the trim, which the linearization cannot see (a re-trim, then the probe), and, where
+    // the linearization fits poorly, each kink's share: the linearization's fits with the term removed
+    sim.trim(&opts.point)
+        .with_context(|| format!("re-trimming {} to probe its coefficient functions", cfg.name))?;
+    let truth = sim
+        .aero_truth()
+        .with_context(|| format!("probing the coefficient functions of {}", cfg.name))?;
+    let gaps = compare::linearization_gaps(&outcome);
+    let mut shares = Vec::new();
+    if !gaps.is_empty() {
+        for term in truth.nonsmooth.iter().take(MAX_KINKS_MEASURED) {
+            shares.push(kink_share(&mut sim, &opts, &args.scales, &term.coefficient, &gaps)?);
+        }
+    }
+    if let Some(section) = compare::nonsmooth_section(&truth.nonsmooth, &outcome, &shares) {
+        // right after the overview table that shows the poor fits
+        let at = report
+            .sections
+            .iter()
+            .position(|s| s.heading == "Overview")
+            .map_or(report.sections.len(), |i| i + 1);
+        report.sections.insert(at, section);
+    }
+    json["nonsmooth_shares"] = serde_json::to_value(&shares)?;
+    json["nonsmooth_terms"] = serde_json::to_value(&truth.nonsmooth)?;
     let index = crate::report::write_report_dir(&args.report, &report, &json)?;
     if let Some(target) = &args.json {
         emit_json(target, &json)?;

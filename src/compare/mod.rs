@@ -602,3 +602,129 @@ fn overview_section(models: &BTreeMap<String, Vec<ModelFit>>) -> Section {
 pub fn outcome_json(outcome: &CompareOutcome) -> serde_json::Value {
     serde_json::to_value(outcome).unwrap_or_else(|e| json!({"error": e.to_string()}))
 }
+
+/// A linearization fit below this (NRMSE %) is called a gap in the non-smooth-terms section.
+pub const LINEARIZATION_GAP_FIT_PERCENT: f64 = 80.0;
+
+/// Transfer functions whose linearization fits the nonlinear flight below [`LINEARIZATION_GAP_FIT_PERCENT`]:
+/// (key, fit %).
+pub fn linearization_gaps(outcome: &CompareOutcome) -> Vec<(String, f64)> {
+    outcome
+        .models
+        .iter()
+        .filter_map(|(key, fits)| {
+            let lin = fits.iter().find(|f| f.model == "jsbsim_linearization")?;
+            (lin.fit_percent < LINEARIZATION_GAP_FIT_PERCENT).then(|| (key.clone(), lin.fit_percent))
+        })
+        .collect()
+}
+
+/// The linearization's fits with one kinked coefficient function removed from the model (flight and
+/// linearization alike): how much of a gap that term explains.
+#[derive(Debug, Clone, Serialize)]
+pub struct KinkShare {
+    /// The coefficient function scaled to 0.
+    pub coefficient: String,
+    /// Linearization fit %, per gap transfer function, without it.
+    pub fit_percent_without: BTreeMap<String, f64>,
+}
+
+/// A term explains a gap when removing it closes at least half of the distance to a perfect fit.
+fn explains(before: f64, after: f64) -> bool {
+    after - before >= 0.5 * (100.0 - before)
+}
+
+/// "What the linearization cannot see": the model's coefficient functions with a kink at the trim point
+/// ([`crate::sim::jsbsim::NonSmoothTerm`]), the transfer functions the linearization fits poorly, and for each
+/// kink the fits measured without it (`shares`), with a verdict per gap. `None` when the model has no kink there.
+pub fn nonsmooth_section(
+    terms: &[crate::sim::jsbsim::NonSmoothTerm],
+    outcome: &CompareOutcome,
+    shares: &[KinkShare],
+) -> Option<Section> {
+    if terms.is_empty() {
+        return None;
+    }
+    let gaps = linearization_gaps(outcome);
+    let rows = terms
+        .iter()
+        .map(|t| {
+            vec![
+                t.coefficient.clone(),
+                t.axis.clone(),
+                t.variable.clone(),
+                format!("{:+.4}", t.slope_below),
+                format!("{:+.4}", t.slope_above),
+                format!("{:+.4}", 0.5 * (t.slope_below + t.slope_above)),
+            ]
+        })
+        .collect();
+    let mut paragraphs = vec![
+        "These coefficient functions of the JSBSim model change slope at the trim point (a term in |β|, a table \
+         breakpoint). JSBSim's linearization takes central differences, so it uses the mean of the two slopes; in \
+         flight the variable swings both ways and the term acts on both sides — for a term in |β| the effect has \
+         the same sign whatever the input's sign, which no linear model can reproduce."
+            .to_string(),
+    ];
+    if gaps.is_empty() {
+        paragraphs.push(format!(
+            "Every transfer function here fits the linearization at {LINEARIZATION_GAP_FIT_PERCENT:.0} % or \
+             better, so these kinks matter little at this amplitude."
+        ));
+    }
+    for (key, before) in &gaps {
+        let measured: Vec<(&str, f64)> = shares
+            .iter()
+            .filter_map(|k| Some((k.coefficient.as_str(), *k.fit_percent_without.get(key)?)))
+            .collect();
+        let effects = measured
+            .iter()
+            .map(|(c, after)| format!("without {c} {before:.1} → {after:.1} %"))
+            .collect::<Vec<_>>()
+            .join("; ");
+        let culprits: Vec<&str> = measured
+            .iter()
+            .filter(|(_, after)| explains(*before, *after))
+            .map(|(c, _)| *c)
+            .collect();
+        paragraphs.push(match (measured.is_empty(), culprits.is_empty()) {
+            (true, _) => format!(
+                "The linearization fits {key} at {before:.1} %. To measure a term's share, rerun with it removed \
+                 from the model: `flightid compare --aircraft {} --scale {}=0`.",
+                outcome.aircraft, terms[0].coefficient
+            ),
+            (false, false) => format!(
+                "The linearization fits {key} at {before:.1} % ({effects}, the model's other terms unchanged): \
+                 {} explains the gap.",
+                culprits.join(" and ")
+            ),
+            (false, true) => format!(
+                "The linearization fits {key} at {before:.1} % ({effects}): no kink of the aerodynamic model \
+                 explains this gap; look at the flight control system (spoilers, dampers, limits) or the slow \
+                 modes."
+            ),
+        });
+    }
+    Some(Section {
+        heading: "What the linearization cannot see: non-smooth terms at the trim".into(),
+        paragraphs,
+        tables: vec![Table {
+            caption: "Coefficient functions with a kink at the trim point (nondimensional slopes per rad; rates \
+                      per unit of p·b/2V, q·c̄/2V, r·b/2V)"
+                .into(),
+            header: [
+                "coefficient",
+                "axis",
+                "variable",
+                "slope below trim",
+                "slope above trim",
+                "linearization uses",
+            ]
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+            rows,
+        }],
+        plots: vec![],
+    })
+}

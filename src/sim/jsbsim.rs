@@ -453,6 +453,86 @@ pub struct AeroTruth {
     /// Gravitational acceleration at the trim altitude, m/s².
     #[serde(default)]
     pub g_m_s2: f64,
+    /// Coefficient functions with a kink at the trim point (see [`NonSmoothTerm`]).
+    #[serde(default)]
+    pub nonsmooth: Vec<NonSmoothTerm>,
+}
+
+/// A coefficient function whose slope at the trim point differs on the two sides of it: a term in `|β|` (c172x's
+/// sideslip drag `CDbeta = 0.17·|β|`), a table breakpoint at the trim value. A central-difference linearization
+/// (JSBSim's `FGLinearization`) sees only the mean of the two slopes, so what the term does in flight, where the
+/// variable swings both ways, is missing from the linear model.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NonSmoothTerm {
+    /// The model's coefficient function (`aero/coefficient/NAME`), e.g. `CDbeta`.
+    pub coefficient: String,
+    /// Its axis in the model (`DRAG`, `SIDE`, `LIFT`, `ROLL`, `PITCH`, `YAW`).
+    pub axis: String,
+    /// The variable with the kink: `alpha`, `beta`, `p`, `q`, `r` or `surface:NAME`.
+    pub variable: String,
+    /// Nondimensional slope just below the trim value (per rad; rates per unit of p̂ = p·b/2V, q̂ = q·c̄/2V).
+    pub slope_below: f64,
+    /// The same just above it.
+    pub slope_above: f64,
+}
+
+/// Smallest jump between one-sided slopes reported as a kink, nondimensional per rad: smaller ones change no
+/// response a report could show (CDbeta's is 0.34).
+const NONSMOOTH_MIN_JUMP: f64 = 0.01;
+
+/// Kinks of single coefficient functions at the trim, from the probe's one-sided differences: for a smooth
+/// function `(f(x+h) − f(x))/h − (f(x) − f(x−h))/h = f''·h` vanishes with h, for a kink it stays the jump in
+/// slope. Reported when the jump exceeds [`NONSMOOTH_MIN_JUMP`] and a quarter of the larger slope.
+fn nonsmooth_terms(
+    probe: &serde_json::Value,
+    base: &BTreeMap<String, f64>,
+    norm: &dyn Fn(&str) -> f64,
+    pitch_rate: f64,
+    lat_rate: f64,
+) -> Vec<NonSmoothTerm> {
+    let mut out = Vec::new();
+    let Some(axes) = probe["axes"].as_object() else {
+        return out;
+    };
+    for (var, scale) in [
+        ("alpha", 1.0),
+        ("beta", 1.0),
+        ("p", lat_rate),
+        ("q", pitch_rate),
+        ("r", lat_rate),
+        ("surface:elevator", 1.0),
+        ("surface:aileron", 1.0),
+        ("surface:rudder", 1.0),
+    ] {
+        let p = &probe["perturbed"][var];
+        let Some(step) = p["h"].as_f64() else {
+            continue;
+        };
+        for (coefficient, axis) in axes {
+            let axis = axis.as_str().unwrap_or("");
+            let key = format!("coef:{coefficient}");
+            let (Some(plus), Some(minus), Some(at)) = (
+                p["plus"][&key].as_f64(),
+                p["minus"][&key].as_f64(),
+                base.get(&key),
+            ) else {
+                continue;
+            };
+            let per_unit = scale / (step * norm(axis));
+            let (above, below) = ((plus - at) * per_unit, (at - minus) * per_unit);
+            let jump = (above - below).abs();
+            if jump > NONSMOOTH_MIN_JUMP && jump > 0.25 * above.abs().max(below.abs()) {
+                out.push(NonSmoothTerm {
+                    coefficient: coefficient.clone(),
+                    axis: axis.to_string(),
+                    variable: var.to_string(),
+                    slope_below: below,
+                    slope_above: above,
+                });
+            }
+        }
+    }
+    out
 }
 
 impl JsbsimSim {
@@ -608,6 +688,7 @@ impl JsbsimSim {
             };
             d.insert(name.to_string(), about_cg * scale);
         }
+        let nonsmooth = nonsmooth_terms(h, &base, &norm, pitch_rate, lat_rate);
         let cl = coef("LIFT");
         let cd = coef("DRAG");
         let cd_alpha = slope("alpha", "DRAG");
@@ -648,6 +729,7 @@ impl JsbsimSim {
             chord_m: cbar_ft * FT_TO_M,
             alpha_rad: trim.alpha_rad,
             g_m_s2: c("accelerations/gravity-ft_sec2") * FT_TO_M,
+            nonsmooth,
         })
     }
 }
