@@ -363,6 +363,22 @@ impl Simulator for JsbsimSim {
                 }
             }
         }
+        if self.config.drive == Drive::Surface {
+            // Bare airframe: the surfaces the plan does not move hold their trim deflection, as in the per-radian
+            // linearization (which overrides every surface). Left to the FCS, feedback through them (the 737's
+            // yaw damper on the rudder) would act in flight but not in the linear model: the 737's φ/δa
+            // linearization fitted its own aileron flight at 77 % that way, 98.7 % in command space.
+            for s in SURFACES {
+                let held = format!("flightid/override/{s}");
+                if set_before.contains_key(&held) {
+                    continue;
+                }
+                if let Some(base) = trim.surfaces_rad.get(s) {
+                    set_before.insert(held, json!(1.0));
+                    set_before.insert(format!("flightid/override/{s}-rad"), json!(base));
+                }
+            }
+        }
         let mut record: Vec<String> = SURFACES.iter().map(|s| surface_property(s)).collect();
         record.extend(RECORDED.iter().map(|(_, p, _)| p.to_string()));
         let req = json!({"cmd": "fly", "n_steps": n, "drives": drives, "record": record, "set_before": set_before});
