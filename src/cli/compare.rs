@@ -48,6 +48,52 @@ pub struct CompareCmd {
     pub scales: Vec<(String, f64)>,
 }
 
+/// The model's kinks at the trim, which the linearization cannot see (a re-trim, then the probe), and, where the
+/// linearization fits poorly, each kink's measured share (the linearization's fits with the term removed): a
+/// report section after the overview and `nonsmooth_terms` / `nonsmooth_shares` in the JSON. Returns the
+/// section's verdict paragraphs for the terminal.
+pub(super) fn explain_linearization_gaps(
+    sim: &mut JsbsimSim,
+    opts: &CompareOptions,
+    user_scales: &[(String, f64)],
+    outcome: &compare::CompareOutcome,
+    report: &mut crate::report::Report,
+    json: &mut serde_json::Value,
+) -> anyhow::Result<Vec<String>> {
+    let aircraft = &outcome.aircraft;
+    sim.trim(&opts.point)
+        .with_context(|| format!("re-trimming {aircraft} to probe its coefficient functions"))?;
+    let truth = sim
+        .aero_truth()
+        .with_context(|| format!("probing the coefficient functions of {aircraft}"))?;
+    let gaps = compare::linearization_gaps(outcome);
+    let mut shares = Vec::new();
+    if !gaps.is_empty() {
+        for term in truth.nonsmooth.iter().take(MAX_KINKS_MEASURED) {
+            shares.push(kink_share(sim, opts, user_scales, &term.coefficient, &gaps)?);
+        }
+    }
+    json["nonsmooth_terms"] = serde_json::to_value(&truth.nonsmooth)?;
+    json["nonsmooth_shares"] = serde_json::to_value(&shares)?;
+    let Some(section) = compare::nonsmooth_section(&truth.nonsmooth, outcome, &shares) else {
+        return Ok(Vec::new());
+    };
+    let verdicts = section
+        .paragraphs
+        .iter()
+        .filter(|p| p.starts_with("The linearization fits"))
+        .cloned()
+        .collect();
+    // right after the overview table that shows the poor fits
+    let at = report
+        .sections
+        .iter()
+        .position(|s| s.heading == "Overview")
+        .map_or(report.sections.len(), |i| i + 1);
+    report.sections.insert(at, section);
+    Ok(verdicts)
+}
+
 /// Kinks whose share is measured (each costs a trim, a linearization and a few flights, ~1.5 s on c172x).
 const MAX_KINKS_MEASURED: usize = 4;
 
@@ -139,31 +185,8 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
     }
     let (outcome, mut report) = compare::run_compare(&mut sim, &opts).map_err(classify)?;
     let mut json = compare::outcome_json(&outcome);
-    // the model's kinks at the trim, which the linearization cannot see (a re-trim, then the probe), and, where
-    // the linearization fits poorly, each kink's share: the linearization's fits with the term removed
-    sim.trim(&opts.point)
-        .with_context(|| format!("re-trimming {} to probe its coefficient functions", cfg.name))?;
-    let truth = sim
-        .aero_truth()
-        .with_context(|| format!("probing the coefficient functions of {}", cfg.name))?;
-    let gaps = compare::linearization_gaps(&outcome);
-    let mut shares = Vec::new();
-    if !gaps.is_empty() {
-        for term in truth.nonsmooth.iter().take(MAX_KINKS_MEASURED) {
-            shares.push(kink_share(&mut sim, &opts, &args.scales, &term.coefficient, &gaps)?);
-        }
-    }
-    if let Some(section) = compare::nonsmooth_section(&truth.nonsmooth, &outcome, &shares) {
-        // right after the overview table that shows the poor fits
-        let at = report
-            .sections
-            .iter()
-            .position(|s| s.heading == "Overview")
-            .map_or(report.sections.len(), |i| i + 1);
-        report.sections.insert(at, section);
-    }
-    json["nonsmooth_shares"] = serde_json::to_value(&shares)?;
-    json["nonsmooth_terms"] = serde_json::to_value(&truth.nonsmooth)?;
+    let verdicts =
+        explain_linearization_gaps(&mut sim, &opts, &args.scales, &outcome, &mut report, &mut json)?;
     let index = crate::report::write_report_dir(&args.report, &report, &json)?;
     if let Some(target) = &args.json {
         emit_json(target, &json)?;
@@ -182,6 +205,9 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
                         .join("  ")
                 );
             }
+        }
+        for v in &verdicts {
+            println!("{v}");
         }
         println!("report: {}", index.display());
     }

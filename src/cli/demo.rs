@@ -49,9 +49,17 @@ pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
     };
     let mut sim = JsbsimSim::start(&cfg, args.trim.rate_hz)
         .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
-    let (outcome, report) =
+    let (outcome, mut report) =
         compare::run_compare(&mut sim, &opts).map_err(super::compare::classify)?;
-    let json = compare::outcome_json(&outcome);
+    let mut json = compare::outcome_json(&outcome);
+    let verdicts = super::compare::explain_linearization_gaps(
+        &mut sim,
+        &opts,
+        &[],
+        &outcome,
+        &mut report,
+        &mut json,
+    )?;
     let index = crate::report::write_report_dir(&args.report, &report, &json)?;
     if let Some(target) = &args.json {
         emit_json(target, &json)?;
@@ -91,6 +99,9 @@ pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
                 ),
             }
         }
+    }
+    for v in &verdicts {
+        println!("\n{v}");
     }
     println!("\nreport: {}", index.display());
     Ok(())
