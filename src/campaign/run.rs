@@ -104,8 +104,8 @@ impl Worker {
             self.key = None;
             let cfg = crate::aircraft::load(&case.aircraft).map_err(|e| e.to_string())?;
             let mut sim = JsbsimSim::start(&cfg, rate_hz).map_err(|e| e.to_string())?;
-            // trim once per flight condition, every case flies from the restored snapshot
-            sim.set_trim_reuse(true);
+            // trim once per flight condition, every case flies from the restored snapshot (where faithful)
+            sim.set_trim_reuse(cfg.trim_restore);
             for (name, factor) in &case.coefficient_scales {
                 sim.set_coefficient_scale(name, *factor)
                     .map_err(|e| e.to_string())?;
