@@ -61,11 +61,6 @@ pub struct AircraftConfig {
     pub engine_running: bool,
     /// Retract the gear before trimming.
     pub gear_up: bool,
-    /// Campaigns may trim each point once and restore the snapshot for later cases (`JsbsimSim::set_trim_reuse`):
-    /// only where a restored trim flies like a live one. 737: max |Δθ| 1e-15 rad over a 20 s doublet; c172x:
-    /// 4e-4 rad (piston-engine thermal states JSBSim cannot set), enough to move its ARX fits, so false.
-    #[serde(default)]
-    pub trim_restore: bool,
     /// Number of engines (throttle inputs drive all of them).
     #[serde(default = "one")]
     pub engines: usize,

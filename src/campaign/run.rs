@@ -81,31 +81,40 @@ pub fn case_path(out: &Path, id: &str) -> PathBuf {
     out.join("cases").join(format!("{id}.json"))
 }
 
-/// What makes a process reusable for a case: the aircraft, its coefficient scales and pre-trim properties.
-type SimKey = (String, Vec<(String, String)>);
+/// The configuration a process is set up for: coefficient scales and pre-trim properties (values as text).
+type ConfigKey = Vec<(String, String)>;
 
 struct Worker {
-    key: Option<SimKey>,
+    /// The aircraft of the running process and the configuration applied to it.
+    key: Option<(String, ConfigKey)>,
     sim: Option<JsbsimSim>,
 }
 
 impl Worker {
+    /// The simulator for a case: the running process when it has the case's aircraft (switching configuration
+    /// only changes the knobs applied at the next trim), else a new one.
     fn sim_for(&mut self, case: &CaseSpec, rate_hz: f64) -> Result<&mut JsbsimSim, String> {
-        let key = (
-            case.aircraft.clone(),
-            case.coefficient_scales
-                .iter()
-                .chain(&case.properties)
-                .map(|(k, v)| (k.clone(), format!("{v:e}")))
-                .collect(),
-        );
-        if self.key.as_ref() != Some(&key) || self.sim.is_none() {
+        let config: ConfigKey = case
+            .coefficient_scales
+            .iter()
+            .chain(&case.properties)
+            .map(|(k, v)| (k.clone(), format!("{v:e}")))
+            .collect();
+        let same_aircraft = self.sim.is_some()
+            && self.key.as_ref().is_some_and(|(a, _)| *a == case.aircraft);
+        if !same_aircraft {
             self.sim = None;
             self.key = None;
             let cfg = crate::aircraft::load(&case.aircraft).map_err(|e| e.to_string())?;
             let mut sim = JsbsimSim::start(&cfg, rate_hz).map_err(|e| e.to_string())?;
-            // trim once per flight condition, every case flies from the restored snapshot (where faithful)
-            sim.set_trim_reuse(cfg.trim_restore);
+            // trim once per flight condition, every case flies from the restored snapshot
+            sim.set_trim_reuse(true);
+            self.sim = Some(sim);
+        }
+        let sim = self.sim.as_mut().ok_or_else(|| "no simulator".to_string())?;
+        if self.key.as_ref().map(|(_, c)| c) != Some(&config) {
+            self.key = None;
+            sim.clear_configuration();
             for (name, factor) in &case.coefficient_scales {
                 sim.set_coefficient_scale(name, *factor)
                     .map_err(|e| e.to_string())?;
@@ -114,51 +123,63 @@ impl Worker {
                 sim.set_pre_trim_property(property, *value)
                     .map_err(|e| e.to_string())?;
             }
-            self.sim = Some(sim);
-            self.key = Some(key);
+            self.key = Some((case.aircraft.clone(), config));
         }
-        self.sim.as_mut().ok_or_else(|| "no simulator".to_string())
+        Ok(sim)
     }
 }
 
 /// Pending cases grouped by configuration, handed out so that a worker stays on one configuration while it has
-/// cases and workers spread over configurations: every configuration switch costs a JSBSim process start
-/// (~0.5 s, a third of a case's work in the example campaign), so two workers sharing every group would start
-/// twice as many processes as one worker.
+/// cases and workers spread over configurations: a switch to another aircraft costs a JSBSim process start
+/// (~0.3 s, more than a case's work in the example campaign) and each process trims a flight condition once, so
+/// two workers sharing every group would start and trim twice as often as one worker. When its group runs dry a
+/// worker moves to a group of its own aircraft if one is as free as any other (same process, new knobs).
 struct CaseQueue<'a> {
     /// (cases left, workers on the group) per configuration, in campaign order.
     groups: Vec<(std::collections::VecDeque<&'a CaseSpec>, usize)>,
+    /// The aircraft of each group.
+    aircraft: Vec<&'a str>,
 }
 
 impl<'a> CaseQueue<'a> {
     fn new(pending: &[&'a CaseSpec]) -> Self {
         let mut groups: Vec<(std::collections::VecDeque<&'a CaseSpec>, usize)> = Vec::new();
         let mut names: Vec<&str> = Vec::new();
+        let mut aircraft: Vec<&'a str> = Vec::new();
         for c in pending {
             match names.iter().position(|n| *n == c.configuration) {
                 Some(i) => groups[i].0.push_back(c),
                 None => {
                     names.push(&c.configuration);
+                    aircraft.push(&c.aircraft);
                     groups.push((std::iter::once(*c).collect(), 0));
                 }
             }
         }
-        CaseQueue { groups }
+        CaseQueue { groups, aircraft }
     }
 
     /// The next case for a worker now on `group`: more of the same configuration, else the group with the
-    /// fewest workers on it (then the most cases left). Updates `group`.
+    /// fewest workers on it (then one of the same aircraft, then the most cases left). Updates `group`.
     fn next(&mut self, group: &mut Option<usize>) -> Option<&'a CaseSpec> {
+        let mut aircraft = None;
         if let Some(g) = *group {
             if let Some(c) = self.groups[g].0.pop_front() {
                 return Some(c);
             }
             self.groups[g].1 -= 1;
+            aircraft = Some(self.aircraft[g]);
             *group = None;
         }
         let g = (0..self.groups.len())
             .filter(|&g| !self.groups[g].0.is_empty())
-            .min_by_key(|&g| (self.groups[g].1, std::cmp::Reverse(self.groups[g].0.len())))?;
+            .min_by_key(|&g| {
+                (
+                    self.groups[g].1,
+                    aircraft != Some(self.aircraft[g]),
+                    std::cmp::Reverse(self.groups[g].0.len()),
+                )
+            })?;
         self.groups[g].1 += 1;
         *group = Some(g);
         self.groups[g].0.pop_front()

@@ -155,10 +155,17 @@ impl JsbsimSim {
     /// Trim each point (with the current knobs) once per process and restore that trimmed state on every later
     /// trim at the same point, instead of a full JSBSim trim (campaigns: ~0.5 ms instead of 3-9 ms per case).
     /// Every trim, the first included, then leaves the restored snapshot, so the state does not depend on what
-    /// the process flew before (bit for bit). The restored state differs from a live trim in the states JSBSim
-    /// cannot set (c172x: cylinder-head and oil temperatures; see `scripts/jsbsim_bridge.py`, `Sim.restore`).
+    /// the process flew before (bit for bit); it flies like a live trim to ~1e-8 rad (c172x: max |Δθ| 8e-9 rad
+    /// over a 20 s doublet, engine temperatures JSBSim cannot set; 737: 1e-15). See `Sim.restore` in the bridge.
     pub fn set_trim_reuse(&mut self, on: bool) {
         self.reuse_trims = on;
+    }
+
+    /// Forgets every coefficient scale, pre-trim property and added term: from the next trim on the aircraft is
+    /// the stock one again (the bridge puts each property back to its value in a fresh process), so one process can
+    /// serve several configurations of an aircraft.
+    pub fn clear_configuration(&mut self) {
+        self.knob_values.clear();
     }
 
     /// Reads arbitrary JSBSim properties (current state).
