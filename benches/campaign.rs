@@ -60,7 +60,8 @@ fn bench_campaign(name: &str) {
         spec.methods.join("+")
     );
 
-    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded). The same loop also
+    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded): the campaign's own
+    // flights (same configurations, steps and recorded properties). The same loop also
     // times what a campaign adds on top: process starts, trims and the identifications (a profile by phase).
     let methods = spec.parsed_methods().unwrap();
     let mut fly_s = 0.0;
@@ -83,6 +84,14 @@ fn bench_campaign(name: &str) {
             start_s += t.elapsed().as_secs_f64();
         }
         let sim = &mut current.as_mut().unwrap().1;
+        // the case's configuration (mass/CG variants), so these are the campaign's flights
+        sim.clear_configuration();
+        for (name, factor) in &c.coefficient_scales {
+            sim.set_coefficient_scale(name, *factor).unwrap();
+        }
+        for (property, value) in &c.properties {
+            sim.set_pre_trim_property(property, *value).unwrap();
+        }
         let t = Instant::now();
         sim.trim(&TrimPoint::level(c.altitude_ft, c.speed_kts))
             .unwrap();

@@ -419,10 +419,14 @@ mod tests {
     use super::*;
 
     fn case(configuration: &str, k: usize) -> CaseSpec {
+        case_of("c172x", configuration, k)
+    }
+
+    fn case_of(aircraft: &str, configuration: &str, k: usize) -> CaseSpec {
         CaseSpec {
             id: format!("{configuration}_{k}"),
             configuration: configuration.into(),
-            aircraft: "c172x".into(),
+            aircraft: aircraft.into(),
             coefficient_scales: BTreeMap::new(),
             properties: BTreeMap::new(),
             altitude_ft: 4000.0,
@@ -469,5 +473,40 @@ mod tests {
         assert_eq!(seen.len(), 36);
         // 4 configurations: at most 5 process starts in all (one group shared at the end), not 8
         assert!(switches[0] + switches[1] <= 5, "{switches:?}");
+    }
+
+    #[test]
+    fn a_worker_whose_configuration_runs_dry_moves_to_a_variant_of_its_own_aircraft() {
+        // the example campaign: c172x (12), c172x_aft_cg (6), 737 (12), 737_light (6); processes are per
+        // aircraft, so two workers need one JSBSim process each when each stays on one aircraft
+        let cases: Vec<CaseSpec> = [
+            ("c172x", "c172x", 12),
+            ("c172x", "c172x_aft_cg", 6),
+            ("737", "737", 12),
+            ("737", "737_light", 6),
+        ]
+        .iter()
+        .flat_map(|(a, c, n)| (0..*n).map(move |k| case_of(a, c, k)))
+        .collect();
+        let pending: Vec<&CaseSpec> = cases.iter().collect();
+        let mut q = CaseQueue::new(&pending);
+        let mut groups = [None, None];
+        let mut aircraft: [Vec<String>; 2] = [vec![], vec![]];
+        let mut n = 0;
+        for turn in 0.. {
+            let w = turn % 2;
+            let Some(c) = q.next(&mut groups[w]) else {
+                if q.groups.iter().all(|g| g.0.is_empty()) {
+                    break;
+                }
+                continue;
+            };
+            n += 1;
+            if aircraft[w].last() != Some(&c.aircraft) {
+                aircraft[w].push(c.aircraft.clone());
+            }
+        }
+        assert_eq!(n, 36);
+        assert_eq!(aircraft[0].len() + aircraft[1].len(), 2, "{aircraft:?}");
     }
 }
