@@ -118,6 +118,10 @@ def make_private_aircraft(root_dir, aircraft, surfaces, aircraft_dir=None):
     """Writes root_dir/aircraft/<aircraft>/ with the rewritten XML; returns the list of coefficient knobs.
 
     aircraft_dir: a directory holding <aircraft>.xml to use instead of the package's (an exported model)."""
+    # a process may load several aircraft one after the other (campaign workers switching aircraft)
+    CMD_PROPERTY.clear()
+    PROBES.clear()
+    AXIS_OF.clear()
     pkg = jsbsim.get_default_root_dir()
     src_dir = aircraft_dir or os.path.join(pkg, "aircraft", aircraft)
     src_xml = os.path.join(src_dir, aircraft + ".xml")

@@ -91,8 +91,8 @@ struct Worker {
 }
 
 impl Worker {
-    /// The simulator for a case: the running process when it has the case's aircraft (switching configuration
-    /// only changes the knobs applied at the next trim), else a new one.
+    /// The simulator for a case: the running process (another aircraft is loaded into it; switching
+    /// configuration only changes the knobs applied at the next trim), else a new one.
     fn sim_for(&mut self, case: &CaseSpec, rate_hz: f64) -> Result<&mut JsbsimSim, String> {
         let config: ConfigKey = case
             .coefficient_scales
@@ -103,10 +103,14 @@ impl Worker {
         let same_aircraft = self.sim.is_some()
             && self.key.as_ref().is_some_and(|(a, _)| *a == case.aircraft);
         if !same_aircraft {
-            self.sim = None;
             self.key = None;
             let cfg = crate::aircraft::load(&case.aircraft).map_err(|e| e.to_string())?;
-            let mut sim = JsbsimSim::start(&cfg, rate_hz).map_err(|e| e.to_string())?;
+            // another aircraft in the running process saves a process start
+            let mut sim = match self.sim.take() {
+                Some(old) => old.reload(&cfg, rate_hz),
+                None => JsbsimSim::start(&cfg, rate_hz),
+            }
+            .map_err(|e| e.to_string())?;
             // trim once per flight condition, every case flies from the restored snapshot
             sim.set_trim_reuse(true);
             self.sim = Some(sim);
