@@ -67,7 +67,7 @@ fn bench_campaign(name: &str) {
     let mut fly_s = 0.0;
     let mut trim_s = 0.0;
     let mut start_s = 0.0;
-    let mut ident_s = 0.0;
+    let mut ident_by_method_s = vec![0.0; methods.len()];
     let cpu0 = tree_cpu_s();
     let mut current: Option<(String, JsbsimSim)> = None;
     for c in &cases {
@@ -108,12 +108,13 @@ fn bench_campaign(name: &str) {
         let rec = sim.fly(&plan).unwrap();
         fly_s += t.elapsed().as_secs_f64();
         let (du, dy) = perturbations(&rec, &c.surface, &c.tf_key).unwrap();
-        let t = Instant::now();
-        for &m in &methods {
+        for (k, &m) in methods.iter().enumerate() {
+            let t = Instant::now();
             let _ = identify(&du, &dy, 1.0 / spec.rate_hz, &paper_options(m));
+            ident_by_method_s[k] += t.elapsed().as_secs_f64();
         }
-        ident_s += t.elapsed().as_secs_f64();
     }
+    let ident_s: f64 = ident_by_method_s.iter().sum();
     drop(current); // reap the bridge, so its CPU time is counted
     let bare_cpu_s = tree_cpu_s() - cpu0;
     println!(
@@ -128,6 +129,15 @@ fn bench_campaign(name: &str) {
         spec.methods.join("+"),
         ident_s,
         start_s
+    );
+    println!(
+        "[{name}] identification by method: {}",
+        spec.methods
+            .iter()
+            .zip(&ident_by_method_s)
+            .map(|(m, t)| format!("{m} {t:.3} s"))
+            .collect::<Vec<_>>()
+            .join(", ")
     );
 
     let mut wall = Vec::new();
