@@ -100,8 +100,8 @@ impl Worker {
             .chain(&case.properties)
             .map(|(k, v)| (k.clone(), format!("{v:e}")))
             .collect();
-        let same_aircraft = self.sim.is_some()
-            && self.key.as_ref().is_some_and(|(a, _)| *a == case.aircraft);
+        let same_aircraft =
+            self.sim.is_some() && self.key.as_ref().is_some_and(|(a, _)| *a == case.aircraft);
         if !same_aircraft {
             self.key = None;
             let cfg = crate::aircraft::load(&case.aircraft).map_err(|e| e.to_string())?;
@@ -115,7 +115,10 @@ impl Worker {
             sim.set_trim_reuse(true);
             self.sim = Some(sim);
         }
-        let sim = self.sim.as_mut().ok_or_else(|| "no simulator".to_string())?;
+        let sim = self
+            .sim
+            .as_mut()
+            .ok_or_else(|| "no simulator".to_string())?;
         if self.key.as_ref().map(|(_, c)| c) != Some(&config) {
             self.key = None;
             sim.clear_configuration();

@@ -8,7 +8,7 @@
 //! methods = ["ls", "srivc"]
 //! noise_std_deg = [0.0]   # white noise added to the output, deg (1 sigma)
 //! seeds = [1]
-//! fresh_process_per_case = false  # reuse one JSBSim process per worker (see the field)
+//! fresh_process_per_case = false  # reuse one JSBSim process per worker and aircraft (see the field)
 //!
 //! [[configurations]]
 //! name = "c172x"                           # the configuration's id (baselines are keyed by it)
