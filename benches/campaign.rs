@@ -1,8 +1,10 @@
-//! Campaign throughput: `campaigns/c172x_737.toml` (36 cases) with 1 and 2 jobs, against the bare JSBSim
-//! stepping time of the same flights (one process, trim + fly only, no identification, no process starts).
+//! Campaign throughput (issue 5) on two campaigns: the example `campaigns/c172x_737.toml` (36 short cases:
+//! 20 s at 60 Hz) and `campaigns/throughput.toml` (24 flight-test-length cases: 60 s at 120 Hz), each with 1 and
+//! 2 jobs, against the bare JSBSim stepping time of the same flights (the `fly` calls only: same steps, same
+//! recorded properties; trims, process starts and identification excluded and reported beside it).
 //!
-//! Run: `cargo bench --bench campaign`. Prints wall-clock seconds; a plain `main` (harness = false) because
-//! each measurement takes seconds and runs once.
+//! Run: `cargo bench --bench campaign` (`-- c172x_737` or `-- throughput` for one campaign). Prints wall-clock
+//! and CPU seconds; a plain `main` (harness = false) because each measurement takes seconds and runs once.
 
 use flightid::campaign::{run_campaign, CampaignSpec, RunOptions};
 use flightid::compare::{paper_options, perturbations, single_surface_plan};
@@ -34,17 +36,38 @@ fn tree_cpu_s() -> f64 {
 }
 
 fn main() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("campaigns/c172x_737.toml");
-    let spec = CampaignSpec::load(&path).expect("example campaign");
-    let cases = spec.cases();
+    let only: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    for name in ["c172x_737", "throughput"] {
+        if only.is_empty() || only.iter().any(|o| o == name) {
+            bench_campaign(name);
+        }
+    }
+}
 
-    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded). The same loop also
+/// Profile by phase, then the campaign with 1 and 2 jobs (reused processes), for `campaigns/NAME.toml`.
+fn bench_campaign(name: &str) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("campaigns/{name}.toml"));
+    let spec = CampaignSpec::load(&path).expect("campaign file");
+    let cases = spec.cases();
+    println!(
+        "== campaign {name}: {} cases of {} s at {} Hz, methods {} ==",
+        cases.len(),
+        spec.duration_s,
+        spec.rate_hz,
+        spec.methods.join("+")
+    );
+
+    // Bare stepping: one process per aircraft, time only the fly() calls (trims excluded): the campaign's own
+    // flights (same configurations, steps and recorded properties). The same loop also
     // times what a campaign adds on top: process starts, trims and the identifications (a profile by phase).
     let methods = spec.parsed_methods().unwrap();
     let mut fly_s = 0.0;
     let mut trim_s = 0.0;
     let mut start_s = 0.0;
-    let mut ident_s = 0.0;
+    let mut ident_by_method_s = vec![0.0; methods.len()];
     let cpu0 = tree_cpu_s();
     let mut current: Option<(String, JsbsimSim)> = None;
     for c in &cases {
@@ -55,13 +78,20 @@ fn main() {
         {
             let cfg = flightid::aircraft::load(&c.aircraft).unwrap();
             let t = Instant::now();
-            current = Some((
-                c.aircraft.clone(),
-                JsbsimSim::start(&cfg, spec.rate_hz).unwrap(),
-            ));
+            let mut sim = JsbsimSim::start(&cfg, spec.rate_hz).unwrap();
+            sim.set_trim_reuse(true); // as the campaign does: trim once per point, then restore
+            current = Some((c.aircraft.clone(), sim));
             start_s += t.elapsed().as_secs_f64();
         }
         let sim = &mut current.as_mut().unwrap().1;
+        // the case's configuration (mass/CG variants), so these are the campaign's flights
+        sim.clear_configuration();
+        for (name, factor) in &c.coefficient_scales {
+            sim.set_coefficient_scale(name, *factor).unwrap();
+        }
+        for (property, value) in &c.properties {
+            sim.set_pre_trim_property(property, *value).unwrap();
+        }
         let t = Instant::now();
         sim.trim(&TrimPoint::level(c.altitude_ft, c.speed_kts))
             .unwrap();
@@ -78,19 +108,20 @@ fn main() {
         let rec = sim.fly(&plan).unwrap();
         fly_s += t.elapsed().as_secs_f64();
         let (du, dy) = perturbations(&rec, &c.surface, &c.tf_key).unwrap();
-        let t = Instant::now();
-        for &m in &methods {
+        for (k, &m) in methods.iter().enumerate() {
+            let t = Instant::now();
             let _ = identify(&du, &dy, 1.0 / spec.rate_hz, &paper_options(m));
+            ident_by_method_s[k] += t.elapsed().as_secs_f64();
         }
-        ident_s += t.elapsed().as_secs_f64();
     }
+    let ident_s: f64 = ident_by_method_s.iter().sum();
     drop(current); // reap the bridge, so its CPU time is counted
     let bare_cpu_s = tree_cpu_s() - cpu0;
     println!(
-        "bare loop CPU (process tree, incl. starts, trims, identification): {bare_cpu_s:.2} s"
+        "[{name}] bare loop CPU (process tree, incl. starts, trims, identification): {bare_cpu_s:.2} s"
     );
     println!(
-        "bare JSBSim for {} cases: fly {:.3} s total; campaign extras: trim {:.3} s, identification ({}) {:.3} s, \
+        "[{name}] bare JSBSim stepping for {} cases: fly {:.3} s total; campaign extras: trim (once per point, then restore) {:.3} s, identification ({}) {:.3} s, \
          process starts (one per aircraft) {:.3} s",
         cases.len(),
         fly_s,
@@ -99,9 +130,19 @@ fn main() {
         ident_s,
         start_s
     );
+    println!(
+        "[{name}] identification by method: {}",
+        spec.methods
+            .iter()
+            .zip(&ident_by_method_s)
+            .map(|(m, t)| format!("{m} {t:.3} s"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
 
     let mut wall = Vec::new();
-    for (jobs, fresh) in [(1, true), (2, true), (1, false), (2, false)] {
+    let mut cpu_s = Vec::new();
+    for (jobs, fresh) in [(1, false), (2, false)] {
         let dir = tempfile::tempdir().unwrap();
         let spec = CampaignSpec {
             fresh_process_per_case: fresh,
@@ -122,17 +163,19 @@ fn main() {
         let cpu = tree_cpu_s() - c0;
         assert_eq!(s.failed, 0);
         println!(
-            "campaign, {jobs} job(s), fresh process per case = {fresh}: {el:.2} s wall ({:.2} cases/s), \
-             {cpu:.2} s CPU",
+            "[{name}] campaign, {jobs} job(s), fresh process per case = {fresh}: {el:.2} s wall \
+             ({:.2} cases/s), {cpu:.2} s CPU",
             cases.len() as f64 / el
         );
         wall.push(el);
+        cpu_s.push(cpu);
     }
     println!(
-        "scaling 1 -> 2 jobs: {:.2}x (fresh processes), {:.2}x (reused); 2-job wall / (bare fly / 2): {:.1}x, {:.1}x",
+        "[{name}] scaling 1 -> 2 jobs: {:.2}x (target >= 1.8x); 2-job wall / (bare stepping / 2): {:.2}x \
+         (target <= 1.2x); CPU 1 job {:.2} s, 2 jobs {:.2} s",
         wall[0] / wall[1],
-        wall[2] / wall[3],
         wall[1] / (fly_s / 2.0),
-        wall[3] / (fly_s / 2.0)
+        cpu_s[0],
+        cpu_s[1]
     );
 }

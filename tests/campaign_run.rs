@@ -114,6 +114,87 @@ fn killed_campaign_resumes_to_the_same_results_as_an_uninterrupted_run() {
     assert_eq!(case_files(&part), reference);
 }
 
+/// Two aircraft, a mass variant of one of them, two conditions: with one job a worker switches configuration
+/// (same process, other pre-trim properties) and aircraft (same process, new JSBSim instance) and restores trims
+/// it made for earlier cases; with two jobs the histories differ again.
+const MIXED: &str = r#"
+name = "mixed"
+rate_hz = 60.0
+duration_s = 6.0
+methods = ["ls"]
+
+[[configurations]]
+name = "c172x"
+aircraft = "c172x"
+conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 }, { altitude_ft = 8000.0, speed_kts = 110.0 } ]
+
+[[configurations]]
+name = "c172x_aft_cg"
+aircraft = "c172x"
+properties = { "inertia/pointmass-weight-lbs[4]" = 200.0, "inertia/pointmass-location-X-inches[4]" = 140.0 }
+conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
+
+[[configurations]]
+name = "737"
+aircraft = "737"
+conditions = [ { altitude_ft = 30000.0, speed_kts = 450.0 } ]
+
+[[maneuvers]]
+surface = "elevator"
+shape = "doublet"
+amplitudes_deg = [1.0]
+
+[[maneuvers]]
+surface = "aileron"
+shape = "doublet"
+amplitudes_deg = [2.0]
+"#;
+
+#[test]
+fn results_do_not_depend_on_how_cases_share_processes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = tmp.path().join("mixed.toml");
+    std::fs::write(&spec, MIXED).unwrap();
+    let mut runs = Vec::new();
+    for (dir, jobs, fresh) in [
+        ("one", "1", false),
+        ("two", "2", false),
+        ("fresh", "2", true),
+    ] {
+        let out = tmp.path().join(dir);
+        let spec_path = if fresh {
+            let p = tmp.path().join("mixed_fresh.toml");
+            std::fs::write(
+                &p,
+                MIXED.replace(
+                    "methods = [\"ls\"]",
+                    "methods = [\"ls\"]\nfresh_process_per_case = true",
+                ),
+            )
+            .unwrap();
+            p
+        } else {
+            spec.clone()
+        };
+        let st = flightid()
+            .args(["campaign", "run"])
+            .arg(&spec_path)
+            .arg("--out")
+            .arg(&out)
+            .args(["--jobs", jobs])
+            .stderr(std::process::Stdio::null())
+            .status()
+            .unwrap();
+        assert!(st.success());
+        runs.push(case_files(&out));
+    }
+    assert_eq!(runs[0].len(), 8, "8 cases: {:?}", runs[0].keys());
+    // byte-identical: one process per worker switching configuration and aircraft, two workers, and a fresh
+    // process per case all give the same result files
+    assert_eq!(runs[0], runs[1]);
+    assert_eq!(runs[0], runs[2]);
+}
+
 #[test]
 fn a_case_whose_trim_fails_is_recorded_and_the_campaign_carries_on() {
     let tmp = tempfile::tempdir().unwrap();

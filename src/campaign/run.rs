@@ -81,29 +81,47 @@ pub fn case_path(out: &Path, id: &str) -> PathBuf {
     out.join("cases").join(format!("{id}.json"))
 }
 
-/// What makes a process reusable for a case: the aircraft, its coefficient scales and pre-trim properties.
-type SimKey = (String, Vec<(String, String)>);
+/// The configuration a process is set up for: coefficient scales and pre-trim properties (values as text).
+type ConfigKey = Vec<(String, String)>;
 
 struct Worker {
-    key: Option<SimKey>,
+    /// The aircraft of the running process and the configuration applied to it.
+    key: Option<(String, ConfigKey)>,
     sim: Option<JsbsimSim>,
 }
 
 impl Worker {
+    /// The simulator for a case: the running process (another aircraft is loaded into it; switching
+    /// configuration only changes the knobs applied at the next trim), else a new one.
     fn sim_for(&mut self, case: &CaseSpec, rate_hz: f64) -> Result<&mut JsbsimSim, String> {
-        let key = (
-            case.aircraft.clone(),
-            case.coefficient_scales
-                .iter()
-                .chain(&case.properties)
-                .map(|(k, v)| (k.clone(), format!("{v:e}")))
-                .collect(),
-        );
-        if self.key.as_ref() != Some(&key) || self.sim.is_none() {
-            self.sim = None;
+        let config: ConfigKey = case
+            .coefficient_scales
+            .iter()
+            .chain(&case.properties)
+            .map(|(k, v)| (k.clone(), format!("{v:e}")))
+            .collect();
+        let same_aircraft =
+            self.sim.is_some() && self.key.as_ref().is_some_and(|(a, _)| *a == case.aircraft);
+        if !same_aircraft {
             self.key = None;
             let cfg = crate::aircraft::load(&case.aircraft).map_err(|e| e.to_string())?;
-            let mut sim = JsbsimSim::start(&cfg, rate_hz).map_err(|e| e.to_string())?;
+            // another aircraft in the running process saves a process start
+            let mut sim = match self.sim.take() {
+                Some(old) => old.reload(&cfg, rate_hz),
+                None => JsbsimSim::start(&cfg, rate_hz),
+            }
+            .map_err(|e| e.to_string())?;
+            // trim once per flight condition, every case flies from the restored snapshot
+            sim.set_trim_reuse(true);
+            self.sim = Some(sim);
+        }
+        let sim = self
+            .sim
+            .as_mut()
+            .ok_or_else(|| "no simulator".to_string())?;
+        if self.key.as_ref().map(|(_, c)| c) != Some(&config) {
+            self.key = None;
+            sim.clear_configuration();
             for (name, factor) in &case.coefficient_scales {
                 sim.set_coefficient_scale(name, *factor)
                     .map_err(|e| e.to_string())?;
@@ -112,51 +130,63 @@ impl Worker {
                 sim.set_pre_trim_property(property, *value)
                     .map_err(|e| e.to_string())?;
             }
-            self.sim = Some(sim);
-            self.key = Some(key);
+            self.key = Some((case.aircraft.clone(), config));
         }
-        self.sim.as_mut().ok_or_else(|| "no simulator".to_string())
+        Ok(sim)
     }
 }
 
 /// Pending cases grouped by configuration, handed out so that a worker stays on one configuration while it has
-/// cases and workers spread over configurations: every configuration switch costs a JSBSim process start
-/// (~0.5 s, a third of a case's work in the example campaign), so two workers sharing every group would start
-/// twice as many processes as one worker.
+/// cases and workers spread over configurations: a switch to another aircraft costs a JSBSim process start
+/// (~0.3 s, more than a case's work in the example campaign) and each process trims a flight condition once, so
+/// two workers sharing every group would start and trim twice as often as one worker. When its group runs dry a
+/// worker moves to a group of its own aircraft if one is as free as any other (same process, new knobs).
 struct CaseQueue<'a> {
     /// (cases left, workers on the group) per configuration, in campaign order.
     groups: Vec<(std::collections::VecDeque<&'a CaseSpec>, usize)>,
+    /// The aircraft of each group.
+    aircraft: Vec<&'a str>,
 }
 
 impl<'a> CaseQueue<'a> {
     fn new(pending: &[&'a CaseSpec]) -> Self {
         let mut groups: Vec<(std::collections::VecDeque<&'a CaseSpec>, usize)> = Vec::new();
         let mut names: Vec<&str> = Vec::new();
+        let mut aircraft: Vec<&'a str> = Vec::new();
         for c in pending {
             match names.iter().position(|n| *n == c.configuration) {
                 Some(i) => groups[i].0.push_back(c),
                 None => {
                     names.push(&c.configuration);
+                    aircraft.push(&c.aircraft);
                     groups.push((std::iter::once(*c).collect(), 0));
                 }
             }
         }
-        CaseQueue { groups }
+        CaseQueue { groups, aircraft }
     }
 
     /// The next case for a worker now on `group`: more of the same configuration, else the group with the
-    /// fewest workers on it (then the most cases left). Updates `group`.
+    /// fewest workers on it (then one of the same aircraft, then the most cases left). Updates `group`.
     fn next(&mut self, group: &mut Option<usize>) -> Option<&'a CaseSpec> {
+        let mut aircraft = None;
         if let Some(g) = *group {
             if let Some(c) = self.groups[g].0.pop_front() {
                 return Some(c);
             }
             self.groups[g].1 -= 1;
+            aircraft = Some(self.aircraft[g]);
             *group = None;
         }
         let g = (0..self.groups.len())
             .filter(|&g| !self.groups[g].0.is_empty())
-            .min_by_key(|&g| (self.groups[g].1, std::cmp::Reverse(self.groups[g].0.len())))?;
+            .min_by_key(|&g| {
+                (
+                    self.groups[g].1,
+                    aircraft != Some(self.aircraft[g]),
+                    std::cmp::Reverse(self.groups[g].0.len()),
+                )
+            })?;
         self.groups[g].1 += 1;
         *group = Some(g);
         self.groups[g].0.pop_front()
@@ -396,10 +426,14 @@ mod tests {
     use super::*;
 
     fn case(configuration: &str, k: usize) -> CaseSpec {
+        case_of("c172x", configuration, k)
+    }
+
+    fn case_of(aircraft: &str, configuration: &str, k: usize) -> CaseSpec {
         CaseSpec {
             id: format!("{configuration}_{k}"),
             configuration: configuration.into(),
-            aircraft: "c172x".into(),
+            aircraft: aircraft.into(),
             coefficient_scales: BTreeMap::new(),
             properties: BTreeMap::new(),
             altitude_ft: 4000.0,
@@ -446,5 +480,40 @@ mod tests {
         assert_eq!(seen.len(), 36);
         // 4 configurations: at most 5 process starts in all (one group shared at the end), not 8
         assert!(switches[0] + switches[1] <= 5, "{switches:?}");
+    }
+
+    #[test]
+    fn a_worker_whose_configuration_runs_dry_moves_to_a_variant_of_its_own_aircraft() {
+        // the example campaign: c172x (12), c172x_aft_cg (6), 737 (12), 737_light (6); processes are per
+        // aircraft, so two workers need one JSBSim process each when each stays on one aircraft
+        let cases: Vec<CaseSpec> = [
+            ("c172x", "c172x", 12),
+            ("c172x", "c172x_aft_cg", 6),
+            ("737", "737", 12),
+            ("737", "737_light", 6),
+        ]
+        .iter()
+        .flat_map(|(a, c, n)| (0..*n).map(move |k| case_of(a, c, k)))
+        .collect();
+        let pending: Vec<&CaseSpec> = cases.iter().collect();
+        let mut q = CaseQueue::new(&pending);
+        let mut groups = [None, None];
+        let mut aircraft: [Vec<String>; 2] = [vec![], vec![]];
+        let mut n = 0;
+        for turn in 0.. {
+            let w = turn % 2;
+            let Some(c) = q.next(&mut groups[w]) else {
+                if q.groups.iter().all(|g| g.0.is_empty()) {
+                    break;
+                }
+                continue;
+            };
+            n += 1;
+            if aircraft[w].last() != Some(&c.aircraft) {
+                aircraft[w].push(c.aircraft.clone());
+            }
+        }
+        assert_eq!(n, 36);
+        assert_eq!(aircraft[0].len() + aircraft[1].len(), 2, "{aircraft:?}");
     }
 }

@@ -8,7 +8,7 @@
 //! methods = ["ls", "srivc"]
 //! noise_std_deg = [0.0]   # white noise added to the output, deg (1 sigma)
 //! seeds = [1]
-//! fresh_process_per_case = false  # reuse one JSBSim process per worker (see the field)
+//! fresh_process_per_case = false  # reuse one JSBSim process per worker and aircraft (see the field)
 //!
 //! [[configurations]]
 //! name = "c172x"                           # the configuration's id (baselines are keyed by it)
@@ -57,10 +57,11 @@ pub struct CampaignSpec {
     /// Noise seeds (each noise level > 0 is run once per seed).
     #[serde(default = "default_seeds")]
     pub seeds: Vec<u64>,
-    /// Start a fresh JSBSim process for every case (default false: reuse one process per worker). The bridge
-    /// resets all models before every trim, so a reused process gives the same results as a fresh one
-    /// whatever ran before (tests/campaign_run.rs checks byte-identical results across `--jobs` and resumption);
-    /// `true` is the belt-and-braces option and costs a process start (~0.4 s) per case.
+    /// Start a fresh JSBSim process for every case (default false: a worker reuses one process per aircraft).
+    /// A reused process trims each flight condition once and flies every case from the restored snapshot after
+    /// resetting all models, so it gives the same results as a fresh one whatever ran before (tests/campaign_run.rs
+    /// checks byte-identical results across `--jobs` and resumption); `true` is the belt-and-braces option and
+    /// costs a process start (~0.15 s CPU) and a full trim per case.
     #[serde(default = "default_fresh")]
     pub fresh_process_per_case: bool,
     /// Aircraft configurations.
