@@ -1,4 +1,5 @@
-//! `flightid campaign report`: modal parameters across flight conditions and where each method fails.
+//! `flightid campaign report`: modal parameters and control derivatives across flight conditions, and where each
+//! method fails.
 
 use super::run::{load_results, CaseResult};
 use super::CampaignError;
@@ -120,9 +121,18 @@ fn modal_section(results: &[CaseResult], key: &str) -> Section {
     let aircraft: std::collections::BTreeSet<&str> =
         picked.iter().map(|r| r.case.aircraft.as_str()).collect();
     for ac in aircraft {
+        // the leading numerator coefficient is the control derivative of the transfer function
+        // (Mδe for θ/δe, L'δa for φ/δa, L'δr for φ/δr; Morelli & Klein 2016 §3.6), per rad
+        let control_derivative = match key {
+            "theta/elevator" => "control derivative Mδe (leading numerator), 1/s²",
+            "phi/aileron" => "control derivative L'δa (leading numerator), 1/s²",
+            "phi/rudder" => "control derivative L'δr (leading numerator), 1/s²",
+            _ => "leading numerator coefficient",
+        };
         for (quantity, label) in [
             ("osc_omega_n_rad_s", "oscillatory mode ωn, rad/s"),
             ("osc_zeta", "oscillatory mode ζ"),
+            ("leading_num", control_derivative),
         ] {
             for (axis, axis_label) in [
                 ("speed", "true airspeed, kts"),
@@ -131,7 +141,11 @@ fn modal_section(results: &[CaseResult], key: &str) -> Section {
                 let mut series: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
                 for r in picked.iter().filter(|r| r.case.aircraft == ac) {
                     for id in r.identifications.iter().filter(|i| i.noise_std_deg == 0.0) {
-                        let Some(v) = id.modal.get(quantity) else {
+                        let value = match quantity {
+                            "leading_num" => id.leading_num,
+                            _ => id.modal.get(quantity).copied(),
+                        };
+                        let Some(v) = value else {
                             continue;
                         };
                         let x = if axis == "speed" {
@@ -142,7 +156,7 @@ fn modal_section(results: &[CaseResult], key: &str) -> Section {
                         series
                             .entry(format!("{} {}", r.case.configuration, id.method))
                             .or_default()
-                            .push((x, *v));
+                            .push((x, v));
                     }
                 }
                 if series.is_empty() {
