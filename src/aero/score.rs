@@ -117,6 +117,7 @@ fn verdict_word(v: &Verdict) -> String {
         Verdict::Determined { .. } => "determined".into(),
         Verdict::Weak { .. } => "weak".into(),
         Verdict::Combination { combination, .. } => format!("only {combination}"),
+        Verdict::Correlated { partner, .. } => format!("only with {partner}"),
         Verdict::Absent => "absent".into(),
     }
 }
