@@ -23,6 +23,7 @@
 //! Transfer functions are computed by a private Faddeev–LeVerrier recursion (exact for these 4×4 systems);
 //! `crate::lti` offers the general `ss2tf`.
 
+pub mod attribution;
 pub mod fit;
 pub mod identifiability;
 pub mod model;

@@ -4,7 +4,8 @@
 use serde::Serialize;
 use serde_json::{json, Value};
 
-use super::fit::{estimate_derivatives, FitOptions, IdentifiedTfs};
+use super::attribution::{self, attribute_tf_fit};
+use super::fit::{estimate_derivatives, FitOptions, IdentifiedTf, IdentifiedTfs};
 use super::model::TfOutput;
 use super::params::Derivative as D;
 use super::score::{score_equation_error, score_tf_fit, table1, table3, Scorecard};
@@ -18,7 +19,8 @@ use super::AeroError;
 use crate::data;
 use crate::report::{Report, Section, Table};
 use crate::sim::jsbsim::AeroTruth;
-use crate::sim::linear::submodel_modes;
+use crate::sim::linear::{paper_transfer_functions, submodel_modes};
+use crate::sim::Linearization;
 use crate::sim::{JsbsimSim, Simulator, TrimPoint};
 
 /// Where the estimates come from.
@@ -109,7 +111,10 @@ pub struct Study {
     pub notes: Vec<String>,
 }
 
-fn modal_check(sim: &mut JsbsimSim, truth: &AeroTruth) -> Result<Vec<ModalCheck>, AeroError> {
+fn modal_check(
+    sim: &mut JsbsimSim,
+    truth: &AeroTruth,
+) -> Result<(Vec<ModalCheck>, Linearization), AeroError> {
     let lin = sim.linearize()?;
     let jsb = submodel_modes(&lin)?;
     let osc = |k: &str| {
@@ -141,12 +146,47 @@ fn modal_check(sim: &mut JsbsimSim, truth: &AeroTruth) -> Result<Vec<ModalCheck>
         full: f(per[1]),
         jsbsim: j,
     };
-    Ok(vec![
-        row("short period ωn, rad/s", &|p| p.0 .0, sp_j.0),
-        row("short period ζ", &|p| p.0 .1, sp_j.1),
-        row("Dutch roll ωn, rad/s", &|p| p.1 .0, dr_j.0),
-        row("Dutch roll ζ", &|p| p.1 .1, dr_j.1),
-    ])
+    Ok((
+        vec![
+            row("short period ωn, rad/s", &|p| p.0 .0, sp_j.0),
+            row("short period ζ", &|p| p.0 .1, sp_j.1),
+            row("Dutch roll ωn, rad/s", &|p| p.1 .0, dr_j.0),
+            row("Dutch roll ζ", &|p| p.1 .1, dr_j.1),
+        ],
+        lin,
+    ))
+}
+
+/// The paper's transfer functions of JSBSim's linearization (decoupled submodels, per radian of surface), as
+/// identified transfer functions with the numerator lengths of `like` (what a perfect identification of the
+/// linearized aircraft would give).
+pub fn linearization_tfs(
+    lin: &Linearization,
+    like: &IdentifiedTfs,
+) -> Result<IdentifiedTfs, AeroError> {
+    let tfs = paper_transfer_functions(lin)?;
+    let mut out = IdentifiedTfs::default();
+    for (o, t) in &like.tfs {
+        let key = match *o {
+            TfOutput::THETA_ELEVATOR => "theta/elevator",
+            TfOutput::PHI_AILERON => "phi/aileron",
+            TfOutput::PHI_RUDDER => "phi/rudder",
+            _ => continue,
+        };
+        let Some(tf) = tfs.get(key) else { continue };
+        let len = t.num.len();
+        let mut num = vec![0.0; len.saturating_sub(tf.num.len())];
+        num.extend(&tf.num[tf.num.len().saturating_sub(len)..]);
+        out.tfs.push((
+            *o,
+            IdentifiedTf {
+                num,
+                den: tf.den.clone(),
+                covariance: None,
+            },
+        ));
+    }
+    Ok(out)
 }
 
 /// Runs the study on a trimmed simulator (`point` is re-trimmed before each flight).
@@ -157,7 +197,7 @@ pub fn run(
 ) -> Result<Study, AeroError> {
     sim.trim(point)?;
     let truth = sim.aero_truth()?;
-    let modal_check = modal_check(sim, &truth)?;
+    let (modal_check, lin) = modal_check(sim, &truth)?;
     let mut notes = vec![
         "Truth: the derivatives the JSBSim model itself uses at this trim (its coefficient functions, tables \
          included, differenced; moments about the CG). TF-route scores are in stability axes, \
@@ -257,7 +297,12 @@ pub fn run(
         }
         let est = estimate_derivatives(&prior, &tfs, &free, FitOptions::default())?;
         identifiability = est.identifiability.to_text();
-        scorecards.push(score_tf_fit(&est, &model.derivatives, opts.structure));
+        let mut card = score_tf_fit(&est, &model.derivatives, opts.structure);
+        let lin_tfs = linearization_tfs(&lin, &tfs)?;
+        let attributions =
+            attribute_tf_fit(&prior, &tfs, Some(&lin_tfs), &free, &model.derivatives)?;
+        attribution::apply(&mut card, &attributions);
+        scorecards.push(card);
         notes.push(format!(
             "TF route: free derivatives start at {:.0} % of the truth; the others are held at the model's values.",
             100.0 * opts.start_factor
