@@ -4,7 +4,10 @@
 use serde::Serialize;
 use serde_json::{json, Value};
 
-use super::attribution::{self, attribute_tf_fit};
+use super::attribution::{
+    self, attribute_equation_error, attribute_tf_fit, CoefficientProbe, EquationAttribution,
+};
+use super::regression::{EquationErrorOptions, EquationErrorResult};
 use super::fit::{estimate_derivatives, FitOptions, IdentifiedTf, IdentifiedTfs};
 use super::model::TfOutput;
 use super::params::Derivative as D;
@@ -13,7 +16,8 @@ use super::spec::{
     apply_overrides, identified_tfs_from_json, model_from_truth, truth_derivatives, Structure,
 };
 use super::trials::{
-    equation_error_flights, equation_error_on, fly_doublets, identify_paper_tfs, TrialOptions,
+    equation_error_flights, equation_error_on, fly_doublets, identify_paper_tfs, Flights,
+    TrialOptions,
 };
 use super::AeroError;
 use crate::data;
@@ -107,6 +111,8 @@ pub struct Study {
     pub scorecards: Vec<Scorecard>,
     /// The identifiability analysis of the transfer-function route, in words.
     pub identifiability: String,
+    /// The equation-error estimates' errors taken apart by JSBSim coefficient function (flights only).
+    pub equation_error_attribution: Vec<EquationAttribution>,
     /// Statements the reader needs (what was dropped and why, what the data cannot give).
     pub notes: Vec<String>,
 }
@@ -211,9 +217,16 @@ pub fn run(
     let mut tfs = IdentifiedTfs::default();
     let mut identified = Vec::new();
     let mut ee = None;
+    let mut ee_attribution = Vec::new();
     match &opts.source {
         Source::Fly(trial) => {
-            let flights = fly_doublets(sim, point, trial)?;
+            // Record every coefficient function along the flights for the error attribution.
+            sim.extra_record = attribution::recorded_properties(&sim.coefficient_axes);
+            let flown = fly_doublets(sim, point, trial);
+            sim.extra_record.clear();
+            let flights = flown?;
+            sim.trim(point)?;
+            let probe = attribution::probe_coefficients(sim)?;
             let (all, results) = identify_paper_tfs(&flights, trial)?;
             for (o, r) in &results {
                 identified.push(IdentifiedSummary {
@@ -252,7 +265,20 @@ pub fn run(
                         .into(),
                 );
             }
-            ee = Some(equation_error_flights(&flights, &truth)?);
+            let noisy_ee = equation_error_flights(&flights, &truth)?;
+            let clean_ee = match &flights.noise_free {
+                Some(clean) => Some(equation_error_flights(clean, &truth)?),
+                None => None,
+            };
+            let clean_flights = flights.noise_free.as_deref().unwrap_or(&flights);
+            ee_attribution = attribute_flights(
+                clean_ee.as_ref().unwrap_or(&noisy_ee),
+                &noisy_ee,
+                clean_flights,
+                &probe,
+                &truth,
+            )?;
+            ee = Some(noisy_ee);
         }
         Source::Identified(docs) => {
             identified_tfs_from_json(docs, &mut tfs)?;
@@ -310,11 +336,11 @@ pub fn run(
     }
     if let Some(ee) = &ee {
         let model = model_from_truth(&truth, Structure::Full.assumptions())?;
-        scorecards.push(score_equation_error(
-            &[ee],
-            &truth_derivatives(&truth),
-            &model,
-        ));
+        let mut card = score_equation_error(&[ee], &truth_derivatives(&truth), &model);
+        if !ee_attribution.is_empty() {
+            attribution::apply(&mut card, &attribution::equation_rows(&ee_attribution));
+        }
+        scorecards.push(card);
         for (c, why) in &ee.skipped {
             notes.push(format!("equation error: {c} skipped: {why}"));
         }
@@ -333,8 +359,50 @@ pub fn run(
         identified,
         scorecards,
         identifiability,
+        equation_error_attribution: ee_attribution,
         notes,
     })
+}
+
+/// Equation-error attribution of every equation of the doublet flights (C_m, C_L from the elevator flight;
+/// C_l, C_n, C_Y from the lateral flight), `clean` the regressions on the noise-free flights, `scored` those
+/// scored (the same when there is no noise).
+fn attribute_flights(
+    clean: &EquationErrorResult,
+    scored: &EquationErrorResult,
+    clean_flights: &Flights,
+    probe: &CoefficientProbe,
+    truth: &AeroTruth,
+) -> Result<Vec<EquationAttribution>, AeroError> {
+    let truth_body = truth_derivatives(truth);
+    let options = EquationErrorOptions::default();
+    let mut out = Vec::new();
+    for c in &clean.equations {
+        let Some(e) = scored
+            .equations
+            .iter()
+            .find(|e| e.coefficient == c.coefficient)
+        else {
+            continue;
+        };
+        if e.terms.iter().map(|t| &t.name).ne(c.terms.iter().map(|t| &t.name)) {
+            continue;
+        }
+        let record = if ["Cm", "CL"].contains(&c.coefficient) {
+            &clean_flights.elevator
+        } else {
+            &clean_flights.lateral
+        };
+        out.push(attribute_equation_error(
+            c,
+            e,
+            record,
+            probe,
+            &truth_body,
+            &options,
+        )?);
+    }
+    Ok(out)
 }
 
 fn apply_overrides_note(doc: &Value, notes: &mut Vec<String>) {
@@ -390,6 +458,7 @@ impl Study {
             "identified": self.identified,
             "scorecards": self.scorecards,
             "identifiability": self.identifiability,
+            "equation_error_attribution": self.equation_error_attribution,
             "notes": self.notes,
         })
     }
