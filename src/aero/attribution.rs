@@ -19,9 +19,9 @@ use serde::Serialize;
 
 use super::fit::{estimate_derivatives, FitOptions, IdentifiedTfs};
 use super::params::{Assumptions, Derivative, Derivatives, ThrustModel};
+use super::regression::{savitzky_golay_smooth, EquationErrorOptions, RegressionResult};
 use super::score::{Scorecard, CMQ_SUM};
 use super::spec::full_assumptions;
-use super::regression::{savitzky_golay_smooth, EquationErrorOptions, RegressionResult};
 use super::AeroError;
 use crate::data;
 use crate::sim::jsbsim::{cross, wind_to_body};
@@ -119,11 +119,7 @@ fn releases(base: Assumptions) -> Vec<(String, Assumptions)> {
 }
 
 /// The errors (estimate − truth) of a fit, by scorecard name, with the pitch-damping sum.
-fn errors(
-    values: &[f64],
-    free: &[Derivative],
-    truth: &Derivatives,
-) -> Vec<(String, f64)> {
+fn errors(values: &[f64], free: &[Derivative], truth: &Derivatives) -> Vec<(String, f64)> {
     let mut out: Vec<(String, f64)> = free
         .iter()
         .zip(values)
@@ -156,10 +152,11 @@ pub fn attribute_tf_fit(
     free: &[Derivative],
     truth: &Derivatives,
 ) -> Result<Vec<RowAttribution>, AeroError> {
-    let fit = |model: &super::AeroModel, t: &IdentifiedTfs| -> Result<Vec<(String, f64)>, AeroError> {
-        let est = estimate_derivatives(model, t, free, FitOptions::default())?;
-        Ok(errors(&est.values, free, truth))
-    };
+    let fit =
+        |model: &super::AeroModel, t: &IdentifiedTfs| -> Result<Vec<(String, f64)>, AeroError> {
+            let est = estimate_derivatives(model, t, free, FitOptions::default())?;
+            Ok(errors(&est.values, free, truth))
+        };
     let base = fit(prior, tfs)?;
     // (words, errors after this step); the contribution of a step is previous − this.
     let mut steps: Vec<(String, Vec<(String, f64)>)> = Vec::new();
@@ -231,8 +228,16 @@ pub fn attribute_tf_fit(
 fn a_merge(current: Assumptions, released: Assumptions, base: Assumptions) -> Assumptions {
     let pick = |c: bool, r: bool, b: bool| if r != b { r } else { c };
     Assumptions {
-        lift_rate_terms: pick(current.lift_rate_terms, released.lift_rate_terms, base.lift_rate_terms),
-        drag_in_z_alpha: pick(current.drag_in_z_alpha, released.drag_in_z_alpha, base.drag_in_z_alpha),
+        lift_rate_terms: pick(
+            current.lift_rate_terms,
+            released.lift_rate_terms,
+            base.lift_rate_terms,
+        ),
+        drag_in_z_alpha: pick(
+            current.drag_in_z_alpha,
+            released.drag_in_z_alpha,
+            base.drag_in_z_alpha,
+        ),
         side_force_in_wind_axes: pick(
             current.side_force_in_wind_axes,
             released.side_force_in_wind_axes,
@@ -253,8 +258,16 @@ fn a_merge(current: Assumptions, released: Assumptions, base: Assumptions) -> As
         } else {
             current.thrust
         },
-        ixz_coupling: pick(current.ixz_coupling, released.ixz_coupling, base.ixz_coupling),
-        level_flight: pick(current.level_flight, released.level_flight, base.level_flight),
+        ixz_coupling: pick(
+            current.ixz_coupling,
+            released.ixz_coupling,
+            base.ixz_coupling,
+        ),
+        level_flight: pick(
+            current.level_flight,
+            released.level_flight,
+            base.level_flight,
+        ),
     }
 }
 
@@ -414,7 +427,13 @@ pub fn probe_coefficients(sim: &mut JsbsimSim) -> Result<CoefficientProbe, AeroE
 
 /// Body-axis force (lbf) and moment about the CG (lbf·ft) of one coefficient function of value `value` on
 /// `axis` at (α, β).
-fn force_moment(axis: &str, value: f64, alpha_rad: f64, beta_rad: f64, arm_ft: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+fn force_moment(
+    axis: &str,
+    value: f64,
+    alpha_rad: f64,
+    beta_rad: f64,
+    arm_ft: [f64; 3],
+) -> ([f64; 3], [f64; 3]) {
     let moment_only = |k: usize| {
         let mut m = [0.0; 3];
         m[k] = value;
@@ -435,7 +454,14 @@ fn force_moment(axis: &str, value: f64, alpha_rad: f64, beta_rad: f64, arm_ft: [
 
 /// The coefficient equation's response from a body force and moment: the same normalisation as
 /// `aero::regression` (C_m = M/(q̄Sc̄), C_l, C_n = L, N/(q̄Sb), C_Y = F_y/(q̄S), C_L = −F_z/(q̄S cos α)).
-fn response_of(eq: &str, f: [f64; 3], m: [f64; 3], qbar_psf: f64, alpha_rad: f64, p: &CoefficientProbe) -> f64 {
+fn response_of(
+    eq: &str,
+    f: [f64; 3],
+    m: [f64; 3],
+    qbar_psf: f64,
+    alpha_rad: f64,
+    p: &CoefficientProbe,
+) -> f64 {
     let qs = qbar_psf * p.wing_area_ft2;
     match eq {
         "Cm" => m[1] / (qs * p.chord_ft),
@@ -450,7 +476,12 @@ fn response_of(eq: &str, f: [f64; 3], m: [f64; 3], qbar_psf: f64, alpha_rad: f64
 /// The probe variables behind a regressor (by its term-name suffix) with the factor from d/d(variable) to
 /// d/d(regressor): rates enter nondimensionalised (q̂ = q c̄/2V, p̂ = p b/2V). In the C_m equation without an
 /// α̇ regressor the q column carries C_mq + C_mα̇ (the scored combination), so α̇ maps onto it too.
-fn regressor_variables(eq: &str, suffix: &str, alphadot_free: bool, p: &CoefficientProbe) -> Vec<(&'static str, f64)> {
+fn regressor_variables(
+    eq: &str,
+    suffix: &str,
+    alphadot_free: bool,
+    p: &CoefficientProbe,
+) -> Vec<(&'static str, f64)> {
     let pitch = 2.0 * p.airspeed_fps / p.chord_ft;
     let lat = 2.0 * p.airspeed_fps / p.span_ft;
     match suffix {
@@ -513,7 +544,8 @@ impl EquationAttribution {
 pub const OTHER: &str =
     "other (response reconstruction: differentiation and smoothing, inertia terms, q̄(t) normalisation)";
 /// Label of the half-sample skew between the reconstructed response and the regressors.
-pub const SKEW: &str = "time skew: the differentiated rates lag the regressors by ½ sample (JSBSim's integrator)";
+pub const SKEW: &str =
+    "time skew: the differentiated rates lag the regressors by ½ sample (JSBSim's integrator)";
 /// Label of the noise part.
 pub const NOISE: &str = "sensor noise";
 /// Label of the difference between the scored truth and the sum of the per-function slopes.
@@ -542,10 +574,9 @@ pub fn attribute_equation_error(
     let eq = clean.coefficient;
     let n = clean.response.len();
     let col = |name: &str| -> Result<&[f64], AeroError> {
-        record
-            .column(name)
-            .filter(|c| c.len() == n)
-            .ok_or_else(|| AeroError::BadRecord(format!("attribution needs the recorded column `{name}`")))
+        record.column(name).filter(|c| c.len() == n).ok_or_else(|| {
+            AeroError::BadRecord(format!("attribution needs the recorded column `{name}`"))
+        })
     };
     let alpha = col("alpha_rad")?;
     let beta = col("beta_rad")?;
@@ -561,7 +592,11 @@ pub fn attribute_equation_error(
     let suffixes: Vec<String> = clean
         .terms
         .iter()
-        .map(|t| t.name.split_once('_').map_or(String::new(), |(_, s)| s.to_string()))
+        .map(|t| {
+            t.name
+                .split_once('_')
+                .map_or(String::new(), |(_, s)| s.to_string())
+        })
         .collect();
     let p_cols = clean.terms.len();
     let truth_of = |j: usize| -> f64 {
@@ -632,7 +667,13 @@ pub fn attribute_equation_error(
         let sc = smooth(&c)?;
         let proj = ls_solve(&clean.regressors, &sc)?;
         let bias: Vec<f64> = (0..p_cols)
-            .map(|j| if suffixes[j] == "0" { f64::NAN } else { proj[j] - s[j] })
+            .map(|j| {
+                if suffixes[j] == "0" {
+                    f64::NAN
+                } else {
+                    proj[j] - s[j]
+                }
+            })
             .collect();
         for i in 0..n {
             sum_c[i] += sc[i];
@@ -660,7 +701,13 @@ pub fn attribute_equation_error(
         parts.push((
             "propulsion (thrust, propeller torque and gyroscopics)".to_string(),
             (0..p_cols)
-                .map(|j| if suffixes[j] == "0" { f64::NAN } else { proj[j] })
+                .map(|j| {
+                    if suffixes[j] == "0" {
+                        f64::NAN
+                    } else {
+                        proj[j]
+                    }
+                })
                 .collect(),
         ));
     }
@@ -711,7 +758,9 @@ pub fn equation_rows(equations: &[EquationAttribution]) -> Vec<RowAttribution> {
     for e in equations {
         let alphadot_free = e.terms.iter().any(|t| t.ends_with("_alphadot"));
         for (j, term) in e.terms.iter().enumerate() {
-            let Ok(d) = term.parse::<Derivative>() else { continue };
+            let Ok(d) = term.parse::<Derivative>() else {
+                continue;
+            };
             let name = if d == Derivative::Cmq && !alphadot_free {
                 CMQ_SUM.to_string()
             } else {
@@ -736,4 +785,220 @@ pub fn equation_rows(equations: &[EquationAttribution]) -> Vec<RowAttribution> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aero::fit::IdentifiedTf;
+    use crate::aero::model::tests::c172x_model;
+    use crate::aero::model::TfOutput;
+    use crate::aero::regression::RegressionTerm;
+    use crate::aero::spec::full_assumptions;
+
+    /// Normal-equation solve (a different path from the SVD in `ls_solve`), for checking.
+    fn normal_solve(cols: &[Vec<f64>], y: &[f64]) -> Vec<f64> {
+        let p = cols.len();
+        let a = Mat::from_fn(p, p, |i, j| {
+            cols[i]
+                .iter()
+                .zip(&cols[j])
+                .map(|(x, z)| x * z)
+                .sum::<f64>()
+        });
+        let b = Mat::from_fn(p, 1, |i, _| {
+            cols[i].iter().zip(y).map(|(x, z)| x * z).sum::<f64>()
+        });
+        let x = faer::prelude::Solve::solve(&a.partial_piv_lu(), &b);
+        (0..p).map(|i| x[(i, 0)]).collect()
+    }
+
+    #[test]
+    fn synthetic_regression_bias_splits_exactly_into_the_nonlinear_terms() {
+        // C_m = F1 + F2 with F1 = 2α + 0.5α² and F2 = −δe + 0.3 δe α (PITCH functions, q̄ = S = c̄ = 1), regressed
+        // on [1, α, δe]. Truth: C_mα = 2, C_mδe = −1. The LS bias must be exactly the projection of 0.5α² (F1)
+        // plus that of 0.3 δe α (F2) (Morelli & Klein eq. 5.8), and the parts must add up to θ̂ − θ.
+        let n = 400;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.02).collect();
+        let alpha: Vec<f64> = t
+            .iter()
+            .map(|t| 0.05 * (1.3 * t).sin() + 0.02 * (3.1 * t).cos())
+            .collect();
+        let de: Vec<f64> = t.iter().map(|t| 0.03 * (2.2 * t).sin().signum()).collect();
+        let f1: Vec<f64> = alpha.iter().map(|a| 2.0 * a + 0.5 * a * a).collect();
+        let f2: Vec<f64> = de
+            .iter()
+            .zip(&alpha)
+            .map(|(d, a)| -d + 0.3 * d * a)
+            .collect();
+        let z: Vec<f64> = f1.iter().zip(&f2).map(|(a, b)| a + b).collect();
+        let cols = vec![vec![1.0; n], alpha.clone(), de.clone()];
+        let theta = normal_solve(&cols, &z);
+        let names = ["Cm_0", "Cm_alpha", "Cm_de"];
+        let result = RegressionResult {
+            coefficient: "Cm",
+            terms: names
+                .iter()
+                .zip(&theta)
+                .map(|(nm, v)| RegressionTerm {
+                    name: nm.to_string(),
+                    derivative: nm.parse().ok(),
+                    value: *v,
+                    std_error: 0.0,
+                    std_error_colored: 0.0,
+                })
+                .collect(),
+            r_squared: 1.0,
+            fit_error_std: 0.0,
+            regressors: cols.clone(),
+            response: z.clone(),
+        };
+        let mut rec = data::FlightRecord::new(t.clone());
+        rec.push_column("alpha_rad", alpha.clone());
+        rec.push_column("beta_rad", vec![0.0; n]);
+        rec.push_column("aero/qbar-psf", vec![1.0; n]);
+        rec.push_column("aero/coefficient/F1", f1);
+        rec.push_column("aero/coefficient/F2", f2);
+        let map = |pairs: &[(&str, f64)]| -> BTreeMap<String, f64> {
+            pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+        };
+        let probe = CoefficientProbe {
+            axes: [("F1", "PITCH"), ("F2", "PITCH")]
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+            base: map(&[("F1", 0.0), ("F2", 0.0)]),
+            slopes: [
+                ("alpha".to_string(), map(&[("F1", 2.0), ("F2", 0.0)])),
+                (
+                    "surface:elevator".to_string(),
+                    map(&[("F1", 0.0), ("F2", -1.0)]),
+                ),
+            ]
+            .into_iter()
+            .collect(),
+            arm_ft: [0.0; 3],
+            wing_area_ft2: 1.0,
+            span_ft: 1.0,
+            chord_ft: 1.0,
+            alpha_rad: 0.0,
+            beta_rad: 0.0,
+            airspeed_fps: 100.0,
+            qbar_psf: 1.0,
+        };
+        let mut truth = Derivatives::default();
+        truth.set(Derivative::Cmalpha, 2.0);
+        truth.set(Derivative::Cmde, -1.0);
+        let options = EquationErrorOptions {
+            smooth_regressors: false,
+            ..EquationErrorOptions::default()
+        };
+        let a = attribute_equation_error(&result, &result, &rec, &probe, &truth, &options).unwrap();
+        let part = |name: &str| &a.parts.iter().find(|(n, _)| n.starts_with(name)).unwrap().1;
+        let b1 = normal_solve(
+            &cols,
+            &alpha.iter().map(|a| 0.5 * a * a).collect::<Vec<_>>(),
+        );
+        let b2 = normal_solve(
+            &cols,
+            &de.iter()
+                .zip(&alpha)
+                .map(|(d, a)| 0.3 * d * a)
+                .collect::<Vec<_>>(),
+        );
+        for j in 1..3 {
+            assert!(
+                (part("F1")[j] - b1[j]).abs() < 1e-10,
+                "F1 {j}: {} vs {}",
+                part("F1")[j],
+                b1[j]
+            );
+            assert!(
+                (part("F2")[j] - b2[j]).abs() < 1e-10,
+                "F2 {j}: {} vs {}",
+                part("F2")[j],
+                b2[j]
+            );
+            // θ̂ − θ = bias(F1) + bias(F2); skew and reconstruction rest cancel (z is exactly Σ F).
+            let truth_j = [f64::NAN, 2.0, -1.0][j];
+            assert!((theta[j] - truth_j - b1[j] - b2[j]).abs() < 1e-10);
+            assert!(
+                a.closure()[j].abs() < 1e-12,
+                "closure {j}: {}",
+                a.closure()[j]
+            );
+            assert!((part(SKEW)[j] + part("other")[j]).abs() < 1e-12);
+            assert!(part(PROBE_MISMATCH)[j].abs() < 1e-12);
+        }
+        // The rows name the term: C_mα's bias comes from F1's α², C_mδe's from F2's δe·α.
+        let rows = equation_rows(std::slice::from_ref(&a));
+        let row = |n: &str| rows.iter().find(|r| r.name == n).unwrap();
+        assert!(row("Cm_alpha")
+            .terms
+            .iter()
+            .any(|t| t.term.starts_with("F1") && (t.share - b1[1] / a.error[1]).abs() < 1e-9));
+        assert!(row("Cm_de").terms.iter().any(|t| t.term.starts_with("F2")));
+    }
+
+    #[test]
+    fn tf_attribution_adds_up_and_names_the_released_structure() {
+        // θ/δe and φ/δa from the full-structure model, fitted with the paper's structure: the parts (each
+        // released assumption, the remainder) add up to estimate − truth, and a released assumption carries
+        // the error of every derivative it moves by more than 1 %.
+        // The truth has every released term (constant-power thrust included), so releasing them all leaves
+        // nothing: the remainder is round-off.
+        let truth = c172x_model(Assumptions {
+            thrust: ThrustModel::ConstantPower,
+            ..full_assumptions()
+        });
+        let tf = |o: TfOutput| {
+            let t = truth.transfer_function(o).unwrap();
+            IdentifiedTf {
+                num: t.num[t.num.len() - 3..].to_vec(),
+                den: t.den,
+                covariance: None,
+            }
+        };
+        let tfs = IdentifiedTfs::paper(
+            Some(tf(TfOutput::THETA_ELEVATOR)),
+            Some(tf(TfOutput::PHI_AILERON)),
+            None,
+        );
+        let free = [
+            Derivative::Cmalpha,
+            Derivative::Cmq,
+            Derivative::Cmde,
+            Derivative::Clp,
+            Derivative::Clda,
+            Derivative::Cnbeta,
+        ];
+        let mut prior = truth.clone();
+        prior.assumptions = Assumptions::paper();
+        let rows = attribute_tf_fit(&prior, &tfs, None, &free, &truth.derivatives).unwrap();
+        for r in &rows {
+            let sum: f64 = r.terms.iter().map(|t| t.contribution).sum();
+            assert!(
+                (sum - r.error).abs() < 1e-9 * r.error.abs().max(1e-6),
+                "{}: {sum} vs {}",
+                r.name,
+                r.error
+            );
+            let rel = r.error / truth.derivatives.get(r.name.parse().unwrap()).abs();
+            if rel.abs() > 0.01 {
+                let main = r.main_term().unwrap();
+                assert!(main.term.starts_with("structure:"), "{}: {main:?}", r.name);
+            }
+            let left = r
+                .terms
+                .iter()
+                .find(|t| t.term.starts_with("left after"))
+                .unwrap();
+            assert!(
+                left.contribution.abs()
+                    < 1e-5 * truth.derivatives.get(r.name.parse().unwrap()).abs(),
+                "{}: {left:?}",
+                r.name
+            );
+        }
+    }
 }

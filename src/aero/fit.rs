@@ -439,7 +439,9 @@ pub fn estimate_derivatives(
     let p = free.len();
     let mut axis_sigma2: Vec<(Axis, f64, f64)> = Vec::new(); // (axis, σ², typical relative coefficient σ)
     for axis in [Axis::Longitudinal, Axis::Lateral] {
-        let rows: Vec<usize> = (0..row_axis.len()).filter(|&i| row_axis[i] == axis).collect();
+        let rows: Vec<usize> = (0..row_axis.len())
+            .filter(|&i| row_axis[i] == axis)
+            .collect();
         let cols: Vec<usize> = (0..p).filter(|&k| axis_of(free[k]) == axis).collect();
         if rows.is_empty() {
             continue;

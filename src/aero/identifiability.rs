@@ -489,7 +489,10 @@ pub(crate) fn assess_estimate(
     }
     for k in 0..p {
         let structural = &report.verdicts[k].verdict;
-        if !matches!(structural, Verdict::Determined { .. } | Verdict::Weak { .. }) {
+        if !matches!(
+            structural,
+            Verdict::Determined { .. } | Verdict::Weak { .. }
+        ) {
             continue;
         }
         let verdict = data_verdict(&cov_z, k, &derivatives, values, scale);
@@ -541,7 +544,9 @@ pub(crate) fn assess_estimate(
                 })
             };
             let own: Vec<usize> = (0..candidates.len())
-                .filter(|&c| (candidates[c].axis == Axis::Longitudinal) == derivatives[k].is_longitudinal())
+                .filter(|&c| {
+                    (candidates[c].axis == Axis::Longitudinal) == derivatives[k].is_longitudinal()
+                })
                 .collect();
             for &c in &own {
                 let total = information_z + &extra_info[c];
@@ -704,7 +709,9 @@ pub(crate) fn analyse_with_weights(
                 }
             }
             Verdict::Absent => format!("{name} does not enter these transfer functions."),
-            Verdict::Correlated { .. } => unreachable!("only assess_estimate judges by correlation"),
+            Verdict::Correlated { .. } => {
+                unreachable!("only assess_estimate judges by correlation")
+            }
         };
         let mut separated_by = Vec::new();
         if !matches!(verdict, Verdict::Determined { .. }) {

@@ -7,10 +7,10 @@ use serde_json::{json, Value};
 use super::attribution::{
     self, attribute_equation_error, attribute_tf_fit, CoefficientProbe, EquationAttribution,
 };
-use super::regression::{EquationErrorOptions, EquationErrorResult};
 use super::fit::{estimate_derivatives, FitOptions, IdentifiedTf, IdentifiedTfs};
 use super::model::TfOutput;
 use super::params::Derivative as D;
+use super::regression::{EquationErrorOptions, EquationErrorResult};
 use super::score::{score_equation_error, score_tf_fit, table1, table3, Scorecard};
 use super::spec::{
     apply_overrides, identified_tfs_from_json, model_from_truth, truth_derivatives, Structure,
@@ -385,7 +385,11 @@ fn attribute_flights(
         else {
             continue;
         };
-        if e.terms.iter().map(|t| &t.name).ne(c.terms.iter().map(|t| &t.name)) {
+        if e.terms
+            .iter()
+            .map(|t| &t.name)
+            .ne(c.terms.iter().map(|t| &t.name))
+        {
             continue;
         }
         let record = if ["Cm", "CL"].contains(&c.coefficient) {
