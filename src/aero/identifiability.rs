@@ -933,6 +933,48 @@ mod tests {
     }
 
     #[test]
+    fn data_verdict_reports_a_highly_correlated_poorly_determined_pair_only_as_its_combination() {
+        // Two estimates p = (−16, 1.4), σ = (0.6, 5), ρ = −0.95, in z units with scale 1: the second is 360 %
+        // uncertain, the pair only as p₁ + c p₂ with c = −Cov₁₂/Var₂ = 0.95·0.6/5 = 0.114, whose σ is
+        // σ₁ √(1 − ρ²) = 0.187; a third, uncorrelated, 2 % estimate stays determined.
+        let ders = [D::Cmq, D::Cmalphadot, D::Cmde];
+        let values = [-16.0, 1.4, -1.25];
+        let scale = [1.0; 3];
+        let (s1, s2, s3, rho) = (0.6, 5.0, 0.025, -0.95);
+        let cov = Mat::from_fn(3, 3, |a, b| match (a, b) {
+            (0, 0) => s1 * s1,
+            (1, 1) => s2 * s2,
+            (2, 2) => s3 * s3,
+            (0, 1) | (1, 0) => rho * s1 * s2,
+            _ => 0.0,
+        });
+        match data_verdict(&cov, 0, &ders, &values, &scale) {
+            Verdict::Correlated {
+                partner,
+                rho: r,
+                value,
+                std_error,
+                ..
+            } => {
+                assert_eq!(partner, D::Cmalphadot);
+                assert!((r - rho).abs() < 1e-12);
+                let c = -rho * s1 * s2 / (s2 * s2);
+                assert!((value - (values[0] + c * values[1])).abs() < 1e-12);
+                assert!((std_error - s1 * (1.0 - rho * rho).sqrt()).abs() < 1e-12);
+            }
+            v => panic!("{v:?}"),
+        }
+        assert!(matches!(
+            data_verdict(&cov, 1, &ders, &values, &scale),
+            Verdict::Correlated { .. }
+        ));
+        match data_verdict(&cov, 2, &ders, &values, &scale) {
+            Verdict::Determined { relative_std } => assert!((relative_std - 0.02).abs() < 1e-12),
+            v => panic!("{v:?}"),
+        }
+    }
+
+    #[test]
     fn lateral_derivative_is_absent_from_the_pitch_transfer_function() {
         let m = c172x_model(Assumptions::paper());
         let r = analyse_identifiability(&m, &[D::Cmalpha, D::Clp], &[TfOutput::THETA_ELEVATOR])
