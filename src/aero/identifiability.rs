@@ -587,6 +587,13 @@ pub(crate) fn assess_estimate(
                 }
             }
         }
+        let mut explanation = explanation;
+        if separated_by.is_empty() && !matches!(verdict, Verdict::Determined { .. }) {
+            explanation.push_str(
+                " No extra transfer function of the same quality separates it (checked: every unused \
+                 output/input pair of its axis alone, in pairs and all together).",
+            );
+        }
         report.verdicts[k] = DerivativeVerdict {
             derivative: derivatives[k],
             verdict,

@@ -11,7 +11,9 @@ use super::fit::{estimate_derivatives, FitOptions, IdentifiedTf, IdentifiedTfs};
 use super::model::TfOutput;
 use super::params::Derivative as D;
 use super::regression::{EquationErrorOptions, EquationErrorResult};
-use super::score::{score_equation_error, score_tf_fit, table1, table3, Scorecard};
+use super::score::{
+    score_equation_error, score_tf_fit, table1, table3, ScoreRow, Scorecard,
+};
 use super::spec::{
     apply_overrides, identified_tfs_from_json, model_from_truth, truth_derivatives, Structure,
 };
@@ -378,6 +380,9 @@ pub fn run(
          C_D_CL², explained; a thrust model (ThrustModel::ConstantPower) or a throttle input would separate them."
             .into(),
     );
+    for card in &scorecards {
+        notes.push(targets_summary(card));
+    }
     Ok(Study {
         truth,
         modal_check,
@@ -387,6 +392,47 @@ pub fn run(
         equation_error_attribution: ee_attribution,
         notes,
     })
+}
+
+/// One sentence: which of the issue's accuracy targets a route meets, which it misses, and the 3σ coverage.
+pub fn targets_summary(card: &Scorecard) -> String {
+    let with_target: Vec<&ScoreRow> = card
+        .rows
+        .iter()
+        .filter(|r| r.target_percent.is_some())
+        .collect();
+    let list = |ok: bool| {
+        with_target
+            .iter()
+            .filter(|r| r.meets_target() == Some(ok))
+            .map(|r| {
+                format!(
+                    "{} {:+.1} % (≤ {:.0} %)",
+                    r.name,
+                    r.error_percent,
+                    r.target_percent.unwrap_or(f64::NAN)
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let (met, missed) = (list(true), list(false));
+    let covered = card
+        .rows
+        .iter()
+        .filter(|r| r.covered_3sigma == Some(true))
+        .count();
+    let judged = card
+        .rows
+        .iter()
+        .filter(|r| r.covered_3sigma.is_some())
+        .count();
+    format!(
+        "Targets, {}: met {}; missed {}. 3σ covers the truth for {covered} of {judged} estimates; each miss \
+         names its term (error attribution table).",
+        card.route,
+        if met.is_empty() { "none".to_string() } else { met.join(", ") },
+        if missed.is_empty() { "none".to_string() } else { missed.join(", ") },
+    )
 }
 
 /// Equation-error attribution of every equation of the doublet flights (C_m, C_L from the elevator flight;
