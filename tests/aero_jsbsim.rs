@@ -202,7 +202,9 @@ fn study_meets_targets_and_attributes_every_miss() {
         let label = if noisy { "noisy" } else { "clean" };
         let tf = &study.scorecards[0];
         let ee = &study.scorecards[1];
-        assert!(tf.route.starts_with("transfer functions") && ee.route.starts_with("equation error"));
+        assert!(
+            tf.route.starts_with("transfer functions") && ee.route.starts_with("equation error")
+        );
         assert_targets(tf, &["Cm_alpha", "Cm_de", CMQ_SUM], &format!("TF {label}"));
         assert_targets(
             ee,
@@ -226,7 +228,10 @@ fn study_meets_targets_and_attributes_every_miss() {
         // The α̇ alias of the equation-error C_mα is attributed to JSBSim's Cmadot function.
         let cm_alpha = ee.row("Cm_alpha").unwrap();
         assert!(
-            cm_alpha.attribution.iter().any(|t| t.term.starts_with("Cmadot") && t.share > 0.5),
+            cm_alpha
+                .attribution
+                .iter()
+                .any(|t| t.term.starts_with("Cmadot") && t.share > 0.5),
             "{label}: {:?}",
             cm_alpha.attribution
         );

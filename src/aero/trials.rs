@@ -311,6 +311,16 @@ pub fn equation_error_on(
     rec: &data::FlightRecord,
     truth: &AeroTruth,
 ) -> Result<EquationErrorResult, AeroError> {
+    equation_error_with(rec, truth, false)
+}
+
+/// [`equation_error_on`] with α̇ c̄/(2V) as a C_m regressor when `include_alphadot` (α measured and
+/// differentiated: the measurement that could separate C_mq from C_mα̇).
+pub fn equation_error_with(
+    rec: &data::FlightRecord,
+    truth: &AeroTruth,
+    include_alphadot: bool,
+) -> Result<EquationErrorResult, AeroError> {
     let col = |c: &str| rec.column(c);
     let record = FlightRecord {
         time_s: &rec.time_s,
@@ -337,6 +347,7 @@ pub fn equation_error_on(
         } else {
             data::G0_M_S2
         },
+        include_alphadot,
         ..EquationErrorOptions::default()
     };
     equation_error(
