@@ -708,7 +708,7 @@ def main():
                     sim.close()
                     sim = None
                 sim = Sim(req)
-                send({"ok": True, "knobs": sim.knobs, "added_terms": sorted(set(ADDED)),
+                send({"ok": True, "knobs": sim.knobs, "axes": AXIS_OF, "added_terms": sorted(set(ADDED)),
                       "jsbsim_version": jsbsim.__version__})
             elif cmd == "quit":
                 send({"ok": True})

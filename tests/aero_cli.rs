@@ -75,6 +75,27 @@ fn default_run_prints_tables_1_and_3_and_writes_json() {
             .iter()
             .any(|r| r["name"] == "Cm_de"));
     }
+    // Coverage-or-attribution in the JSON: every row outside its 3σ interval carries its attributed terms and
+    // a note naming the one responsible; the equation-error decomposition is there per equation.
+    for c in cards {
+        for r in c["rows"].as_array().unwrap() {
+            if r["covered_3sigma"] == false {
+                assert!(
+                    r["note"].as_str().unwrap().contains("because of")
+                        && !r["attribution"].as_array().unwrap().is_empty(),
+                    "{}: {}",
+                    r["name"],
+                    r["note"]
+                );
+            }
+        }
+    }
+    assert!(!v["equation_error_attribution"]
+        .as_array()
+        .unwrap()
+        .is_empty());
+    let md = std::fs::read_to_string(dir.join("report/report.md")).unwrap();
+    assert!(md.contains("error attribution of every miss"), "{md}");
     assert!(dir.join("report/index.html").exists());
 }
 

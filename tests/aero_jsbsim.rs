@@ -175,3 +175,82 @@ fn transfer_function_route_on_doublets() {
         }
     }
 }
+
+/// The whole study (`flightid derivatives`), noise-free and with realistic sensor noise, paper structure:
+/// the accuracy targets per route, and the coverage-or-attribution rule — every estimate whose 3σ
+/// interval misses the truth names the term responsible (its attribution has a term with a positive share), and
+/// the equation-error decomposition adds up to estimate − truth to round-off.
+/// Measured (120 Hz, clean/noisy): TF C_mα +8/+4 %, C_mδe −2/−8 %, C_mq + C_mα̇ +11/−4 %; EE C_mδe +2/+5 %,
+/// C_mq + C_mα̇ +7/+6 %, C_lp +1/+1 %, C_lδa −0.4/−0.5 %, C_nβ +2/+2 %, C_nδr −1/−0.4 %; EE C_mα +17/+22 % (the
+/// α̇ alias, attributed to Cmadot).
+#[test]
+fn study_meets_targets_and_attributes_every_miss() {
+    use flightid::aero::study::{run, Source, StudyOptions};
+    // 120 Hz, the CLI's default (at 60 Hz the TF route's C_mq + C_mα̇ is +16 %, just outside its target).
+    let (mut sim, point, _) = trimmed(120.0);
+    for noisy in [false, true] {
+        let opts = StudyOptions {
+            source: Source::Fly(TrialOptions {
+                rate_hz: 120.0,
+                ..options(noisy)
+            }),
+            structure: Structure::Paper,
+            free: None,
+            start_factor: 1.2,
+        };
+        let study = run(&mut sim, &point, &opts).unwrap();
+        let label = if noisy { "noisy" } else { "clean" };
+        let tf = &study.scorecards[0];
+        let ee = &study.scorecards[1];
+        assert!(
+            tf.route.starts_with("transfer functions") && ee.route.starts_with("equation error")
+        );
+        assert_targets(tf, &["Cm_alpha", "Cm_de", CMQ_SUM], &format!("TF {label}"));
+        assert_targets(
+            ee,
+            &["Cm_de", CMQ_SUM, "Cl_p", "Cl_da", "Cn_beta", "Cn_dr"],
+            &format!("EE {label}"),
+        );
+        for card in [tf, ee] {
+            for r in &card.rows {
+                if r.covered_3sigma == Some(false) {
+                    let main = r.attribution.iter().find(|t| t.share > 0.0);
+                    assert!(
+                        main.is_some() && r.note.contains("because of"),
+                        "{label} {}: {} misses 3σ without an attributed term: {:?}",
+                        card.route,
+                        r.name,
+                        r.note
+                    );
+                }
+            }
+        }
+        // The α̇ alias of the equation-error C_mα is attributed to JSBSim's Cmadot function.
+        let cm_alpha = ee.row("Cm_alpha").unwrap();
+        assert!(
+            cm_alpha
+                .attribution
+                .iter()
+                .any(|t| t.term.starts_with("Cmadot") && t.share > 0.5),
+            "{label}: {:?}",
+            cm_alpha.attribution
+        );
+        for e in &study.equation_error_attribution {
+            for (j, c) in e.closure().iter().enumerate() {
+                if e.error[j].is_finite() {
+                    assert!(
+                        c.abs() < 1e-9 * e.error[j].abs().max(1e-6),
+                        "{label} {}: parts do not add up: {c}",
+                        e.terms[j]
+                    );
+                }
+            }
+        }
+        // Identifiability at the data's uncertainty: C_mα̇ is not reported as determined on its own.
+        assert!(
+            !study.identifiability.contains("Cm_alphadot  determined"),
+            "{label}: {}",
+            study.identifiability
+        );
+    }
+}

@@ -13,8 +13,8 @@
 
 use faer::{Mat, Side};
 
-use super::identifiability::{analyse_with_weights, IdentifiabilityReport};
-use super::model::{AeroModel, TfOutput};
+use super::identifiability::{analyse_with_weights, assess_estimate, IdentifiabilityReport};
+use super::model::{AeroModel, Axis, TfOutput};
 use super::params::Derivative;
 use super::AeroError;
 
@@ -93,6 +93,9 @@ pub struct DerivativeEstimate {
     pub covariance: Mat<f64>,
     /// Final weighted cost ‖W^{1/2} r‖².
     pub cost: f64,
+    /// Per free derivative, the scale applied to its axis' block of (JᵀWJ)⁻¹: that axis' reduced χ²
+    /// cost/(N − rank) (≥ 1 with a coefficient covariance).
+    pub covariance_scale: Vec<f64>,
     /// Iterations used.
     pub iterations: usize,
     /// Identifiability of each free derivative at the estimate.
@@ -415,20 +418,81 @@ pub fn estimate_derivatives(
         .iter()
         .filter(|&&x| x > options.null_tolerance * s_max)
         .count();
-    let sigma2 = if target.from_covariance {
-        1.0
-    } else if target.coefficients.len() > rank {
-        cost / (target.coefficients.len() - rank) as f64
-    } else {
-        f64::NAN
+    // With a coefficient covariance the residual should be χ²(N − rank); when the cost is larger the model
+    // cannot reproduce the identified coefficients within their stated uncertainty (model-structure error or
+    // an identification bias the covariance does not hold), and the covariance is scaled by the reduced χ²
+    // (fit-error scaling, Morelli & Klein §6.2.3; Seber & Wild §2.1.3), never below 1. The axes are
+    // decoupled (the Jacobian is block-diagonal), so each axis gets its own scale from its own residuals.
+    let row_axis: Vec<Axis> = target
+        .outputs
+        .iter()
+        .zip(&target.num_lengths)
+        .flat_map(|(o, &len)| std::iter::repeat_n(o.axis, 4 + len))
+        .collect();
+    let axis_of = |d: Derivative| {
+        if d.is_longitudinal() {
+            Axis::Longitudinal
+        } else {
+            Axis::Lateral
+        }
     };
-    let v = svd.V();
     let p = free.len();
+    let mut axis_sigma2: Vec<(Axis, f64, f64)> = Vec::new(); // (axis, σ², typical relative coefficient σ)
+    for axis in [Axis::Longitudinal, Axis::Lateral] {
+        let rows: Vec<usize> = (0..row_axis.len())
+            .filter(|&i| row_axis[i] == axis)
+            .collect();
+        let cols: Vec<usize> = (0..p).filter(|&k| axis_of(free[k]) == axis).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let sub = Mat::from_fn(rows.len(), cols.len(), |i, k| jac[(rows[i], cols[k])]);
+        let rank_g = if cols.is_empty() {
+            0
+        } else {
+            let sv: Vec<f64> = sub
+                .singular_values()
+                .map_err(|_| AeroError::Numerical("SVD of the Jacobian"))?;
+            let top = sv.first().copied().unwrap_or(0.0);
+            sv.iter()
+                .filter(|&&x| x > options.null_tolerance * top && top > 0.0)
+                .count()
+        };
+        let cost_g: f64 = rows.iter().map(|&i| r[i] * r[i]).sum();
+        let dof = rows.len().saturating_sub(rank_g);
+        let s2 = if target.from_covariance {
+            if dof > 0 {
+                (cost_g / dof as f64).max(1.0)
+            } else {
+                1.0
+            }
+        } else if dof > 0 {
+            cost_g / dof as f64
+        } else {
+            f64::NAN
+        };
+        let mut rel: Vec<f64> = rows
+            .iter()
+            .map(|&i| s2.sqrt() / (target.whitening[(i, i)] * target.coefficients[i]).abs())
+            .filter(|x| x.is_finite() && *x > 0.0)
+            .collect();
+        rel.sort_by(f64::total_cmp);
+        let eps = rel.get(rel.len() / 2).copied().unwrap_or(f64::NAN);
+        axis_sigma2.push((axis, s2, eps));
+    }
+    let sigma2_of = |d: Derivative| {
+        axis_sigma2
+            .iter()
+            .find(|(a, _, _)| *a == axis_of(d))
+            .map_or(f64::NAN, |x| x.1)
+    };
+    let covariance_scale: Vec<f64> = free.iter().map(|&d| sigma2_of(d)).collect();
+    let v = svd.V();
     let covariance = Mat::from_fn(p, p, |a, b| {
         let z: f64 = (0..rank)
             .map(|i| v[(a, i)] * v[(b, i)] / (s[i] * s[i]))
             .sum();
-        z * scale[a] * scale[b] * sigma2
+        z * scale[a] * scale[b] * (covariance_scale[a] * covariance_scale[b]).sqrt()
     });
     let std_error = (0..p)
         .map(|k| {
@@ -439,6 +503,26 @@ pub fn estimate_derivatives(
             }
         })
         .collect();
+    // Data-based verdicts: the same Jacobian at the coefficients' actual uncertainty (module doc of
+    // `identifiability`, `assess_estimate`). Needs a finite σ².
+    let mut identifiability = identifiability;
+    if covariance_scale.iter().all(|x| x.is_finite() && *x > 0.0) {
+        let information = Mat::from_fn(p, p, |a, b| {
+            (0..jac.nrows())
+                .map(|i| jac[(i, a)] * jac[(i, b)])
+                .sum::<f64>()
+                / (covariance_scale[a] * covariance_scale[b]).sqrt()
+        });
+        let eps: Vec<(Axis, f64)> = axis_sigma2.iter().map(|&(a, _, e)| (a, e)).collect();
+        assess_estimate(
+            &mut identifiability,
+            &model,
+            &values,
+            &scale,
+            &information,
+            &eps,
+        )?;
+    }
     Ok(DerivativeEstimate {
         model,
         free: free.to_vec(),
@@ -446,6 +530,7 @@ pub fn estimate_derivatives(
         std_error,
         covariance,
         cost,
+        covariance_scale,
         iterations,
         identifiability,
     })

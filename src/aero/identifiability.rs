@@ -55,6 +55,22 @@ pub enum Verdict {
         /// The determined combination in words, e.g. `Cm_q + 1.0000·Cm_alphadot`.
         combination: String,
     },
+    /// Determined by the structure, but at the identified transfer functions' actual uncertainty the estimate
+    /// is so strongly correlated with a partner that only their combination is reliable.
+    Correlated {
+        /// The most correlated other derivative.
+        partner: Derivative,
+        /// Correlation coefficient of the two estimates.
+        rho: f64,
+        /// Relative standard error of this estimate, σ/|estimate|.
+        relative_std: f64,
+        /// The best-determined combination, e.g. `Cm_q + 0.9312·Cm_alphadot`.
+        combination: String,
+        /// The combination's estimate.
+        value: f64,
+        /// Its standard error.
+        std_error: f64,
+    },
     /// It does not enter these transfer functions at all.
     Absent,
 }
@@ -85,6 +101,9 @@ pub struct IdentifiabilityReport {
     pub null_space: Vec<Vec<f64>>,
     /// One verdict per derivative, in `derivatives` order.
     pub verdicts: Vec<DerivativeVerdict>,
+    /// Correlation matrix of the estimates at the identified transfer functions' uncertainty (`derivatives`
+    /// order), when the verdicts come from an estimate ([`assess_estimate`]); empty otherwise.
+    pub correlation: Vec<Vec<f64>>,
 }
 
 impl IdentifiabilityReport {
@@ -92,7 +111,10 @@ impl IdentifiabilityReport {
     pub fn is_determined(&self, d: Derivative) -> bool {
         self.verdicts.iter().any(|v| {
             v.derivative == d
-                && matches!(v.verdict, Verdict::Determined { .. } | Verdict::Weak { .. })
+                && matches!(
+                    v.verdict,
+                    Verdict::Determined { .. } | Verdict::Weak { .. } | Verdict::Correlated { .. }
+                )
         })
     }
 
@@ -310,6 +332,287 @@ fn verdict_of(core: &Core, k: usize, derivatives: &[Derivative], scale: &[f64]) 
     }
 }
 
+/// Pairwise correlation above which two estimates, one of them with a relative standard error above
+/// [`WEAK_RELATIVE_SE`], are reported only as a combination: at |ρ| = 0.8 the partner's uncertainty already
+/// makes up 64 % of this estimate's variance (ρ² of it, Morelli & Klein §5.4), so a poorly determined partner
+/// drags this estimate with it.
+const COMBINATION_CORRELATION: f64 = HIGH_CORRELATION;
+/// Relative standard error σ/|estimate| above which an estimate is weakly determined (20 %: its 3σ interval
+/// spans more than ±60 % of the value).
+const WEAK_RELATIVE_SE: f64 = 0.2;
+
+/// Pseudo-inverse of a symmetric positive semi-definite matrix (eigenvalues below 1e-12 of the largest dropped).
+fn pinv_symmetric(m: &Mat<f64>) -> Result<Mat<f64>, AeroError> {
+    let n = m.nrows();
+    let svd = m
+        .svd()
+        .map_err(|_| AeroError::Numerical("SVD of the information matrix"))?;
+    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    let s_max = s.first().copied().unwrap_or(0.0);
+    let (u, v) = (svd.U(), svd.V());
+    Ok(Mat::from_fn(n, n, |a, b| {
+        (0..s.len())
+            .filter(|&i| s[i] > 1e-12 * s_max)
+            .map(|i| v[(a, i)] * u[(b, i)] / s[i])
+            .sum()
+    }))
+}
+
+/// Data-based verdict of estimate `k` from the covariance of the scaled parameters (see [`assess_estimate`]).
+fn data_verdict(
+    cov_z: &Mat<f64>,
+    k: usize,
+    derivatives: &[Derivative],
+    values: &[f64],
+    scale: &[f64],
+) -> Verdict {
+    let phys = |a: usize, b: usize| cov_z[(a, b)] * scale[a] * scale[b];
+    let rse = |a: usize| {
+        let mag = if values[a].abs() > 1e-12 {
+            values[a].abs()
+        } else {
+            scale[a]
+        };
+        phys(a, a).max(0.0).sqrt() / mag
+    };
+    let relative_std = rse(k);
+    let partner = (0..derivatives.len())
+        .filter(|&j| j != k && phys(j, j) > 0.0 && phys(k, k) > 0.0)
+        .map(|j| (j, phys(k, j) / (phys(k, k) * phys(j, j)).sqrt()))
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
+    if let Some((j, rho)) = partner {
+        if rho.abs() >= COMBINATION_CORRELATION && relative_std.max(rse(j)) > WEAK_RELATIVE_SE {
+            // The minimum-variance combination p_k + c p_j: c = −Cov(k, j)/Var(j).
+            let c = -phys(k, j) / phys(j, j);
+            let var = phys(k, k) + 2.0 * c * phys(k, j) + c * c * phys(j, j);
+            return Verdict::Correlated {
+                partner: derivatives[j],
+                rho,
+                relative_std,
+                combination: format!(
+                    "{} {} {:.4}·{}",
+                    derivatives[k].name(),
+                    if c >= 0.0 { "+" } else { "−" },
+                    c.abs(),
+                    derivatives[j].name()
+                ),
+                value: values[k] + c * values[j],
+                std_error: var.max(0.0).sqrt(),
+            };
+        }
+    }
+    if relative_std > WEAK_RELATIVE_SE {
+        let correlated_with = partner
+            .filter(|(_, rho)| rho.abs() > HIGH_CORRELATION)
+            .map(|(j, rho)| (derivatives[j], rho));
+        Verdict::Weak {
+            relative_std,
+            correlated_with,
+        }
+    } else {
+        Verdict::Determined { relative_std }
+    }
+}
+
+/// Re-judges the verdicts of `report` at an estimate, from the estimate's own covariance: the honest
+/// identifiability at the identified transfer functions' actual uncertainty, not only the noise-free Jacobian.
+///
+/// With J the whitened Jacobian of the coefficients with respect to the scaled parameters z (p = p₀ + s ⊙ z),
+/// Cov(ẑ) = σ² (JᵀJ)⁺ (Gauss–Newton; Morelli & Klein eq. 6.20 for output error, the same form as the
+/// least-squares eq. 5.12), and ρ_kj = Cov_kj/√(Cov_kk Cov_jj). A derivative structurally determined is then
+/// - "only as a combination" when |ρ| ≥ 0.9 with a partner and either has σ/|p̂| > 20 %, with the
+///   minimum-variance combination p_k − (Cov_kj/Cov_jj) p_j and its estimate;
+/// - weak when σ/|p̂| > 20 %;
+/// - determined otherwise.
+///
+/// For every verdict short of "determined", each unused output/input pair of the axis is added as a
+/// hypothetical extra measurement of the same relative quality (`coefficient_rel_std` on each of its
+/// coefficients), the information matrix is updated, I = JᵀJ/σ² + J_oᵀW_oJ_o, and the verdict re-judged: the
+/// pairs that make the derivative determined are the measurements that would separate it (a numerical check,
+/// not an assertion).
+pub(crate) fn assess_estimate(
+    report: &mut IdentifiabilityReport,
+    model: &AeroModel,
+    values: &[f64],
+    scale: &[f64],
+    information_z: &Mat<f64>,
+    coefficient_rel_std: &[(Axis, f64)],
+) -> Result<(), AeroError> {
+    let derivatives = report.derivatives.clone();
+    let p = derivatives.len();
+    let cov_z = pinv_symmetric(information_z)?;
+    report.correlation = (0..p)
+        .map(|a| {
+            (0..p)
+                .map(|b| cov_z[(a, b)] / (cov_z[(a, a)] * cov_z[(b, b)]).sqrt())
+                .collect()
+        })
+        .collect();
+    let axes: Vec<Axis> = {
+        let mut a: Vec<Axis> = report.outputs.iter().map(|o| o.axis).collect();
+        a.dedup();
+        a
+    };
+    let candidates: Vec<TfOutput> = axes
+        .iter()
+        .flat_map(|&axis| {
+            (0..4).flat_map(move |state| {
+                (0..axis.input_names().len()).map(move |input| TfOutput { axis, state, input })
+            })
+        })
+        .filter(|o| !report.outputs.contains(o))
+        .collect();
+    // Whitened Jacobian of each candidate's coefficients, z units, weights 1/(ε |c|).
+    let h = 1e-6;
+    let mut extra_info = Vec::with_capacity(candidates.len());
+    for &o in &candidates {
+        let len = natural_num_length(o);
+        let eps = coefficient_rel_std
+            .iter()
+            .find(|(a, _)| *a == o.axis)
+            .map_or(f64::NAN, |x| x.1);
+        let c0 = model_coefficients(model, &[o], &[len])?;
+        let w = relative_whitening(&c0, &[len]);
+        let mut jac = Mat::<f64>::zeros(c0.len(), p);
+        for k in 0..p {
+            let mut up = values.to_vec();
+            let mut dn = values.to_vec();
+            up[k] += h * scale[k];
+            dn[k] -= h * scale[k];
+            let cu = model_coefficients(&with_values(model, &derivatives, &up), &[o], &[len])?;
+            let cd = model_coefficients(&with_values(model, &derivatives, &dn), &[o], &[len])?;
+            for i in 0..c0.len() {
+                jac[(i, k)] = w[(i, i)] * (cu[i] - cd[i]) / (2.0 * h) / eps;
+            }
+        }
+        extra_info.push(jac.transpose() * &jac);
+    }
+    for k in 0..p {
+        let structural = &report.verdicts[k].verdict;
+        if !matches!(
+            structural,
+            Verdict::Determined { .. } | Verdict::Weak { .. }
+        ) {
+            continue;
+        }
+        let verdict = data_verdict(&cov_z, k, &derivatives, values, scale);
+        let name = derivatives[k].name();
+        let explanation = match &verdict {
+            Verdict::Determined { relative_std } => format!(
+                "determined: relative standard error {:.1} % at the identified transfer functions' uncertainty.",
+                100.0 * relative_std
+            ),
+            Verdict::Weak {
+                relative_std,
+                correlated_with,
+            } => {
+                let mut t = format!(
+                    "weakly determined: relative standard error {:.0} % at the identified transfer functions' \
+                     uncertainty.",
+                    100.0 * relative_std
+                );
+                if let Some((other, rho)) = correlated_with {
+                    let _ = write!(t, " Correlated with {other} (ρ = {rho:+.3}).");
+                }
+                t
+            }
+            Verdict::Correlated {
+                partner,
+                rho,
+                relative_std,
+                combination,
+                value,
+                std_error,
+            } => format!(
+                "only as a combination: its estimate is correlated with {partner} (ρ = {rho:+.3}; σ/|{name}| = \
+                 {:.0} %), so the data fix only {combination} = {value:.4} ± {std_error:.4} (1σ).",
+                100.0 * relative_std
+            ),
+            _ => unreachable!("data_verdict gives Determined, Weak or Correlated"),
+        };
+        let mut separated_by = Vec::new();
+        if !matches!(verdict, Verdict::Determined { .. }) {
+            let words = |info: &Mat<f64>, what: String| -> Result<Option<String>, AeroError> {
+                let cz = pinv_symmetric(info)?;
+                Ok(match data_verdict(&cz, k, &derivatives, values, scale) {
+                    Verdict::Determined { relative_std } => Some(format!(
+                        "{what} (σ/|{name}| {:.0} % → {:.1} %)",
+                        100.0 * rse_of(&verdict),
+                        100.0 * relative_std
+                    )),
+                    _ => None,
+                })
+            };
+            let own: Vec<usize> = (0..candidates.len())
+                .filter(|&c| {
+                    (candidates[c].axis == Axis::Longitudinal) == derivatives[k].is_longitudinal()
+                })
+                .collect();
+            for &c in &own {
+                let total = information_z + &extra_info[c];
+                if let Some(w) = words(&total, measurement_words(candidates[c]))? {
+                    separated_by.push(w);
+                }
+            }
+            if separated_by.is_empty() {
+                // No single extra measurement suffices: pairs of them.
+                for (x, &a) in own.iter().enumerate() {
+                    for &b in &own[x + 1..] {
+                        let total = &(information_z + &extra_info[a]) + &extra_info[b];
+                        let what = format!(
+                            "{} together with {}",
+                            measurement_words(candidates[a]),
+                            measurement_words(candidates[b])
+                        );
+                        if separated_by.len() < 3 {
+                            if let Some(w) = words(&total, what)? {
+                                separated_by.push(w);
+                            }
+                        }
+                    }
+                }
+            }
+            if separated_by.is_empty() && !own.is_empty() {
+                let mut total = information_z.clone();
+                for &c in &own {
+                    total = &total + &extra_info[c];
+                }
+                let all = own
+                    .iter()
+                    .map(|&c| candidates[c].label())
+                    .collect::<Vec<_>>()
+                    .join(" + ");
+                if let Some(w) = words(&total, format!("all of {all}"))? {
+                    separated_by.push(w);
+                }
+            }
+        }
+        let mut explanation = explanation;
+        if separated_by.is_empty() && !matches!(verdict, Verdict::Determined { .. }) {
+            explanation.push_str(
+                " No extra transfer function of the same quality separates it (checked: every unused \
+                 output/input pair of its axis alone, in pairs and all together).",
+            );
+        }
+        report.verdicts[k] = DerivativeVerdict {
+            derivative: derivatives[k],
+            verdict,
+            explanation,
+            separated_by,
+        };
+    }
+    Ok(())
+}
+
+fn rse_of(v: &Verdict) -> f64 {
+    match v {
+        Verdict::Determined { relative_std }
+        | Verdict::Weak { relative_std, .. }
+        | Verdict::Correlated { relative_std, .. } => *relative_std,
+        _ => f64::NAN,
+    }
+}
+
 /// Numerator length that covers the model: attitude outputs (θ, φ) have relative degree 2 (3 coefficients),
 /// every other state relative degree 1 (4 coefficients).
 fn natural_num_length(o: TfOutput) -> usize {
@@ -413,6 +716,9 @@ pub(crate) fn analyse_with_weights(
                 }
             }
             Verdict::Absent => format!("{name} does not enter these transfer functions."),
+            Verdict::Correlated { .. } => {
+                unreachable!("only assess_estimate judges by correlation")
+            }
         };
         let mut separated_by = Vec::new();
         if !matches!(verdict, Verdict::Determined { .. }) {
@@ -462,6 +768,7 @@ pub(crate) fn analyse_with_weights(
         singular_values: c.singular_values,
         null_space,
         verdicts,
+        correlation: Vec::new(),
     })
 }
 
@@ -630,6 +937,48 @@ mod tests {
             "{}",
             r.to_text()
         );
+    }
+
+    #[test]
+    fn data_verdict_reports_a_highly_correlated_poorly_determined_pair_only_as_its_combination() {
+        // Two estimates p = (−16, 1.4), σ = (0.6, 5), ρ = −0.95, in z units with scale 1: the second is 360 %
+        // uncertain, the pair only as p₁ + c p₂ with c = −Cov₁₂/Var₂ = 0.95·0.6/5 = 0.114, whose σ is
+        // σ₁ √(1 − ρ²) = 0.187; a third, uncorrelated, 2 % estimate stays determined.
+        let ders = [D::Cmq, D::Cmalphadot, D::Cmde];
+        let values = [-16.0, 1.4, -1.25];
+        let scale = [1.0; 3];
+        let (s1, s2, s3, rho) = (0.6, 5.0, 0.025, -0.95);
+        let cov = Mat::from_fn(3, 3, |a, b| match (a, b) {
+            (0, 0) => s1 * s1,
+            (1, 1) => s2 * s2,
+            (2, 2) => s3 * s3,
+            (0, 1) | (1, 0) => rho * s1 * s2,
+            _ => 0.0,
+        });
+        match data_verdict(&cov, 0, &ders, &values, &scale) {
+            Verdict::Correlated {
+                partner,
+                rho: r,
+                value,
+                std_error,
+                ..
+            } => {
+                assert_eq!(partner, D::Cmalphadot);
+                assert!((r - rho).abs() < 1e-12);
+                let c = -rho * s1 * s2 / (s2 * s2);
+                assert!((value - (values[0] + c * values[1])).abs() < 1e-12);
+                assert!((std_error - s1 * (1.0 - rho * rho).sqrt()).abs() < 1e-12);
+            }
+            v => panic!("{v:?}"),
+        }
+        assert!(matches!(
+            data_verdict(&cov, 1, &ders, &values, &scale),
+            Verdict::Correlated { .. }
+        ));
+        match data_verdict(&cov, 2, &ders, &values, &scale) {
+            Verdict::Determined { relative_std } => assert!((relative_std - 0.02).abs() < 1e-12),
+            v => panic!("{v:?}"),
+        }
     }
 
     #[test]

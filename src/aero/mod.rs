@@ -11,6 +11,8 @@
 //! - [`model`]: longitudinal (u, α, q, θ) and lateral (β, p, r, φ) state space, θ/δe, φ/δa, φ/δr, modes.
 //! - [`fit`]: derivatives from identified transfer functions by Levenberg–Marquardt, with covariance.
 //! - [`identifiability`]: which derivatives a set of transfer functions determines, in plain words.
+//! - [`attribution`]: why an estimate misses the truth, term by term (TF route by releasing assumptions,
+//!   equation error by projecting each JSBSim coefficient function's remainder on the regressors).
 //! - [`regression`]: equation-error estimates from flight-data channels (SIDPAC `lesq` style) and the
 //!   Savitzky–Golay differentiator it needs.
 //!
@@ -23,6 +25,7 @@
 //! Transfer functions are computed by a private Faddeev–LeVerrier recursion (exact for these 4×4 systems);
 //! `crate::lti` offers the general `ss2tf`.
 
+pub mod attribution;
 pub mod fit;
 pub mod identifiability;
 pub mod model;

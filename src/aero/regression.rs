@@ -123,6 +123,10 @@ pub struct RegressionResult {
     pub r_squared: f64,
     /// Fit error standard deviation s.
     pub fit_error_std: f64,
+    /// The regressor columns X as used (smoothed when the options say so), in `terms` order.
+    pub regressors: Vec<Vec<f64>>,
+    /// The response z (the coefficient reconstructed from the motion).
+    pub response: Vec<f64>,
 }
 
 impl RegressionResult {
@@ -385,6 +389,8 @@ fn lesq(
         terms,
         r_squared: if sst > 0.0 { 1.0 - sse / sst } else { f64::NAN },
         fit_error_std: s2.sqrt(),
+        regressors: columns.to_vec(),
+        response: z.to_vec(),
     })
 }
 

@@ -36,6 +36,8 @@ pub struct ScoreRow {
     pub verdict: String,
     /// Why an estimate misses, when a model-structure term is known to be responsible.
     pub note: String,
+    /// The error taken apart term by term (`aero::attribution`), largest share first; empty when not done.
+    pub attribution: Vec<super::attribution::TermShare>,
 }
 
 impl ScoreRow {
@@ -76,6 +78,7 @@ fn row(name: &str, truth: f64, estimate: f64, std_error: f64) -> ScoreRow {
         target_percent: None,
         verdict: String::new(),
         note: String::new(),
+        attribution: Vec::new(),
     }
 }
 
@@ -117,6 +120,7 @@ fn verdict_word(v: &Verdict) -> String {
         Verdict::Determined { .. } => "determined".into(),
         Verdict::Weak { .. } => "weak".into(),
         Verdict::Combination { combination, .. } => format!("only {combination}"),
+        Verdict::Correlated { partner, .. } => format!("only with {partner}"),
         Verdict::Absent => "absent".into(),
     }
 }

@@ -4,21 +4,27 @@
 use serde::Serialize;
 use serde_json::{json, Value};
 
-use super::fit::{estimate_derivatives, FitOptions, IdentifiedTfs};
+use super::attribution::{
+    self, attribute_equation_error, attribute_tf_fit, CoefficientProbe, EquationAttribution,
+};
+use super::fit::{estimate_derivatives, FitOptions, IdentifiedTf, IdentifiedTfs};
 use super::model::TfOutput;
 use super::params::Derivative as D;
-use super::score::{score_equation_error, score_tf_fit, table1, table3, Scorecard};
+use super::regression::{EquationErrorOptions, EquationErrorResult};
+use super::score::{score_equation_error, score_tf_fit, table1, table3, ScoreRow, Scorecard};
 use super::spec::{
     apply_overrides, identified_tfs_from_json, model_from_truth, truth_derivatives, Structure,
 };
 use super::trials::{
-    equation_error_flights, equation_error_on, fly_doublets, identify_paper_tfs, TrialOptions,
+    equation_error_flights, equation_error_on, fly_doublets, identify_paper_tfs, Flights,
+    TrialOptions,
 };
 use super::AeroError;
 use crate::data;
 use crate::report::{Report, Section, Table};
 use crate::sim::jsbsim::AeroTruth;
-use crate::sim::linear::submodel_modes;
+use crate::sim::linear::{paper_transfer_functions, submodel_modes};
+use crate::sim::Linearization;
 use crate::sim::{JsbsimSim, Simulator, TrimPoint};
 
 /// Where the estimates come from.
@@ -105,11 +111,16 @@ pub struct Study {
     pub scorecards: Vec<Scorecard>,
     /// The identifiability analysis of the transfer-function route, in words.
     pub identifiability: String,
+    /// The equation-error estimates' errors taken apart by JSBSim coefficient function (flights only).
+    pub equation_error_attribution: Vec<EquationAttribution>,
     /// Statements the reader needs (what was dropped and why, what the data cannot give).
     pub notes: Vec<String>,
 }
 
-fn modal_check(sim: &mut JsbsimSim, truth: &AeroTruth) -> Result<Vec<ModalCheck>, AeroError> {
+fn modal_check(
+    sim: &mut JsbsimSim,
+    truth: &AeroTruth,
+) -> Result<(Vec<ModalCheck>, Linearization), AeroError> {
     let lin = sim.linearize()?;
     let jsb = submodel_modes(&lin)?;
     let osc = |k: &str| {
@@ -141,12 +152,47 @@ fn modal_check(sim: &mut JsbsimSim, truth: &AeroTruth) -> Result<Vec<ModalCheck>
         full: f(per[1]),
         jsbsim: j,
     };
-    Ok(vec![
-        row("short period ωn, rad/s", &|p| p.0 .0, sp_j.0),
-        row("short period ζ", &|p| p.0 .1, sp_j.1),
-        row("Dutch roll ωn, rad/s", &|p| p.1 .0, dr_j.0),
-        row("Dutch roll ζ", &|p| p.1 .1, dr_j.1),
-    ])
+    Ok((
+        vec![
+            row("short period ωn, rad/s", &|p| p.0 .0, sp_j.0),
+            row("short period ζ", &|p| p.0 .1, sp_j.1),
+            row("Dutch roll ωn, rad/s", &|p| p.1 .0, dr_j.0),
+            row("Dutch roll ζ", &|p| p.1 .1, dr_j.1),
+        ],
+        lin,
+    ))
+}
+
+/// The paper's transfer functions of JSBSim's linearization (decoupled submodels, per radian of surface), as
+/// identified transfer functions with the numerator lengths of `like` (what a perfect identification of the
+/// linearized aircraft would give).
+pub fn linearization_tfs(
+    lin: &Linearization,
+    like: &IdentifiedTfs,
+) -> Result<IdentifiedTfs, AeroError> {
+    let tfs = paper_transfer_functions(lin)?;
+    let mut out = IdentifiedTfs::default();
+    for (o, t) in &like.tfs {
+        let key = match *o {
+            TfOutput::THETA_ELEVATOR => "theta/elevator",
+            TfOutput::PHI_AILERON => "phi/aileron",
+            TfOutput::PHI_RUDDER => "phi/rudder",
+            _ => continue,
+        };
+        let Some(tf) = tfs.get(key) else { continue };
+        let len = t.num.len();
+        let mut num = vec![0.0; len.saturating_sub(tf.num.len())];
+        num.extend(&tf.num[tf.num.len().saturating_sub(len)..]);
+        out.tfs.push((
+            *o,
+            IdentifiedTf {
+                num,
+                den: tf.den.clone(),
+                covariance: None,
+            },
+        ));
+    }
+    Ok(out)
 }
 
 /// Runs the study on a trimmed simulator (`point` is re-trimmed before each flight).
@@ -157,7 +203,7 @@ pub fn run(
 ) -> Result<Study, AeroError> {
     sim.trim(point)?;
     let truth = sim.aero_truth()?;
-    let modal_check = modal_check(sim, &truth)?;
+    let (modal_check, lin) = modal_check(sim, &truth)?;
     let mut notes = vec![
         "Truth: the derivatives the JSBSim model itself uses at this trim (its coefficient functions, tables \
          included, differenced; moments about the CG). TF-route scores are in stability axes, \
@@ -171,9 +217,16 @@ pub fn run(
     let mut tfs = IdentifiedTfs::default();
     let mut identified = Vec::new();
     let mut ee = None;
+    let mut ee_attribution = Vec::new();
     match &opts.source {
         Source::Fly(trial) => {
-            let flights = fly_doublets(sim, point, trial)?;
+            // Record every coefficient function along the flights for the error attribution.
+            sim.extra_record = attribution::recorded_properties(&sim.coefficient_axes);
+            let flown = fly_doublets(sim, point, trial);
+            sim.extra_record.clear();
+            let flights = flown?;
+            sim.trim(point)?;
+            let probe = attribution::probe_coefficients(sim)?;
             let (all, results) = identify_paper_tfs(&flights, trial)?;
             for (o, r) in &results {
                 identified.push(IdentifiedSummary {
@@ -212,7 +265,24 @@ pub fn run(
                         .into(),
                 );
             }
-            ee = Some(equation_error_flights(&flights, &truth)?);
+            notes.push(alphadot_separation_note(
+                flights.noise_free.as_deref().unwrap_or(&flights),
+                &truth,
+            )?);
+            let noisy_ee = equation_error_flights(&flights, &truth)?;
+            let clean_ee = match &flights.noise_free {
+                Some(clean) => Some(equation_error_flights(clean, &truth)?),
+                None => None,
+            };
+            let clean_flights = flights.noise_free.as_deref().unwrap_or(&flights);
+            ee_attribution = attribute_flights(
+                clean_ee.as_ref().unwrap_or(&noisy_ee),
+                &noisy_ee,
+                clean_flights,
+                &probe,
+                &truth,
+            )?;
+            ee = Some(noisy_ee);
         }
         Source::Identified(docs) => {
             identified_tfs_from_json(docs, &mut tfs)?;
@@ -257,19 +327,49 @@ pub fn run(
         }
         let est = estimate_derivatives(&prior, &tfs, &free, FitOptions::default())?;
         identifiability = est.identifiability.to_text();
-        scorecards.push(score_tf_fit(&est, &model.derivatives, opts.structure));
+        let mut card = score_tf_fit(&est, &model.derivatives, opts.structure);
+        let lin_tfs = linearization_tfs(&lin, &tfs)?;
+        let attributions =
+            attribute_tf_fit(&prior, &tfs, Some(&lin_tfs), &free, &model.derivatives)?;
+        attribution::apply(&mut card, &attributions);
+        scorecards.push(card);
         notes.push(format!(
-            "TF route: free derivatives start at {:.0} % of the truth; the others are held at the model's values.",
-            100.0 * opts.start_factor
+            "TF route: free derivatives start at {:.0} % of the truth; the others are held at the model's values. \
+             Standard errors are scaled per axis by the reduced χ² of the coefficient fit when it exceeds 1 \
+             (here {}): the model reproduces the identified coefficients only to that many times their stated \
+             variance, so the identified TFs' own covariance would overstate the precision.",
+            100.0 * opts.start_factor,
+            {
+                let mut seen: Vec<String> = Vec::new();
+                for (d, s) in est.free.iter().zip(&est.covariance_scale) {
+                    let axis = if d.is_longitudinal() { "longitudinal" } else { "lateral" };
+                    let w = format!("{axis} {s:.0}");
+                    if !seen.contains(&w) {
+                        seen.push(w);
+                    }
+                }
+                seen.join(", ")
+            }
         ));
+        notes.push(
+            "Error attribution, TF route: the fit repeated on JSBSim's linearization TFs (what a perfect \
+             identification would give) takes out the identification error; then the paper's assumptions are \
+             released one after another (the omitted terms at their truth values), each taking out its share. \
+             Equation-error route: every JSBSim coefficient function is recorded along the flight; its remainder \
+             (value minus its linearization with the truth derivatives) projected on the regressors, \
+             (XᵀX)⁻¹Xᵀρ, is its exact share of the LS bias (Morelli & Klein eq. 5.8); the rest is propulsion, \
+             the ½-sample skew of JSBSim's integrator between differentiated rates and regressors, the response \
+             reconstruction, and noise."
+                .into(),
+        );
     }
     if let Some(ee) = &ee {
         let model = model_from_truth(&truth, Structure::Full.assumptions())?;
-        scorecards.push(score_equation_error(
-            &[ee],
-            &truth_derivatives(&truth),
-            &model,
-        ));
+        let mut card = score_equation_error(&[ee], &truth_derivatives(&truth), &model);
+        if !ee_attribution.is_empty() {
+            attribution::apply(&mut card, &attribution::equation_rows(&ee_attribution));
+        }
+        scorecards.push(card);
         for (c, why) in &ee.skipped {
             notes.push(format!("equation error: {c} skipped: {why}"));
         }
@@ -282,14 +382,152 @@ pub fn run(
          C_D_CL², explained; a thrust model (ThrustModel::ConstantPower) or a throttle input would separate them."
             .into(),
     );
+    for card in &scorecards {
+        notes.push(targets_summary(card));
+    }
     Ok(Study {
         truth,
         modal_check,
         identified,
         scorecards,
         identifiability,
+        equation_error_attribution: ee_attribution,
         notes,
     })
+}
+
+/// Does measuring α separate C_mq from C_mα̇? The C_m equation error on the (noise-free) elevator flight with
+/// α̇ c̄/(2V) as a regressor, checked numerically: both estimates against the truth and the correlation of the two estimates,
+/// ρ = D_qα̇/√(D_qq D_α̇α̇) with D = (XᵀX)⁻¹ (Morelli & Klein eq. 5.12).
+fn alphadot_separation_note(flights: &Flights, truth: &AeroTruth) -> Result<String, AeroError> {
+    let r = super::trials::equation_error_with(&flights.elevator, truth, true)?;
+    let Some(cm) = r.equations.iter().find(|e| e.coefficient == "Cm") else {
+        return Ok("C_m equation with α̇ could not be formed on the elevator flight".into());
+    };
+    let (Some(iq), Some(ia)) = (
+        cm.terms.iter().position(|t| t.derivative == Some(D::Cmq)),
+        cm.terms
+            .iter()
+            .position(|t| t.derivative == Some(D::Cmalphadot)),
+    ) else {
+        return Ok("C_m equation with α̇: no C_mq or C_mα̇ column".into());
+    };
+    let x = &cm.regressors;
+    let p = x.len();
+    let xtx = faer::Mat::from_fn(p, p, |a, b| {
+        x[a].iter().zip(&x[b]).map(|(u, v)| u * v).sum::<f64>()
+    });
+    let d = faer::prelude::Solve::solve(&xtx.partial_piv_lu(), faer::Mat::<f64>::identity(p, p));
+    let rho = d[(iq, ia)] / (d[(iq, iq)] * d[(ia, ia)]).sqrt();
+    let body = truth_derivatives(truth);
+    let pct = |est: f64, t: f64| 100.0 * (est - t) / t.abs();
+    let (q, a) = (&cm.terms[iq], &cm.terms[ia]);
+    Ok(format!(
+        "Separating C_mq from C_mα̇ by measuring α (equation error on the elevator doublet with α̇ c̄/(2V) as a \
+         regressor, checked numerically): C_mq {:.2} ({:+.0} %), C_mα̇ {:.2} ({:+.0} %), estimate correlation \
+         ρ = {rho:+.3}, σ(C_mα̇) = {:.2}. {}",
+        q.value,
+        pct(q.value, body.get(D::Cmq)),
+        a.value,
+        pct(a.value, body.get(D::Cmalphadot)),
+        a.std_error_colored,
+        if rho.abs() > 0.9 {
+            "On this doublet α̇ and q move together (|ρ| > 0.9): measuring α does not separate them; the manoeuvre \
+             itself would have to move α̇ independently of q (not checked here)."
+        } else if (a.value - body.get(D::Cmalphadot)).abs() > 3.0 * a.std_error_colored {
+            "The columns are separable (|ρ| ≤ 0.9), yet C_mα̇ misses its 3σ interval: differentiating α and the \
+             ½-sample skew between differentiated rates and regressors bias it, so α measured does not separate \
+             them reliably on this record."
+        } else {
+            "The columns are separable (|ρ| ≤ 0.9) and both estimates cover the truth: α measured separates them."
+        }
+    ))
+}
+
+/// One sentence: which of the issue's accuracy targets a route meets, which it misses, and the 3σ coverage.
+pub fn targets_summary(card: &Scorecard) -> String {
+    let with_target: Vec<&ScoreRow> = card
+        .rows
+        .iter()
+        .filter(|r| r.target_percent.is_some())
+        .collect();
+    let list = |ok: bool| {
+        with_target
+            .iter()
+            .filter(|r| r.meets_target() == Some(ok))
+            .map(|r| {
+                format!(
+                    "{} {:+.1} % (≤ {:.0} %)",
+                    r.name,
+                    r.error_percent,
+                    r.target_percent.unwrap_or(f64::NAN)
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let (met, missed) = (list(true), list(false));
+    let covered = card
+        .rows
+        .iter()
+        .filter(|r| r.covered_3sigma == Some(true))
+        .count();
+    let judged = card
+        .rows
+        .iter()
+        .filter(|r| r.covered_3sigma.is_some())
+        .count();
+    format!(
+        "Targets, {}: met {}; missed {}. 3σ covers the truth for {covered} of {judged} estimates; each miss \
+         names its term (error attribution table).",
+        card.route,
+        if met.is_empty() { "none".to_string() } else { met.join(", ") },
+        if missed.is_empty() { "none".to_string() } else { missed.join(", ") },
+    )
+}
+
+/// Equation-error attribution of every equation of the doublet flights (C_m, C_L from the elevator flight;
+/// C_l, C_n, C_Y from the lateral flight), `clean` the regressions on the noise-free flights, `scored` those
+/// scored (the same when there is no noise).
+fn attribute_flights(
+    clean: &EquationErrorResult,
+    scored: &EquationErrorResult,
+    clean_flights: &Flights,
+    probe: &CoefficientProbe,
+    truth: &AeroTruth,
+) -> Result<Vec<EquationAttribution>, AeroError> {
+    let truth_body = truth_derivatives(truth);
+    let options = EquationErrorOptions::default();
+    let mut out = Vec::new();
+    for c in &clean.equations {
+        let Some(e) = scored
+            .equations
+            .iter()
+            .find(|e| e.coefficient == c.coefficient)
+        else {
+            continue;
+        };
+        if e.terms
+            .iter()
+            .map(|t| &t.name)
+            .ne(c.terms.iter().map(|t| &t.name))
+        {
+            continue;
+        }
+        let record = if ["Cm", "CL"].contains(&c.coefficient) {
+            &clean_flights.elevator
+        } else {
+            &clean_flights.lateral
+        };
+        out.push(attribute_equation_error(
+            c,
+            e,
+            record,
+            probe,
+            &truth_body,
+            &options,
+        )?);
+    }
+    Ok(out)
 }
 
 fn apply_overrides_note(doc: &Value, notes: &mut Vec<String>) {
@@ -327,12 +565,52 @@ impl Study {
         }
     }
 
-    /// Table 1 and Table 3 of every route.
+    /// Table 1 and Table 3 of every route, and the error attribution of every estimate that misses its 3σ
+    /// interval or its target.
     pub fn tables(&self) -> Vec<Table> {
         let mut out = vec![self.modal_table()];
         for c in &self.scorecards {
             out.push(table1(c, "derivatives"));
             out.push(table3(c, "derivatives"));
+        }
+        let mut rows = Vec::new();
+        for c in &self.scorecards {
+            for r in &c.rows {
+                let missed = r.covered_3sigma == Some(false) || r.meets_target() == Some(false);
+                if !missed || r.attribution.is_empty() {
+                    continue;
+                }
+                let terms: Vec<String> = r
+                    .attribution
+                    .iter()
+                    .filter(|t| t.share.abs() >= 0.05)
+                    .take(4)
+                    .map(|t| format!("{} {:+.0} %", t.term, 100.0 * t.share))
+                    .collect();
+                rows.push(vec![
+                    r.name.clone(),
+                    c.route.split(" (").next().unwrap_or(&c.route).to_string(),
+                    format!("{:+.4}", r.estimate - r.truth),
+                    terms.join("; "),
+                ]);
+            }
+        }
+        if !rows.is_empty() {
+            out.push(Table {
+                caption:
+                    "derivatives — error attribution of every miss (share of estimate − truth; the \
+                          parts add up to 100 %, shares of opposite sign offset each other)"
+                        .into(),
+                header: [
+                    "derivative",
+                    "route",
+                    "estimate − truth",
+                    "terms (share of the error)",
+                ]
+                .map(String::from)
+                .to_vec(),
+                rows,
+            });
         }
         out
     }
@@ -345,6 +623,7 @@ impl Study {
             "identified": self.identified,
             "scorecards": self.scorecards,
             "identifiability": self.identifiability,
+            "equation_error_attribution": self.equation_error_attribution,
             "notes": self.notes,
         })
     }

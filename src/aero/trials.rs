@@ -114,6 +114,8 @@ pub struct Flights {
     pub rudder: data::FlightRecord,
     /// Aileron doublet, then a rudder doublet 4 pulses later.
     pub lateral: data::FlightRecord,
+    /// The same flights before the sensor noise was added (`None` when no noise was asked for).
+    pub noise_free: Option<Box<Flights>>,
 }
 
 fn doublet(opts: &TrialOptions, duration_s: f64, start_s: f64, amplitude_rad: f64) -> Vec<f64> {
@@ -189,20 +191,31 @@ pub fn fly_doublets(
             ],
         ),
     ];
-    let mut recs = Vec::new();
-    for (k, p) in plans.iter().enumerate() {
+    let mut raw = Vec::new();
+    for p in &plans {
         sim.trim(point)?;
-        let rec = sim.fly(p)?;
-        recs.push(with_noise(rec, opts.noise, opts.seed + k as u64));
+        raw.push(sim.fly(p)?);
     }
-    let mut it = recs.into_iter();
-    let mut next = || it.next().unwrap_or_default();
-    Ok(Flights {
-        elevator: next(),
-        aileron: next(),
-        rudder: next(),
-        lateral: next(),
-    })
+    let assemble = |recs: Vec<data::FlightRecord>, noise_free: Option<Box<Flights>>| {
+        let mut it = recs.into_iter();
+        let mut next = || it.next().unwrap_or_default();
+        Flights {
+            elevator: next(),
+            aileron: next(),
+            rudder: next(),
+            lateral: next(),
+            noise_free,
+        }
+    };
+    if opts.noise.is_none() {
+        return Ok(assemble(raw, None));
+    }
+    let noisy = raw
+        .iter()
+        .enumerate()
+        .map(|(k, rec)| with_noise(rec.clone(), opts.noise, opts.seed + k as u64))
+        .collect();
+    Ok(assemble(noisy, Some(Box::new(assemble(raw, None)))))
 }
 
 /// Mean of `x` over the samples before `start_s`.
@@ -298,6 +311,16 @@ pub fn equation_error_on(
     rec: &data::FlightRecord,
     truth: &AeroTruth,
 ) -> Result<EquationErrorResult, AeroError> {
+    equation_error_with(rec, truth, false)
+}
+
+/// [`equation_error_on`] with α̇ c̄/(2V) as a C_m regressor when `include_alphadot` (α measured and
+/// differentiated: the measurement that could separate C_mq from C_mα̇).
+pub fn equation_error_with(
+    rec: &data::FlightRecord,
+    truth: &AeroTruth,
+    include_alphadot: bool,
+) -> Result<EquationErrorResult, AeroError> {
     let col = |c: &str| rec.column(c);
     let record = FlightRecord {
         time_s: &rec.time_s,
@@ -324,6 +347,7 @@ pub fn equation_error_on(
         } else {
             data::G0_M_S2
         },
+        include_alphadot,
         ..EquationErrorOptions::default()
     };
     equation_error(

@@ -41,7 +41,16 @@ pub struct JsbsimSim {
     pub coefficient_knobs: Vec<String>,
     /// Added aerodynamic terms the private copy offers (`flightid/added/NAME`, default 0), e.g. `Cm_alpha2`.
     pub added_terms: Vec<String>,
+    /// Coefficient function name → the `<axis>` it belongs to (`LIFT`, `DRAG`, `SIDE`, `ROLL`, `PITCH`, `YAW`).
+    pub coefficient_axes: BTreeMap<String, String>,
+    /// Extra JSBSim properties every `fly` records, each as a column named by its property path (JSBSim
+    /// units), e.g. `aero/coefficient/Clr` for the error attribution of `aero::attribution`.
+    pub extra_record: Vec<String>,
 }
+
+/// Slopes of properties with respect to the aero inputs: input (`alpha`, `q`, `surface:elevator`, …) →
+/// property → d(property)/d(input), per rad or rad/s.
+pub type PropertySlopes = BTreeMap<String, BTreeMap<String, f64>>;
 
 fn surface_property(surface: &str) -> String {
     format!("flightid/aero/{surface}-rad")
@@ -115,6 +124,14 @@ impl JsbsimSim {
         })?;
         let coefficient_knobs = string_list(&resp.header["knobs"]);
         let added_terms = string_list(&resp.header["added_terms"]);
+        let coefficient_axes = resp.header["axes"]
+            .as_object()
+            .map(|m| {
+                m.iter()
+                    .filter_map(|(k, v)| Some((k.clone(), v.as_str()?.to_string())))
+                    .collect()
+            })
+            .unwrap_or_default();
         Ok(JsbsimSim {
             bridge,
             config: config.clone(),
@@ -124,7 +141,49 @@ impl JsbsimSim {
             reuse_trims: false,
             coefficient_knobs,
             added_terms,
+            coefficient_axes,
+            extra_record: Vec::new(),
         })
+    }
+
+    /// Values of `properties` at the current trim and their slopes with respect to each aero input (α, β, p, q,
+    /// r, α̇, β̇, surfaces), from the bridge's probe: integration suspended, central differences, the same
+    /// perturbations as [`JsbsimSim::aero_truth`].
+    pub fn probe_slopes(
+        &mut self,
+        properties: &[String],
+    ) -> Result<(BTreeMap<String, f64>, PropertySlopes), SimError> {
+        if self.trim.is_none() {
+            return Err(SimError::Usage(
+                "probe_slopes needs a successful trim first".into(),
+            ));
+        }
+        let perturb = json!({
+            "alpha": 1e-3, "beta": 1e-3, "p": 1e-2, "q": 1e-2, "r": 1e-2, "alphadot": 1e-2, "betadot": 1e-2,
+            "surface:elevator": 1e-3, "surface:aileron": 1e-3, "surface:rudder": 1e-3,
+        });
+        let resp = self.bridge.request(
+            json!({"cmd": "probe", "perturb": perturb, "condition": [], "extra": properties}),
+            &[],
+        )?;
+        let h = &resp.header;
+        let base = values_map(&h["base"]);
+        let mut slopes = PropertySlopes::new();
+        if let Some(per) = h["perturbed"].as_object() {
+            for (var, p) in per {
+                let step = p["h"].as_f64().unwrap_or(1.0);
+                let row = properties
+                    .iter()
+                    .map(|prop| {
+                        let plus = p["plus"][prop].as_f64().unwrap_or(f64::NAN);
+                        let minus = p["minus"][prop].as_f64().unwrap_or(f64::NAN);
+                        (prop.clone(), (plus - minus) / (2.0 * step))
+                    })
+                    .collect();
+                slopes.insert(var.clone(), row);
+            }
+        }
+        Ok((base, slopes))
     }
 
     /// The bridge's process id (for supervision and tests).
@@ -421,6 +480,7 @@ impl Simulator for JsbsimSim {
         }
         let mut record: Vec<String> = SURFACES.iter().map(|s| surface_property(s)).collect();
         record.extend(RECORDED.iter().map(|(_, p, _)| p.to_string()));
+        record.extend(self.extra_record.iter().cloned());
         let req = json!({"cmd": "fly", "n_steps": n, "drives": drives, "record": record, "set_before": set_before});
         let resp = self.bridge.request(req, &payload)?;
         let width = record.len();
@@ -443,6 +503,9 @@ impl Simulator for JsbsimSim {
         }
         for (i, (name, _, factor)) in RECORDED.iter().enumerate() {
             rec.push_column(name, column(SURFACES.len() + i, *factor));
+        }
+        for (i, prop) in self.extra_record.iter().enumerate() {
+            rec.push_column(prop, column(SURFACES.len() + RECORDED.len() + i, 1.0));
         }
         rec.metadata.push(format!(
             "aircraft: {} (JSBSim model {})",
@@ -791,7 +854,7 @@ impl JsbsimSim {
 }
 
 /// JSBSim's wind-to-body rotation (`FGAuxiliary::Tw2b`) applied to a wind-axis vector.
-fn wind_to_body(alpha_rad: f64, beta_rad: f64, v: [f64; 3]) -> [f64; 3] {
+pub(crate) fn wind_to_body(alpha_rad: f64, beta_rad: f64, v: [f64; 3]) -> [f64; 3] {
     let (sa, ca) = alpha_rad.sin_cos();
     let (sb, cb) = beta_rad.sin_cos();
     [
@@ -802,7 +865,7 @@ fn wind_to_body(alpha_rad: f64, beta_rad: f64, v: [f64; 3]) -> [f64; 3] {
 }
 
 /// Cross product r × f.
-fn cross(r: [f64; 3], f: [f64; 3]) -> [f64; 3] {
+pub(crate) fn cross(r: [f64; 3], f: [f64; 3]) -> [f64; 3] {
     [
         r[1] * f[2] - r[2] * f[1],
         r[2] * f[0] - r[0] * f[2],
