@@ -117,7 +117,8 @@ impl Svf {
             for (i, out) in next.iter_mut().enumerate().take(n) {
                 let row = &self.phi[i * n..(i + 1) * n];
                 let s = self.g_now[i] * w_now + self.g_other[i] * w_other;
-                *out = s + row.iter().zip(&x).map(|(r, xj)| r * xj).sum::<f64>();
+                // accumulated onto s in index order, as the textbook recursion reads
+                *out = row.iter().zip(&x).fold(s, |acc, (r, xj)| acc + r * xj);
             }
             std::mem::swap(&mut x, &mut next);
         }
