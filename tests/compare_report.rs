@@ -100,22 +100,27 @@ fn opens_in_headless_chromium_with_every_plot(dir: &std::path::Path, figures: us
     assert!(std::fs::metadata(&png).map(|m| m.len() > 10_000).unwrap_or(false), "screenshot {png:?}");
 }
 
-/// Fit % of JSBSim's linearization on each transfer function, from a `compare --json` run.
-fn linearization_fits(extra: &[&str]) -> std::collections::BTreeMap<String, f64> {
+/// `flightid compare` on c172x (srivc only, a one-amplitude sweep) with `extra` arguments: its report
+/// directory (kept alive by the returned temporary directory) and its JSON.
+fn quick_compare(extra: &[&str]) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
     let tmp = tempfile::tempdir().unwrap();
-    let json = tmp.path().join("compare.json");
+    let (dir, json) = (tmp.path().join("report"), tmp.path().join("compare.json"));
     let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
         .args(["compare", "--aircraft", "c172x", "--method", "srivc", "--sweep-deg", "1"])
         .args(extra)
         .arg("--report")
-        .arg(tmp.path().join("report"))
+        .arg(&dir)
         .arg("--json")
         .arg(&json)
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (tmp, dir, v)
+}
+
+/// Fit % of JSBSim's linearization on each transfer function of a `compare --json` output.
+fn linearization_fits(v: &serde_json::Value) -> std::collections::BTreeMap<String, f64> {
     v["models"]
         .as_object()
         .unwrap()
@@ -139,32 +144,17 @@ fn the_lateral_linearization_gap_is_the_sideslip_drag_that_the_linearization_can
     // leaves the aircraft in a bank the linear model does not have (scripts/oracle_rudder_spiral.py: the held bank
     // has the same sign for +A and −A doublets and grows with |A|). Measured: φ/δr 26 % → 94.6 %, φ/δa 84 % →
     // 94.5 % with CDbeta scaled to 0. Thresholds sit halfway between, far from both.
-    let with = linearization_fits(&[]);
-    let without = linearization_fits(&["--scale", "CDbeta=0"]);
+    let (_tmp, dir, v) = quick_compare(&[]);
+    let with = linearization_fits(&v);
+    let without = linearization_fits(&quick_compare(&["--scale", "CDbeta=0"]).2);
     eprintln!("linearization fit %, with CDbeta: {with:?}; without: {without:?}");
     assert!(with["phi/rudder"] < 50.0, "{with:?}");
     assert!(without["phi/rudder"] > 85.0, "{without:?}");
     assert!(without["phi/aileron"] > with["phi/aileron"] + 5.0);
-}
 
-#[test]
-fn the_report_names_the_kink_the_linearization_cannot_see() {
-    // The probe's one-sided differences at the trim find CDbeta's kink at β = 0 (slopes ∓0.17 per rad, the XML's
-    // 0.17·|β|; the trim β is within the probe step of 0, so the upper slope is a little less), and nothing
-    // else of the c172x's 32 coefficient functions; the report measures its share of the φ/δr gap.
-    let tmp = tempfile::tempdir().unwrap();
-    let (dir, json) = (tmp.path().join("report"), tmp.path().join("compare.json"));
-    let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
-        .args(["compare", "--aircraft", "c172x", "--method", "srivc", "--sweep-deg", "1"])
-        .arg("--report")
-        .arg(&dir)
-        .arg("--json")
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // The report finds that cause itself. The probe's one-sided differences at the trim find CDbeta's kink at
+    // β = 0 (slopes ∓0.17 per rad, the XML's 0.17·|β|; the trim β is within the probe step of 0, so the upper
+    // slope is a little less), and nothing else of the c172x's 32 coefficient functions ...
     let terms = v["nonsmooth_terms"].as_array().unwrap();
     assert_eq!(terms.len(), 1, "{terms:?}");
     assert_eq!(terms[0]["coefficient"], "CDbeta");
@@ -174,13 +164,13 @@ fn the_report_names_the_kink_the_linearization_cannot_see() {
         terms[0]["slope_above"].as_f64().unwrap(),
     );
     assert!((below + 0.17).abs() < 0.01 && (above - 0.17).abs() < 0.01, "{below} {above}");
-    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
-    assert!(md.contains("non-smooth terms"), "{md}");
-    // its share is measured, not guessed: the linearization's φ/δr fit with CDbeta removed (measured 94.6 %)
-    let without = v["nonsmooth_shares"][0]["fit_percent_without"]["phi/rudder"]
+    // ... and measures its share of the φ/δr gap rather than guessing it (the same 94.6 % as above)
+    let share = v["nonsmooth_shares"][0]["fit_percent_without"]["phi/rudder"]
         .as_f64()
         .unwrap();
-    assert!(without > 85.0, "{without}");
+    assert!((share - without["phi/rudder"]).abs() < 1.0, "{share}");
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(md.contains("non-smooth terms"), "{md}");
     assert!(md.contains("CDbeta explains the gap"), "{md}");
 }
 
