@@ -51,6 +51,9 @@ pub enum EnvError {
 
 static PROVISION_LOCK: Mutex<()> = Mutex::new(());
 
+/// `FLIGHTID_PYTHON` interpreters this process has already seen import jsbsim.
+static USER_PYTHON_OK: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
 /// The cache directory flightid keeps its Python environment and bridge program in.
 pub fn cache_dir() -> PathBuf {
     if let Some(d) = std::env::var_os("FLIGHTID_CACHE_DIR") {
@@ -79,13 +82,22 @@ fn fnv1a(text: &str) -> String {
 pub fn python() -> Result<PathBuf, EnvError> {
     if let Some(p) = std::env::var_os("FLIGHTID_PYTHON") {
         let path = PathBuf::from(&p);
+        // checked once per process and path: every bridge start (campaign workers, reloads) asks again,
+        // and `import jsbsim` costs ~0.1 s
+        let mut checked = USER_PYTHON_OK.lock().unwrap_or_else(|e| e.into_inner());
+        if checked.contains(&path) {
+            return Ok(path);
+        }
         let out = Command::new(&path)
             .arg("-c")
             .arg("import jsbsim")
             .stdin(Stdio::null())
             .output();
         return match out {
-            Ok(o) if o.status.success() => Ok(path),
+            Ok(o) if o.status.success() => {
+                checked.push(path.clone());
+                Ok(path)
+            }
             Ok(o) => Err(EnvError::BadUserPython {
                 path: path.display().to_string(),
                 reason: format!(
