@@ -19,7 +19,9 @@ use serde::Serialize;
 
 use super::fit::{estimate_derivatives, FitOptions, IdentifiedTfs};
 use super::params::{Assumptions, Derivative, Derivatives, ThrustModel};
-use super::regression::{savitzky_golay_smooth, EquationErrorOptions, RegressionResult};
+use super::regression::{
+    half_sample_lag, savitzky_golay_smooth, EquationErrorOptions, RegressionResult,
+};
 use super::score::{Scorecard, CMQ_SUM};
 use super::spec::full_assumptions;
 use super::AeroError;
@@ -581,12 +583,19 @@ pub fn attribute_equation_error(
     let alpha = col("alpha_rad")?;
     let beta = col("beta_rad")?;
     let qbar = col("aero/qbar-psf")?;
+    // what the regression does to its regressors, applied to each function's share of the response:
+    // smoothed, then delayed by half a sample when the estimator models the integrator's lag
     let smooth = |c: &[f64]| -> Result<Vec<f64>, AeroError> {
-        if options.smooth_regressors && c.iter().any(|v| *v != c[0]) {
-            savitzky_golay_smooth(c, options.half_window, options.poly_order)
+        let s = if options.smooth_regressors && c.iter().any(|v| *v != c[0]) {
+            savitzky_golay_smooth(c, options.half_window, options.poly_order)?
         } else {
-            Ok(c.to_vec())
-        }
+            c.to_vec()
+        };
+        Ok(if options.lags_half_sample(eq) {
+            half_sample_lag(&s)
+        } else {
+            s
+        })
     };
     let alphadot_free = clean.terms.iter().any(|t| t.name.ends_with("_alphadot"));
     let suffixes: Vec<String> = clean
@@ -715,9 +724,13 @@ pub fn attribute_equation_error(
     // moments half a step old: z(t_i) ≈ ½ (M(t_{i−1}) + M(t_i)) (measured on c172x at 60 Hz: the C_m residual
     // drops 7× with that half-sample shift). Its part is the projection of the shifted minus the unshifted
     // sum; what is left after it is the rest of the reconstruction.
-    let shifted: Vec<f64> = (0..n)
-        .map(|i| 0.5 * (sum_c[i.saturating_sub(1)] + sum_c[i]))
-        .collect();
+    // (with `response_lags_half_sample` the estimator models the shift itself: sum_c is already shifted and
+    // the skew part is zero)
+    let shifted: Vec<f64> = if options.lags_half_sample(eq) {
+        sum_c.clone()
+    } else {
+        half_sample_lag(&sum_c)
+    };
     let skew: Vec<f64> = (0..n).map(|i| shifted[i] - sum_c[i]).collect();
     let rest: Vec<f64> = (0..n).map(|i| clean.response[i] - shifted[i]).collect();
     for (label, y) in [(SKEW, &skew), (OTHER, &rest)] {

@@ -81,6 +81,27 @@ pub struct EquationErrorOptions {
     pub air_density_kg_m3: f64,
     /// Gravitational acceleration.
     pub g_m_s2: f64,
+    /// Delay every regressor by half a sample ([`half_sample_lag`]) to match a response that lags by that
+    /// much: on JSBSim records the rates are integrated before the aero model runs, so the central-difference
+    /// derivative at row k is the mean of the moments at rows k−1 and k (measured on c172x: the C_m residual
+    /// drops 7× with the shift). Real sensor data have no such lag: leave it off for them.
+    pub response_lags_half_sample: bool,
+}
+
+impl EquationErrorOptions {
+    /// Whether the regressors of this equation are delayed by half a sample: the moment equations (from
+    /// differentiated body rates) when [`Self::response_lags_half_sample`] is set.
+    pub fn lags_half_sample(&self, coefficient: &str) -> bool {
+        self.response_lags_half_sample && matches!(coefficient, "Cm" | "Cl" | "Cn")
+    }
+}
+
+/// `v'_k = ½ (v_{k−1} + v_k)` (`v'_0 = v_0`): the half-sample delay of a sampled signal, exact for the
+/// trapezoidal mean that a central difference of rectangular-Euler-integrated states sees.
+pub fn half_sample_lag(v: &[f64]) -> Vec<f64> {
+    (0..v.len())
+        .map(|k| 0.5 * (v[k.saturating_sub(1)] + v[k]))
+        .collect()
 }
 
 impl Default for EquationErrorOptions {
@@ -93,6 +114,7 @@ impl Default for EquationErrorOptions {
             max_lag: None,
             air_density_kg_m3: 1.225,
             g_m_s2: 9.80665,
+            response_lags_half_sample: false,
         }
     }
 }
@@ -289,16 +311,22 @@ fn lesq_smoothed(
     z: &[f64],
     options: &EquationErrorOptions,
 ) -> Result<RegressionResult, AeroError> {
-    if !options.smooth_regressors {
-        return lesq(coefficient, names, columns, z, options.max_lag);
-    }
     let smoothed = columns
         .iter()
         .map(|c| {
             if c.iter().all(|&v| v == c[0]) {
-                Ok(c.clone())
+                Ok::<_, AeroError>(c.clone())
             } else {
-                savitzky_golay_smooth(c, options.half_window, options.poly_order)
+                let s = if options.smooth_regressors {
+                    savitzky_golay_smooth(c, options.half_window, options.poly_order)?
+                } else {
+                    c.clone()
+                };
+                Ok(if options.lags_half_sample(coefficient) {
+                    half_sample_lag(&s)
+                } else {
+                    s
+                })
             }
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -683,6 +711,44 @@ fn lateral_regression(
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn a_response_lagging_half_a_sample_is_fitted_exactly_once_the_regressors_lag_too() {
+        // z_k = ½ (x_{k−1} + x_k)·θ, θ = (−1.2, 0.4): what a central difference of Euler-integrated rates sees
+        // (the moment of the step before and of this one). Without the lag the slope is biased by the
+        // signal's own change per half sample; with it, LS returns θ to round-off.
+        let n = 400;
+        let x1: Vec<f64> = (0..n).map(|k| (0.07 * k as f64).sin()).collect();
+        let x2: Vec<f64> = (0..n).map(|k| (0.031 * k as f64).cos() * 0.5).collect();
+        let z: Vec<f64> = (0..n)
+            .map(|k: usize| {
+                let j = k.saturating_sub(1);
+                -1.2 * 0.5 * (x1[j] + x1[k]) + 0.4 * 0.5 * (x2[j] + x2[k])
+            })
+            .collect();
+        let names = vec!["Cm_alpha".to_string(), "Cm_de".to_string()];
+        let cols = vec![x1, x2];
+        let fit = |lag: bool| {
+            let opts = EquationErrorOptions {
+                smooth_regressors: false,
+                response_lags_half_sample: lag,
+                ..EquationErrorOptions::default()
+            };
+            let r = lesq_smoothed("Cm", &names, &cols, &z, &opts).unwrap();
+            (r.terms[0].value, r.terms[1].value)
+        };
+        let (a, b) = fit(true);
+        assert!((a + 1.2).abs() < 1e-12 && (b - 0.4).abs() < 1e-12, "{a} {b}");
+        let (a, _) = fit(false);
+        assert!((a + 1.2).abs() > 1e-4, "without the lag the fit is biased: {a}");
+        // force equations never lag (their response comes from differentiated velocities)
+        let opts = EquationErrorOptions {
+            response_lags_half_sample: true,
+            ..EquationErrorOptions::default()
+        };
+        assert!(opts.lags_half_sample("Cl") && !opts.lags_half_sample("CL") && !opts.lags_half_sample("CY"));
+    }
+
     use super::*;
     use crate::aero::model::tests::{c172x_model, CL_TRIM, RHO_KG_M3, V_M_S};
     use crate::aero::model::LinearModel;

@@ -496,7 +496,10 @@ fn attribute_flights(
     truth: &AeroTruth,
 ) -> Result<Vec<EquationAttribution>, AeroError> {
     let truth_body = truth_derivatives(truth);
-    let options = EquationErrorOptions::default();
+    let options = EquationErrorOptions {
+        response_lags_half_sample: super::trials::JSBSIM_RESPONSE_LAG,
+        ..EquationErrorOptions::default()
+    };
     let mut out = Vec::new();
     for c in &clean.equations {
         let Some(e) = scored

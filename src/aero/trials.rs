@@ -18,6 +18,11 @@ use crate::sim::jsbsim::AeroTruth;
 use crate::sim::{FlightPlan, Simulator, SurfaceInput, TrimPoint};
 use faer::Mat;
 
+/// Whether equation error on these JSBSim flights models the half-sample lag of the differentiated rates
+/// behind the regressors ([`EquationErrorOptions::response_lags_half_sample`]); the attribution
+/// (`aero::study`) must use the same setting.
+pub const JSBSIM_RESPONSE_LAG: bool = true;
+
 /// White sensor noise, one standard deviation per channel kind.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SensorNoise {
@@ -348,6 +353,7 @@ pub fn equation_error_with(
             data::G0_M_S2
         },
         include_alphadot,
+        response_lags_half_sample: JSBSIM_RESPONSE_LAG,
         ..EquationErrorOptions::default()
     };
     equation_error(
