@@ -148,3 +148,47 @@ fn unsupported_transfer_function_is_bad_input() {
     let out = flightid(&["derivatives", "--from", p.to_str().unwrap()]);
     assert_bad_input(&out, "not one of the model's transfer functions");
 }
+
+/// `derivatives --data` on a CSV that `flightid fly` wrote (c172x, aileron 3-2-1-1): the half-sample lag of the
+/// JSBSim record is modelled by default, so the roll damping and aileron power land within 1 % (measured
+/// +0.0 % and −0.0 %); read as sensor data (`--sensor-data`, no lag modelled) the roll damping is off by the
+/// lag's bias (measured +2.2 %), more than twice as far.
+#[test]
+fn derivatives_from_a_jsbsim_csv_model_its_half_sample_lag_unless_told_it_is_sensor_data() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = tmp.path().join("lat.csv");
+    let bin = env!("CARGO_BIN_EXE_flightid");
+    let out = std::process::Command::new(bin)
+        .args(["fly", "--aircraft", "c172x", "--surface", "aileron", "--maneuver", "3211"])
+        .args(["--amplitude-deg", "2", "--pulse-s", "0.5", "--duration-s", "20", "--out"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let error_percent = |extra: &[&str], name: &str| -> f64 {
+        let json = tmp.path().join("d.json");
+        let out = std::process::Command::new(bin)
+            .args(["derivatives", "--aircraft", "c172x", "--data"])
+            .arg(&csv)
+            .args(extra)
+            .arg("--json")
+            .arg(&json)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        v["scorecards"][0]["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["name"] == name)
+            .unwrap()["error_percent"]
+            .as_f64()
+            .unwrap()
+    };
+    let (clp, clda) = (error_percent(&[], "Cl_p"), error_percent(&[], "Cl_da"));
+    assert!(clp.abs() < 1.0 && clda.abs() < 1.0, "Cl_p {clp} %, Cl_da {clda} %");
+    let clp_sensor = error_percent(&["--sensor-data"], "Cl_p");
+    assert!(clp_sensor.abs() > 2.0 * clp.abs().max(0.5), "Cl_p as sensor data {clp_sensor} %");
+}

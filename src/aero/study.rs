@@ -16,7 +16,8 @@ use super::spec::{
     apply_overrides, identified_tfs_from_json, model_from_truth, truth_derivatives, Structure,
 };
 use super::trials::{
-    equation_error_flights, equation_error_on, fly_doublets, identify_paper_tfs, Flights,
+    equation_error_flights, equation_error_with, fly_doublets, identify_paper_tfs, Flights,
+    JSBSIM_RESPONSE_LAG,
     TrialOptions,
 };
 use super::AeroError;
@@ -34,8 +35,14 @@ pub enum Source {
     Fly(TrialOptions),
     /// Identified transfer functions (`flightid identify --json` documents, with their file names).
     Identified(Vec<(String, Value)>),
-    /// A flight-data CSV, read by equation error.
-    Data(data::FlightRecord),
+    /// A flight-data CSV, read by equation error; `simulated`: written by JSBSim (`flightid fly`), whose
+    /// differentiated rates lag the moments by half a sample (modelled), else sensor data (not).
+    Data {
+        /// The record.
+        record: data::FlightRecord,
+        /// JSBSim-made (the half-sample lag is modelled) or measured.
+        simulated: bool,
+    },
 }
 
 /// What to estimate and how.
@@ -298,8 +305,8 @@ pub fn run(
                 });
             }
         }
-        Source::Data(rec) => {
-            ee = Some(equation_error_on(rec, &truth)?);
+        Source::Data { record, simulated } => {
+            ee = Some(equation_error_with(record, &truth, false, *simulated)?);
         }
     }
     let mut scorecards = Vec::new();
@@ -400,7 +407,7 @@ pub fn run(
 /// α̇ c̄/(2V) as a regressor, checked numerically: both estimates against the truth and the correlation of the two estimates,
 /// ρ = D_qα̇/√(D_qq D_α̇α̇) with D = (XᵀX)⁻¹ (Morelli & Klein eq. 5.12).
 fn alphadot_separation_note(flights: &Flights, truth: &AeroTruth) -> Result<String, AeroError> {
-    let r = super::trials::equation_error_with(&flights.elevator, truth, true)?;
+    let r = super::trials::equation_error_with(&flights.elevator, truth, true, JSBSIM_RESPONSE_LAG)?;
     let Some(cm) = r.equations.iter().find(|e| e.coefficient == "Cm") else {
         return Ok("C_m equation with α̇ could not be formed on the elevator flight".into());
     };

@@ -316,15 +316,17 @@ pub fn equation_error_on(
     rec: &data::FlightRecord,
     truth: &AeroTruth,
 ) -> Result<EquationErrorResult, AeroError> {
-    equation_error_with(rec, truth, false)
+    equation_error_with(rec, truth, false, JSBSIM_RESPONSE_LAG)
 }
 
 /// [`equation_error_on`] with α̇ c̄/(2V) as a C_m regressor when `include_alphadot` (α measured and
-/// differentiated: the measurement that could separate C_mq from C_mα̇).
+/// differentiated: the measurement that could separate C_mq from C_mα̇), and the half-sample lag of JSBSim
+/// records modelled when `simulated` ([`EquationErrorOptions::response_lags_half_sample`]).
 pub fn equation_error_with(
     rec: &data::FlightRecord,
     truth: &AeroTruth,
     include_alphadot: bool,
+    simulated: bool,
 ) -> Result<EquationErrorResult, AeroError> {
     let col = |c: &str| rec.column(c);
     let record = FlightRecord {
@@ -353,7 +355,7 @@ pub fn equation_error_with(
             data::G0_M_S2
         },
         include_alphadot,
-        response_lags_half_sample: JSBSIM_RESPONSE_LAG,
+        response_lags_half_sample: simulated,
         ..EquationErrorOptions::default()
     };
     equation_error(

@@ -39,9 +39,13 @@ pub struct DerivativesCmd {
     /// May carry `mass` / `geometry` objects replacing the JSBSim model's.
     #[arg(long, value_name = "IDENTIFIED.json", conflicts_with = "data")]
     pub from: Vec<PathBuf>,
-    /// A flight-data CSV (DESIGN.md §4) for equation error on the full state.
+    /// A flight-data CSV (DESIGN.md §4) for equation error on the full state. Taken as a JSBSim record
+    /// (`flightid fly`): its differentiated rates lag the moments by half a sample, which is modelled.
     #[arg(long, value_name = "FLIGHT.csv")]
     pub data: Option<PathBuf>,
+    /// With --data: the CSV is measured sensor data, sampled together, with no integrator lag to model.
+    #[arg(long, requires = "data")]
+    pub sensor_data: bool,
     /// Model structure of the transfer-function route.
     #[arg(long = "model", value_enum, default_value = "paper")]
     pub structure: StructureArg,
@@ -91,8 +95,11 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
         .parse()
         .map_err(|e| UsageError(format!("--method: {e}")))?;
     let source = if let Some(path) = &args.data {
-        let rec = data::read_csv(path).map_err(|e| UsageError(e.to_string()))?;
-        Source::Data(rec)
+        let record = data::read_csv(path).map_err(|e| UsageError(e.to_string()))?;
+        Source::Data {
+            record,
+            simulated: !args.sensor_data,
+        }
     } else if !args.from.is_empty() {
         let mut docs = Vec::new();
         for p in &args.from {
