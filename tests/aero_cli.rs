@@ -159,12 +159,32 @@ fn derivatives_from_a_jsbsim_csv_model_its_half_sample_lag_unless_told_it_is_sen
     let csv = tmp.path().join("lat.csv");
     let bin = env!("CARGO_BIN_EXE_flightid");
     let out = std::process::Command::new(bin)
-        .args(["fly", "--aircraft", "c172x", "--surface", "aileron", "--maneuver", "3211"])
-        .args(["--amplitude-deg", "2", "--pulse-s", "0.5", "--duration-s", "20", "--out"])
+        .args([
+            "fly",
+            "--aircraft",
+            "c172x",
+            "--surface",
+            "aileron",
+            "--maneuver",
+            "3211",
+        ])
+        .args([
+            "--amplitude-deg",
+            "2",
+            "--pulse-s",
+            "0.5",
+            "--duration-s",
+            "20",
+            "--out",
+        ])
         .arg(&csv)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let error_percent = |extra: &[&str], name: &str| -> f64 {
         let json = tmp.path().join("d.json");
         let out = std::process::Command::new(bin)
@@ -175,7 +195,11 @@ fn derivatives_from_a_jsbsim_csv_model_its_half_sample_lag_unless_told_it_is_sen
             .arg(&json)
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let v: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
         v["scorecards"][0]["rows"]
@@ -188,7 +212,13 @@ fn derivatives_from_a_jsbsim_csv_model_its_half_sample_lag_unless_told_it_is_sen
             .unwrap()
     };
     let (clp, clda) = (error_percent(&[], "Cl_p"), error_percent(&[], "Cl_da"));
-    assert!(clp.abs() < 1.0 && clda.abs() < 1.0, "Cl_p {clp} %, Cl_da {clda} %");
+    assert!(
+        clp.abs() < 1.0 && clda.abs() < 1.0,
+        "Cl_p {clp} %, Cl_da {clda} %"
+    );
     let clp_sensor = error_percent(&["--sensor-data"], "Cl_p");
-    assert!(clp_sensor.abs() > 2.0 * clp.abs().max(0.5), "Cl_p as sensor data {clp_sensor} %");
+    assert!(
+        clp_sensor.abs() > 2.0 * clp.abs().max(0.5),
+        "Cl_p as sensor data {clp_sensor} %"
+    );
 }

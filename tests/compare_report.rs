@@ -82,7 +82,10 @@ fn opens_in_headless_chromium_with_every_plot(dir: &std::path::Path, figures: us
     }
     let shots = dir.with_file_name("shots");
     let out = Command::new("python3")
-        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/report_screenshot.py"))
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/scripts/report_screenshot.py"
+        ))
         .arg(dir)
         .arg("--out")
         .arg(&shots)
@@ -95,9 +98,20 @@ fn opens_in_headless_chromium_with_every_plot(dir: &std::path::Path, figures: us
         "browser check failed: {said}{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(said.contains(&format!("{figures}/{figures} figures rendered")), "{said}");
-    let png = shots.join(format!("{}.png", dir.file_name().unwrap().to_string_lossy()));
-    assert!(std::fs::metadata(&png).map(|m| m.len() > 10_000).unwrap_or(false), "screenshot {png:?}");
+    assert!(
+        said.contains(&format!("{figures}/{figures} figures rendered")),
+        "{said}"
+    );
+    let png = shots.join(format!(
+        "{}.png",
+        dir.file_name().unwrap().to_string_lossy()
+    ));
+    assert!(
+        std::fs::metadata(&png)
+            .map(|m| m.len() > 10_000)
+            .unwrap_or(false),
+        "screenshot {png:?}"
+    );
 }
 
 /// `flightid compare` on c172x (srivc only, a one-amplitude sweep) with `extra` arguments: its report
@@ -106,7 +120,15 @@ fn quick_compare(extra: &[&str]) -> (tempfile::TempDir, std::path::PathBuf, serd
     let tmp = tempfile::tempdir().unwrap();
     let (dir, json) = (tmp.path().join("report"), tmp.path().join("compare.json"));
     let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
-        .args(["compare", "--aircraft", "c172x", "--method", "srivc", "--sweep-deg", "1"])
+        .args([
+            "compare",
+            "--aircraft",
+            "c172x",
+            "--method",
+            "srivc",
+            "--sweep-deg",
+            "1",
+        ])
         .args(extra)
         .arg("--report")
         .arg(&dir)
@@ -114,7 +136,11 @@ fn quick_compare(extra: &[&str]) -> (tempfile::TempDir, std::path::PathBuf, serd
         .arg(&json)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     (tmp, dir, v)
 }
@@ -163,7 +189,10 @@ fn the_lateral_linearization_gap_is_the_sideslip_drag_that_the_linearization_can
         terms[0]["slope_below"].as_f64().unwrap(),
         terms[0]["slope_above"].as_f64().unwrap(),
     );
-    assert!((below + 0.17).abs() < 0.01 && (above - 0.17).abs() < 0.01, "{below} {above}");
+    assert!(
+        (below + 0.17).abs() < 0.01 && (above - 0.17).abs() < 0.01,
+        "{below} {above}"
+    );
     // ... and measures its share of the φ/δr gap rather than guessing it (the same 94.6 % as above)
     let share = v["nonsmooth_shares"][0]["fit_percent_without"]["phi/rudder"]
         .as_f64()
@@ -178,12 +207,22 @@ fn the_lateral_linearization_gap_is_the_sideslip_drag_that_the_linearization_can
 fn an_unknown_coefficient_to_scale_is_a_usage_error_that_lists_the_model_s_coefficients() {
     let tmp = tempfile::tempdir().unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
-        .args(["compare", "--aircraft", "c172x", "--scale", "CDbta=0", "--report"])
+        .args([
+            "compare",
+            "--aircraft",
+            "c172x",
+            "--scale",
+            "CDbta=0",
+            "--report",
+        ])
         .arg(tmp.path().join("report"))
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("'CDbta'") && err.contains("CDbeta"), "{err}");
-    assert!(!tmp.path().join("report").exists(), "no report for a refused run");
+    assert!(
+        !tmp.path().join("report").exists(),
+        "no report for a refused run"
+    );
 }

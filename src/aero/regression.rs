@@ -738,15 +738,25 @@ mod tests {
             (r.terms[0].value, r.terms[1].value)
         };
         let (a, b) = fit(true);
-        assert!((a + 1.2).abs() < 1e-12 && (b - 0.4).abs() < 1e-12, "{a} {b}");
+        assert!(
+            (a + 1.2).abs() < 1e-12 && (b - 0.4).abs() < 1e-12,
+            "{a} {b}"
+        );
         let (a, _) = fit(false);
-        assert!((a + 1.2).abs() > 1e-4, "without the lag the fit is biased: {a}");
+        assert!(
+            (a + 1.2).abs() > 1e-4,
+            "without the lag the fit is biased: {a}"
+        );
         // force equations never lag (their response comes from differentiated velocities)
         let opts = EquationErrorOptions {
             response_lags_half_sample: true,
             ..EquationErrorOptions::default()
         };
-        assert!(opts.lags_half_sample("Cl") && !opts.lags_half_sample("CL") && !opts.lags_half_sample("CY"));
+        assert!(
+            opts.lags_half_sample("Cl")
+                && !opts.lags_half_sample("CL")
+                && !opts.lags_half_sample("CY")
+        );
     }
 
     use super::*;

@@ -17,8 +17,7 @@ use super::spec::{
 };
 use super::trials::{
     equation_error_flights, equation_error_with, fly_doublets, identify_paper_tfs, Flights,
-    JSBSIM_RESPONSE_LAG,
-    TrialOptions,
+    TrialOptions, JSBSIM_RESPONSE_LAG,
 };
 use super::AeroError;
 use crate::data;
@@ -407,7 +406,8 @@ pub fn run(
 /// α̇ c̄/(2V) as a regressor, checked numerically: both estimates against the truth and the correlation of the two estimates,
 /// ρ = D_qα̇/√(D_qq D_α̇α̇) with D = (XᵀX)⁻¹ (Morelli & Klein eq. 5.12).
 fn alphadot_separation_note(flights: &Flights, truth: &AeroTruth) -> Result<String, AeroError> {
-    let r = super::trials::equation_error_with(&flights.elevator, truth, true, JSBSIM_RESPONSE_LAG)?;
+    let r =
+        super::trials::equation_error_with(&flights.elevator, truth, true, JSBSIM_RESPONSE_LAG)?;
     let Some(cm) = r.equations.iter().find(|e| e.coefficient == "Cm") else {
         return Ok("C_m equation with α̇ could not be formed on the elevator flight".into());
     };

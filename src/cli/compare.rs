@@ -70,7 +70,13 @@ pub(super) fn explain_linearization_gaps(
     let mut shares = Vec::new();
     if !gaps.is_empty() {
         for term in truth.nonsmooth.iter().take(MAX_KINKS_MEASURED) {
-            shares.push(kink_share(sim, opts, user_scales, &term.coefficient, &gaps)?);
+            shares.push(kink_share(
+                sim,
+                opts,
+                user_scales,
+                &term.coefficient,
+                &gaps,
+            )?);
         }
     }
     json["nonsmooth_terms"] = serde_json::to_value(&truth.nonsmooth)?;
@@ -146,7 +152,9 @@ fn parse_scale(s: &str) -> Result<(String, f64), String> {
         .parse()
         .map_err(|_| format!("'{factor}' in '{s}' is not a number"))?;
     if !factor.is_finite() || name.trim().is_empty() {
-        return Err(format!("expected NAME=FACTOR with a finite factor, got '{s}'"));
+        return Err(format!(
+            "expected NAME=FACTOR with a finite factor, got '{s}'"
+        ));
     }
     Ok((name.trim().to_string(), factor))
 }
@@ -185,8 +193,14 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
     }
     let (outcome, mut report) = compare::run_compare(&mut sim, &opts).map_err(classify)?;
     let mut json = compare::outcome_json(&outcome);
-    let verdicts =
-        explain_linearization_gaps(&mut sim, &opts, &args.scales, &outcome, &mut report, &mut json)?;
+    let verdicts = explain_linearization_gaps(
+        &mut sim,
+        &opts,
+        &args.scales,
+        &outcome,
+        &mut report,
+        &mut json,
+    )?;
     let index = crate::report::write_report_dir(&args.report, &report, &json)?;
     if let Some(target) = &args.json {
         emit_json(target, &json)?;

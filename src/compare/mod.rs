@@ -614,7 +614,8 @@ pub fn linearization_gaps(outcome: &CompareOutcome) -> Vec<(String, f64)> {
         .iter()
         .filter_map(|(key, fits)| {
             let lin = fits.iter().find(|f| f.model == "jsbsim_linearization")?;
-            (lin.fit_percent < LINEARIZATION_GAP_FIT_PERCENT).then(|| (key.clone(), lin.fit_percent))
+            (lin.fit_percent < LINEARIZATION_GAP_FIT_PERCENT)
+                .then(|| (key.clone(), lin.fit_percent))
         })
         .collect()
 }

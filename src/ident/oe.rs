@@ -330,7 +330,9 @@ fn lag_weighted_products(s: &[f64], acf: &[f64], len: usize, p: usize) -> Vec<f6
         .map(|c| (0..len).map(|i| s[i * p + c]).collect())
         .collect();
     // kernel[t] = R(|t − L|), t = 0 … 2L
-    let kernel: Vec<f64> = (0..=2 * max_lag).map(|t| acf[t.abs_diff(max_lag)]).collect();
+    let kernel: Vec<f64> = (0..=2 * max_lag)
+        .map(|t| acf[t.abs_diff(max_lag)])
+        .collect();
     let convolved: Vec<Vec<f64>> = cols
         .iter()
         .map(|col| {
@@ -406,7 +408,9 @@ mod lag_tests {
                 (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
             })
             .collect();
-        let acf: Vec<f64> = (0..=23).map(|l| (1.0 - l as f64 / 24.0) * (0.9f64).powi(l)).collect();
+        let acf: Vec<f64> = (0..=23)
+            .map(|l| (1.0 - l as f64 / 24.0) * (0.9f64).powi(l))
+            .collect();
         let fast = lag_weighted_products(&s, &acf, len, p);
         let slow = by_definition(&s, &acf, len, p);
         for (f, d) in fast.iter().zip(&slow) {
