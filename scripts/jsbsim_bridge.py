@@ -508,13 +508,10 @@ class Sim:
         for coef, axis in AXIS_OF.items():
             axes.setdefault(axis, []).append(self.node("aero/coefficient/" + coef).get_double_value)
         extra = {p: self.node(p).get_double_value for p in req.get("extra", [])}
-        # each coefficient function on its own too, so one-sided slopes can show where a single term has a kink
-        coefs = {"coef:" + c: self.node("aero/coefficient/" + c).get_double_value for c in AXIS_OF}
 
         def read():
             vals = {axis: sum(g() for g in getters) for axis, getters in axes.items()}
             vals.update({k: g() for k, g in extra.items()})
-            vals.update({k: g() for k, g in coefs.items()})
             return vals
 
         fdm.suspend_integration()
@@ -559,7 +556,7 @@ class Sim:
             fdm.resume_integration()
             fdm.set_dt(self.dt_s)
         cond = {k: fdm[k] for k in req.get("condition", [])}
-        return {"base": base, "perturbed": out, "condition": cond, "axes": dict(AXIS_OF)}
+        return {"base": base, "perturbed": out, "condition": cond}
 
     def fly(self, req, payload):
         """Runs n_steps from the current (trimmed) state; returns the recorded properties, step-major."""

@@ -5,23 +5,14 @@ use std::process::Command;
 
 #[test]
 fn compare_report_holds_every_plot_and_srivc_matches_the_linearized_short_period() {
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("report");
-    let json = tmp.path().join("compare.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
-        .args(["compare", "--aircraft", "c172x", "--duration-s", "12"])
-        .args(["--method", "ls,srivc", "--sweep-deg", "1,6"])
-        .arg("--report")
-        .arg(&dir)
-        .arg("--json")
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (_tmp, dir, v) = compare(&[
+        "--duration-s",
+        "12",
+        "--method",
+        "ls,srivc",
+        "--sweep-deg",
+        "1,6",
+    ]);
     let html = std::fs::read_to_string(dir.join("index.html")).unwrap();
     // 3 transfer functions × (time overlay, Bode magnitude, Bode phase, amplitude sweep)
     for tf in ["theta_elevator", "phi_aileron", "phi_rudder"] {
@@ -40,8 +31,6 @@ fn compare_report_holds_every_plot_and_srivc_matches_the_linearized_short_period
         "no network"
     );
     assert!(dir.join("report.md").exists() && dir.join("report.json").exists());
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let models = v["models"]["theta/elevator"].as_array().unwrap();
     let wn = |name: &str| {
         models.iter().find(|m| m["model"] == name).unwrap()["modal"]["osc_omega_n_rad_s"]
@@ -114,22 +103,14 @@ fn opens_in_headless_chromium_with_every_plot(dir: &std::path::Path, figures: us
     );
 }
 
-/// `flightid compare` on c172x (srivc only, a one-amplitude sweep) with `extra` arguments: its report
-/// directory (kept alive by the returned temporary directory) and its JSON.
-fn quick_compare(extra: &[&str]) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
+/// `flightid compare --aircraft c172x ARGS --report DIR --json FILE`: the report directory (kept alive by the
+/// returned temporary directory) and the JSON.
+fn compare(args: &[&str]) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
     let tmp = tempfile::tempdir().unwrap();
     let (dir, json) = (tmp.path().join("report"), tmp.path().join("compare.json"));
     let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
-        .args([
-            "compare",
-            "--aircraft",
-            "c172x",
-            "--method",
-            "srivc",
-            "--sweep-deg",
-            "1",
-        ])
-        .args(extra)
+        .args(["compare", "--aircraft", "c172x"])
+        .args(args)
         .arg("--report")
         .arg(&dir)
         .arg("--json")
@@ -143,6 +124,15 @@ fn quick_compare(extra: &[&str]) -> (tempfile::TempDir, std::path::PathBuf, serd
     );
     let v = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     (tmp, dir, v)
+}
+
+/// [`compare`] with srivc only and a one-amplitude sweep, plus `extra` arguments.
+fn quick_compare(extra: &[&str]) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
+    let args: Vec<&str> = ["--method", "srivc", "--sweep-deg", "1"]
+        .into_iter()
+        .chain(extra.iter().copied())
+        .collect();
+    compare(&args)
 }
 
 /// Fit % of JSBSim's linearization on each transfer function of a `compare --json` output.

@@ -20,13 +20,13 @@ use serde::Serialize;
 use super::fit::{estimate_derivatives, FitOptions, IdentifiedTfs};
 use super::params::{Assumptions, Derivative, Derivatives, ThrustModel};
 use super::regression::{
-    half_sample_lag, savitzky_golay_smooth, EquationErrorOptions, RegressionResult,
+    half_sample_lag, regressor_filter, EquationErrorOptions, RegressionResult,
 };
 use super::score::{Scorecard, CMQ_SUM};
 use super::spec::full_assumptions;
 use super::AeroError;
 use crate::data;
-use crate::sim::jsbsim::{cross, wind_to_body};
+use crate::sim::jsbsim::{coefficient_property, cross, wind_to_body};
 use crate::sim::JsbsimSim;
 
 /// One named cause of an estimate's error and how much of it it accounts for.
@@ -355,11 +355,6 @@ pub struct CoefficientProbe {
     pub qbar_psf: f64,
 }
 
-/// Property of a coefficient function.
-fn function_property(name: &str) -> String {
-    format!("aero/coefficient/{name}")
-}
-
 /// Propulsion forces and moments (body axes, about the CG) recorded as the `propulsion` term.
 const PROPULSION: [&str; 6] = [
     "forces/fbx-prop-lbs",
@@ -374,7 +369,7 @@ const PROPULSION: [&str; 6] = [
 /// function, the propulsion forces and moments.
 pub fn recorded_properties(axes: &BTreeMap<String, String>) -> Vec<String> {
     let mut out = vec!["aero/qbar-psf".to_string()];
-    out.extend(axes.keys().map(|k| function_property(k)));
+    out.extend(axes.keys().map(|k| coefficient_property(k)));
     out.extend(PROPULSION.iter().map(|p| p.to_string()));
     out
 }
@@ -382,7 +377,7 @@ pub fn recorded_properties(axes: &BTreeMap<String, String>) -> Vec<String> {
 /// Probes every coefficient function of the simulator at its current trim ([`CoefficientProbe`]).
 pub fn probe_coefficients(sim: &mut JsbsimSim) -> Result<CoefficientProbe, AeroError> {
     let axes = sim.coefficient_axes.clone();
-    let props: Vec<String> = axes.keys().map(|k| function_property(k)).collect();
+    let props: Vec<String> = axes.keys().map(|k| coefficient_property(k)).collect();
     let (base, slopes) = sim.probe_slopes(&props)?;
     let names = [
         "metrics/aero-rp-x-in",
@@ -583,20 +578,8 @@ pub fn attribute_equation_error(
     let alpha = col("alpha_rad")?;
     let beta = col("beta_rad")?;
     let qbar = col("aero/qbar-psf")?;
-    // what the regression does to its regressors, applied to each function's share of the response:
-    // smoothed, then delayed by half a sample when the estimator models the integrator's lag
-    let smooth = |c: &[f64]| -> Result<Vec<f64>, AeroError> {
-        let s = if options.smooth_regressors && c.iter().any(|v| *v != c[0]) {
-            savitzky_golay_smooth(c, options.half_window, options.poly_order)?
-        } else {
-            c.to_vec()
-        };
-        Ok(if options.lags_half_sample(eq) {
-            half_sample_lag(&s)
-        } else {
-            s
-        })
-    };
+    // what the regression does to its regressors, applied to each function's share of the response
+    let smooth = |c: &[f64]| regressor_filter(c, eq, options);
     let alphadot_free = clean.terms.iter().any(|t| t.name.ends_with("_alphadot"));
     let suffixes: Vec<String> = clean
         .terms
@@ -627,7 +610,7 @@ pub fn attribute_equation_error(
     let mut sum_c = vec![0.0; n];
     let mut sum_s = vec![0.0; p_cols];
     for (name, axis) in &probe.axes {
-        let series = col(&function_property(name))?;
+        let series = col(&coefficient_property(name))?;
         let c: Vec<f64> = (0..n)
             .map(|i| {
                 let (f, m) = force_moment(axis, series[i], alpha[i], beta[i], probe.arm_ft);

@@ -303,6 +303,28 @@ fn channel<'a>(
     }
 }
 
+/// What the regression does to a regressor column of `coefficient`'s equation: a non-constant one is smoothed
+/// with the differentiator's fit (if the options say so) and delayed half a sample (if they say that).
+pub fn regressor_filter(
+    c: &[f64],
+    coefficient: &str,
+    options: &EquationErrorOptions,
+) -> Result<Vec<f64>, AeroError> {
+    if c.iter().all(|&v| v == c[0]) {
+        return Ok(c.to_vec());
+    }
+    let s = if options.smooth_regressors {
+        savitzky_golay_smooth(c, options.half_window, options.poly_order)?
+    } else {
+        c.to_vec()
+    };
+    Ok(if options.lags_half_sample(coefficient) {
+        half_sample_lag(&s)
+    } else {
+        s
+    })
+}
+
 /// [`lesq`] after smoothing every non-constant regressor with the differentiator's fit, if asked.
 fn lesq_smoothed(
     coefficient: &'static str,
@@ -313,22 +335,7 @@ fn lesq_smoothed(
 ) -> Result<RegressionResult, AeroError> {
     let smoothed = columns
         .iter()
-        .map(|c| {
-            if c.iter().all(|&v| v == c[0]) {
-                Ok::<_, AeroError>(c.clone())
-            } else {
-                let s = if options.smooth_regressors {
-                    savitzky_golay_smooth(c, options.half_window, options.poly_order)?
-                } else {
-                    c.clone()
-                };
-                Ok(if options.lags_half_sample(coefficient) {
-                    half_sample_lag(&s)
-                } else {
-                    s
-                })
-            }
-        })
+        .map(|c| regressor_filter(c, coefficient, options))
         .collect::<Result<Vec<_>, _>>()?;
     lesq(coefficient, names, &smoothed, z, options.max_lag)
 }

@@ -81,7 +81,8 @@ pub(super) fn explain_linearization_gaps(
     }
     json["nonsmooth_terms"] = serde_json::to_value(&truth.nonsmooth)?;
     json["nonsmooth_shares"] = serde_json::to_value(&shares)?;
-    let Some(section) = compare::nonsmooth_section(&truth.nonsmooth, outcome, &shares) else {
+    let Some(section) = compare::nonsmooth_section(&truth.nonsmooth, outcome, &gaps, &shares)
+    else {
         return Ok(Vec::new());
     };
     let verdicts = section

@@ -636,17 +636,18 @@ fn explains(before: f64, after: f64) -> bool {
 }
 
 /// "What the linearization cannot see": the model's coefficient functions with a kink at the trim point
-/// ([`crate::sim::jsbsim::NonSmoothTerm`]), the transfer functions the linearization fits poorly, and for each
-/// kink the fits measured without it (`shares`), with a verdict per gap. `None` when the model has no kink there.
+/// ([`crate::sim::jsbsim::NonSmoothTerm`]), the transfer functions the linearization fits poorly (`gaps`, from
+/// [`linearization_gaps`]), and for each kink the fits measured without it (`shares`), with a verdict per gap.
+/// `None` when the model has no kink there.
 pub fn nonsmooth_section(
     terms: &[crate::sim::jsbsim::NonSmoothTerm],
     outcome: &CompareOutcome,
+    gaps: &[(String, f64)],
     shares: &[KinkShare],
 ) -> Option<Section> {
     if terms.is_empty() {
         return None;
     }
-    let gaps = linearization_gaps(outcome);
     let rows = terms
         .iter()
         .map(|t| {
@@ -673,7 +674,7 @@ pub fn nonsmooth_section(
              better, so these kinks matter little at this amplitude."
         ));
     }
-    for (key, before) in &gaps {
+    for (key, before) in gaps {
         let measured: Vec<(&str, f64)> = shares
             .iter()
             .filter_map(|k| Some((k.coefficient.as_str(), *k.fit_percent_without.get(key)?)))

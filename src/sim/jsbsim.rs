@@ -158,10 +158,7 @@ impl JsbsimSim {
                 "probe_slopes needs a successful trim first".into(),
             ));
         }
-        let perturb = json!({
-            "alpha": 1e-3, "beta": 1e-3, "p": 1e-2, "q": 1e-2, "r": 1e-2, "alphadot": 1e-2, "betadot": 1e-2,
-            "surface:elevator": 1e-3, "surface:aileron": 1e-3, "surface:rudder": 1e-3,
-        });
+        let perturb = probe_steps();
         let resp = self.bridge.request(
             json!({"cmd": "probe", "perturb": perturb, "condition": [], "extra": properties}),
             &[],
@@ -595,6 +592,19 @@ pub struct NonSmoothTerm {
     pub slope_above: f64,
 }
 
+/// Perturbation of each aero input in the bridge's probe: rad for angles and surfaces, rad/s for rates.
+fn probe_steps() -> serde_json::Value {
+    json!({
+        "alpha": 1e-3, "beta": 1e-3, "p": 1e-2, "q": 1e-2, "r": 1e-2, "alphadot": 1e-2, "betadot": 1e-2,
+        "surface:elevator": 1e-3, "surface:aileron": 1e-3, "surface:rudder": 1e-3,
+    })
+}
+
+/// The property of an aerodynamic coefficient function, `aero/coefficient/NAME`.
+pub fn coefficient_property(name: &str) -> String {
+    format!("aero/coefficient/{name}")
+}
+
 /// Smallest jump between one-sided slopes reported as a kink, nondimensional per rad: smaller ones change no
 /// response a report could show (CDbeta's is 0.34).
 const NONSMOOTH_MIN_JUMP: f64 = 0.01;
@@ -605,14 +615,12 @@ const NONSMOOTH_MIN_JUMP: f64 = 0.01;
 fn nonsmooth_terms(
     probe: &serde_json::Value,
     base: &BTreeMap<String, f64>,
+    axes: &BTreeMap<String, String>,
     norm: &dyn Fn(&str) -> f64,
     pitch_rate: f64,
     lat_rate: f64,
 ) -> Vec<NonSmoothTerm> {
     let mut out = Vec::new();
-    let Some(axes) = probe["axes"].as_object() else {
-        return out;
-    };
     for (var, scale) in [
         ("alpha", 1.0),
         ("beta", 1.0),
@@ -628,8 +636,8 @@ fn nonsmooth_terms(
             continue;
         };
         for (coefficient, axis) in axes {
-            let axis = axis.as_str().unwrap_or("");
-            let key = format!("coef:{coefficient}");
+            let axis = axis.as_str();
+            let key = coefficient_property(coefficient);
             let (Some(plus), Some(minus), Some(at)) = (
                 p["plus"][&key].as_f64(),
                 p["minus"][&key].as_f64(),
@@ -665,10 +673,7 @@ impl JsbsimSim {
             .trim
             .clone()
             .ok_or_else(|| SimError::Usage("aero_truth needs a successful trim first".into()))?;
-        let perturb = json!({
-            "alpha": 1e-3, "beta": 1e-3, "p": 1e-2, "q": 1e-2, "r": 1e-2, "alphadot": 1e-2, "betadot": 1e-2,
-            "surface:elevator": 1e-3, "surface:aileron": 1e-3, "surface:rudder": 1e-3,
-        });
+        let perturb = probe_steps();
         let condition = [
             "aero/qbar-psf",
             "velocities/vt-fps",
@@ -690,11 +695,20 @@ impl JsbsimSim {
             "inertia/cg-y-in",
             "inertia/cg-z-in",
         ];
-        let extra = [
+        // the CG moments, and every coefficient function on its own (for its one-sided slopes: kinks)
+        let extra: Vec<String> = [
             "moments/m-aero-lbsft",
             "moments/l-aero-lbsft",
             "moments/n-aero-lbsft",
-        ];
+        ]
+        .iter()
+        .map(|p| p.to_string())
+        .chain(
+            self.coefficient_axes
+                .keys()
+                .map(|c| coefficient_property(c)),
+        )
+        .collect();
         let resp = self.bridge.request(
             json!({"cmd": "probe", "perturb": perturb, "condition": condition, "extra": extra}),
             &[],
@@ -807,7 +821,14 @@ impl JsbsimSim {
             };
             d.insert(name.to_string(), about_cg * scale);
         }
-        let nonsmooth = nonsmooth_terms(h, &base, &norm, pitch_rate, lat_rate);
+        let nonsmooth = nonsmooth_terms(
+            h,
+            &base,
+            &self.coefficient_axes,
+            &norm,
+            pitch_rate,
+            lat_rate,
+        );
         let cl = coef("LIFT");
         let cd = coef("DRAG");
         let cd_alpha = slope("alpha", "DRAG");
