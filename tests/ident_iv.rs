@@ -58,40 +58,27 @@ fn iv_places_the_dominant_poles_of_all_three_paper_tfs_within_3_percent_under_on
 }
 
 #[test]
-fn when_the_iv_iterations_fail_iv_returns_its_srivc_start_with_a_warning() {
-    // A 2nd-order system (ωn 2 rad/s, ζ 0.25) fitted with 4 poles and 2 zeros, noise-free: the extra pole pair
-    // cancels against the zeros, the IV iterate's numerator regression is singular, and iv falls back to the SRIVC
-    // estimate it started from — which fits these data exactly — saying so in `warnings`.
+fn an_iv_fit_s_warnings_reach_stderr_and_the_run_still_succeeds() {
+    // A slowly divergent first-order system, 1/(s − 0.2), over 30 s (e^6 ≈ 400-fold growth): iv finds the
+    // unstable pole and the identification warns that the model grows over the record. (iv's own fallback to its
+    // SRIVC start is unit-tested in src/ident/iv.rs: a near-singular scenario that triggers it end to end depends
+    // on the last bits of the SRIVC start.)
     let dt_s = 0.01;
     let mut u = signal::generate(&Maneuver::Doublet { pulse_s: 1.0 }, dt_s, 30.0, 1.0);
     u.resize(3000, 0.0);
-    let y = ident::simulate_tf(&[4.0], &[1.0, 1.0, 4.0], &u, dt_s);
+    let y = ident::simulate_tf(&[1.0], &[1.0, -0.2], &u, dt_s);
     let opts = IdentOptions {
         method: Method::Iv,
-        ..IdentOptions::default()
+        poles: 1,
+        zeros: 0,
+        estimate_delay: false,
     };
     let r = ident::identify(&u, &y, dt_s, &opts).unwrap();
+    assert!((r.tf.den[1] + 0.2).abs() < 1e-6, "{:?}", r.tf.den);
     assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
-    assert!(
-        r.warnings[0].contains("returning its starting estimate (srivc)"),
-        "{}",
-        r.warnings[0]
-    );
-    assert!(r.fit_sim_percent > 99.9, "fit {}", r.fit_sim_percent);
-    let srivc = ident::identify(
-        &u,
-        &y,
-        dt_s,
-        &IdentOptions {
-            method: Method::Srivc,
-            ..opts
-        },
-    )
-    .unwrap();
-    assert_eq!(r.tf.den, srivc.tf.den);
-    // the same record through the CLI: the warning reaches stderr, the run still succeeds
+    assert!(r.warnings[0].contains("grows"), "{}", r.warnings[0]);
     let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("second_order.csv");
+    let csv = dir.path().join("divergent.csv");
     let mut text = String::from("time_s,elevator_rad,theta_rad\n");
     for k in 0..u.len() {
         text.push_str(&format!("{},{},{}\n", k as f64 * dt_s, u[k], y[k]));
@@ -107,10 +94,19 @@ fn when_the_iv_iterations_fail_iv_returns_its_srivc_start_with_a_warning() {
             "theta_rad",
             "--method",
             "iv",
+            "--poles",
+            "1",
+            "--zeros",
+            "0",
         ])
         .output()
         .unwrap();
-    assert!(out.status.success());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("warning: iv did not converge"), "{stderr}");
+    assert!(stderr.contains("warning: pole"), "{stderr}");
+    assert!(stderr.contains("grows"), "{stderr}");
 }

@@ -200,8 +200,20 @@ pub(crate) fn iv(
             break;
         }
     }
+    Ok(best_or_start(best, failure, start, start_fit, start_name))
+}
+
+/// The best iterate when it simulates within a point of the start's fit; otherwise the start,
+/// with a warning saying why (the iteration's `failure`, or the best iterate's fit).
+fn best_or_start(
+    best: Option<(ContinuousModel, f64)>,
+    failure: Option<String>,
+    start: ContinuousModel,
+    start_fit: f64,
+    start_name: &str,
+) -> ContinuousModel {
     match best {
-        Some((model, fit)) if fit >= start_fit - 1.0 => Ok(model),
+        Some((model, fit)) if fit >= start_fit - 1.0 => model,
         other => {
             let why = match (other, failure) {
                 (Some((_, fit)), _) => format!(
@@ -214,7 +226,51 @@ pub(crate) fn iv(
             model.warnings.push(format!(
                 "iv did not converge ({why}); returning its starting estimate ({start_name})"
             ));
-            Ok(model)
+            model
         }
+    }
+}
+
+#[cfg(test)]
+mod fallback_tests {
+    use super::best_or_start;
+    use crate::ident::ContinuousModel;
+
+    fn model(pole: f64) -> ContinuousModel {
+        ContinuousModel::new(vec![1.0], vec![1.0, pole], 0.0)
+    }
+
+    #[test]
+    fn an_iterate_within_a_point_of_the_start_is_returned_as_is() {
+        let m = best_or_start(Some((model(2.0), 89.5)), None, model(1.0), 90.0, "srivc");
+        assert_eq!(m.den, vec![1.0, 2.0]);
+        assert!(m.warnings.is_empty());
+    }
+
+    #[test]
+    fn a_worse_iterate_returns_the_start_with_both_fits_in_the_warning() {
+        let m = best_or_start(Some((model(2.0), 88.9)), None, model(1.0), 90.0, "srivc");
+        assert_eq!(m.den, vec![1.0, 1.0]);
+        assert_eq!(
+            m.warnings,
+            vec!["iv did not converge (its best iterate simulates at 88.90 % against the start's 90.00 %); \
+                  returning its starting estimate (srivc)"]
+        );
+    }
+
+    #[test]
+    fn a_failure_before_any_iterate_returns_the_start_naming_the_failure() {
+        let m = best_or_start(
+            None,
+            Some("singular instrument matrix".into()),
+            model(1.0),
+            90.0,
+            "ls",
+        );
+        assert_eq!(m.den, vec![1.0, 1.0]);
+        assert_eq!(
+            m.warnings,
+            vec!["iv did not converge (singular instrument matrix); returning its starting estimate (ls)"]
+        );
     }
 }

@@ -220,3 +220,21 @@ pub(crate) fn stabilize_continuous(den_monic: &[f64]) -> Vec<f64> {
         .collect();
     poly_from_roots(&refl)
 }
+
+/// Inner product with eight independent partial sums (lets the compiler vectorise the loop).
+pub(crate) fn dot(x: &[f64], y: &[f64]) -> f64 {
+    let mut acc = [0.0; 8];
+    let (xc, yc) = (x.chunks_exact(8), y.chunks_exact(8));
+    let tail: f64 = xc
+        .remainder()
+        .iter()
+        .zip(yc.remainder())
+        .map(|(a, b)| a * b)
+        .sum();
+    for (a, b) in xc.zip(yc) {
+        for k in 0..8 {
+            acc[k] += a[k] * b[k];
+        }
+    }
+    acc.iter().sum::<f64>() + tail
+}

@@ -288,6 +288,12 @@ fn validate(u: &[f64], y: &[f64], dt_s: f64, opts: &IdentOptions) -> Result<(), 
             opts.poles, opts.zeros
         )));
     }
+    if opts.poles > MAX_POLES {
+        return Err(IdentError::InvalidOptions(format!(
+            "at most {MAX_POLES} poles, got {} (flight data do not determine more)",
+            opts.poles
+        )));
+    }
     // ten samples per parameter of the largest regression (the ARX fit, 2n parameters)
     let needed = 20 * opts.poles + 10;
     if u.len() < needed {
@@ -347,6 +353,10 @@ fn input_noise_std(u: &[f64]) -> f64 {
     let (_, median, _) = d.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
     1.4826 * *median / std::f64::consts::SQRT_2
 }
+
+/// Largest model order accepted: the output-error sensitivities filter by `A(s)²`, and the state
+/// filters are specialised up to order 2 × 32 (see [`filter::Svf`]).
+pub const MAX_POLES: usize = 32;
 
 /// Identifies a continuous transfer function from input `u` to output `y` sampled every
 /// `dt_s` seconds with the estimator and orders in `opts`.

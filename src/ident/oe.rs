@@ -22,6 +22,8 @@
 use super::filter::{combine, simulate, Hold, Svf};
 use super::linalg::{inverse, matmul, poly_mul, solve_square};
 use super::{ContinuousModel, IdentError};
+use num_complex::Complex64;
+use realfft::RealFftPlanner;
 
 const MAX_ITER: usize = 100;
 
@@ -301,80 +303,134 @@ pub(crate) fn covariance(
 fn coloured_covariance(s: &[f64], r: &[f64], minv: &[f64], p: usize) -> Vec<f64> {
     let len = r.len();
     let cap = (len / 10).max(1).min(len - 1);
-    let acf_at = |l: usize| (l..len).map(|k| r[k] * r[k - l]).sum::<f64>() / len as f64;
-    let r0 = acf_at(0).max(f64::MIN_POSITIVE);
+    let acf = autocorrelation(r, cap);
+    let r0 = acf[0].max(f64::MIN_POSITIVE);
     let bound = 2.58 / (len as f64).sqrt();
-    let mut decay = cap;
-    for l in 1..=cap {
-        if (acf_at(l) / r0).abs() < bound {
-            decay = l;
-            break;
-        }
-    }
+    let decay = (1..=cap)
+        .find(|&l| (acf[l] / r0).abs() < bound)
+        .unwrap_or(cap);
     let max_lag = (2 * decay).min(cap);
-    let acf: Vec<f64> = (0..=max_lag)
-        .map(|l| acf_at(l) * (1.0 - l as f64 / (max_lag as f64 + 1.0)))
+    let weighted: Vec<f64> = (0..=max_lag)
+        .map(|l| acf[l] * (1.0 - l as f64 / (max_lag as f64 + 1.0)))
         .collect();
-    // W = Σ_i s_i w_iᵀ with w_i = Σ_j R(|i−j|) s_j: each column of w is the column of s convolved
-    // with the symmetric kernel R(−L … L), computed column-major so the inner products run over
-    // contiguous memory (8 accumulators: vectorised), then W[a][b] = ⟨s_a, w_b⟩.
-    let w = lag_weighted_products(s, &acf, len, p);
+    let w = lag_weighted_products(s, &weighted, len, p);
     matmul(&matmul(minv, &w, p), minv, p)
+}
+
+/// Sample autocorrelation `R(l) = (1/N) Σ_k r_k r_{k−l}` for l = 0 … `max_lag`, by FFT (Wiener–
+/// Khinchin on the record zero-padded past `N + max_lag`, so the circular correlation is the
+/// linear one).
+fn autocorrelation(r: &[f64], max_lag: usize) -> Vec<f64> {
+    let len = r.len();
+    let size = (len + max_lag).next_power_of_two();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let spectrum = real_spectrum(&mut planner, r, size);
+    let mut power: Vec<Complex64> = spectrum
+        .iter()
+        .map(|z| Complex64::new(z.norm_sqr(), 0.0))
+        .collect();
+    let mut out = vec![0.0; size];
+    planner
+        .plan_fft_inverse(size)
+        .process(&mut power, &mut out)
+        .expect("inverse FFT of a Hermitian spectrum");
+    out.truncate(max_lag + 1);
+    // realfft's inverse is unnormalised: divide by the FFT size, then by N for the estimate
+    out.iter_mut().for_each(|v| *v /= size as f64 * len as f64);
+    out
+}
+
+/// The one-sided spectrum (`size/2 + 1` bins) of `v` zero-padded to `size`.
+fn real_spectrum(planner: &mut RealFftPlanner<f64>, v: &[f64], size: usize) -> Vec<Complex64> {
+    let fft = planner.plan_fft_forward(size);
+    let mut input = vec![0.0; size];
+    input[..v.len()].copy_from_slice(v);
+    let mut spectrum = fft.make_output_vec();
+    fft.process(&mut input, &mut spectrum)
+        .expect("forward FFT of a real signal");
+    spectrum
 }
 
 /// `W = Σ_i Σ_j s_i R(|i−j|) s_jᵀ` (p × p, row-major) for the row-major `len × p` matrix `s` and
 /// the lag weights `acf[0..=L]` (zero beyond L).
+///
+/// `W_ab = ⟨s_a, K * s_b⟩` with the symmetric kernel `K(l) = R(|l|)`; by Parseval on columns
+/// zero-padded to `M ≥ N + L` (no wrap-around), `W_ab = (1/M) Σ_f conj(Ŝ_a(f)) K̂(f) Ŝ_b(f)`,
+/// `K̂(f) = R(0) + 2 Σ_l R(l) cos(2π f l / M)` real: p FFTs instead of p convolutions of
+/// length 2L+1 (O(pN log N) instead of O(pNL)).
 fn lag_weighted_products(s: &[f64], acf: &[f64], len: usize, p: usize) -> Vec<f64> {
     let max_lag = acf.len() - 1;
-    let cols: Vec<Vec<f64>> = (0..p)
-        .map(|c| (0..len).map(|i| s[i * p + c]).collect())
-        .collect();
-    // kernel[t] = R(|t − L|), t = 0 … 2L
-    let kernel: Vec<f64> = (0..=2 * max_lag)
-        .map(|t| acf[t.abs_diff(max_lag)])
-        .collect();
-    let convolved: Vec<Vec<f64>> = cols
+    let size = (len + max_lag).next_power_of_two();
+    let mut planner = RealFftPlanner::<f64>::new();
+    // K̂ from the kernel laid out circularly: K[0] = R(0), K[l] = K[M−l] = R(l)
+    let mut kernel = vec![0.0; size];
+    kernel[0] = acf[0];
+    for l in 1..=max_lag {
+        kernel[l] = acf[l];
+        kernel[size - l] = acf[l];
+    }
+    let k_hat: Vec<f64> = real_spectrum(&mut planner, &kernel, size)
         .iter()
-        .map(|col| {
-            (0..len)
-                .map(|i| {
-                    let lo = i.saturating_sub(max_lag);
-                    let hi = (i + max_lag).min(len - 1);
-                    dot(&col[lo..=hi], &kernel[lo + max_lag - i..=hi + max_lag - i])
-                })
-                .collect()
+        .map(|z| z.re)
+        .collect();
+    let spectra: Vec<Vec<Complex64>> = (0..p)
+        .map(|c| {
+            let col: Vec<f64> = (0..len).map(|i| s[i * p + c]).collect();
+            real_spectrum(&mut planner, &col, size)
         })
+        .collect();
+    // the full spectrum counts every bin but DC and Nyquist twice (conjugate symmetry)
+    let half = size / 2;
+    let weight: Vec<f64> = (0..=half)
+        .map(|f| if f == 0 || f == half { 1.0 } else { 2.0 } * k_hat[f] / size as f64)
         .collect();
     let mut w = vec![0.0; p * p];
     for a in 0..p {
-        for b in 0..p {
-            w[a * p + b] = dot(&cols[a], &convolved[b]);
+        for b in a..p {
+            let v: f64 = spectra[a]
+                .iter()
+                .zip(&spectra[b])
+                .zip(&weight)
+                .map(|((x, y), g)| g * (x.re * y.re + x.im * y.im))
+                .sum();
+            w[a * p + b] = v;
+            w[b * p + a] = v;
         }
     }
     w
 }
 
-/// Inner product with eight independent partial sums (lets the compiler vectorise the loop).
-fn dot(x: &[f64], y: &[f64]) -> f64 {
-    let mut acc = [0.0; 8];
-    let (xc, yc) = (x.chunks_exact(8), y.chunks_exact(8));
-    let tail: f64 = xc
-        .remainder()
-        .iter()
-        .zip(yc.remainder())
-        .map(|(a, b)| a * b)
-        .sum();
-    for (a, b) in xc.zip(yc) {
-        for k in 0..8 {
-            acc[k] += a[k] * b[k];
-        }
-    }
-    acc.iter().sum::<f64>() + tail
-}
-
 #[cfg(test)]
 mod lag_tests {
-    use super::lag_weighted_products;
+    use super::{autocorrelation, lag_weighted_products};
+
+    /// Deterministic pseudo-random numbers in [−0.5, 0.5) (xorshift64).
+    fn noise(count: usize) -> Vec<f64> {
+        let mut state = 0x2545F4914F6CDD1D_u64;
+        (0..count)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect()
+    }
+
+    #[test]
+    fn fft_autocorrelation_equals_the_lagged_sums() {
+        // a coloured record (first-order filtered noise, plus a mean) and lags up to a third of it
+        let mut r = noise(301);
+        for k in 1..r.len() {
+            r[k] += 0.8 * r[k - 1] + 0.01;
+        }
+        let acf = autocorrelation(&r, 100);
+        assert_eq!(acf.len(), 101);
+        for (l, a) in acf.iter().enumerate() {
+            let d = (l..r.len()).map(|k| r[k] * r[k - l]).sum::<f64>() / r.len() as f64;
+            assert!((a - d).abs() <= 1e-13 * acf[0], "lag {l}: {a} vs {d}");
+        }
+    }
 
     /// The definition, summed pair by pair: `Σ_i Σ_j s_i R(|i−j|) s_jᵀ`.
     fn by_definition(s: &[f64], acf: &[f64], len: usize, p: usize) -> Vec<f64> {
@@ -395,26 +451,23 @@ mod lag_tests {
     }
 
     #[test]
-    fn column_convolution_equals_the_double_sum() {
+    fn spectral_products_equal_the_double_sum() {
         // deterministic pseudo-random sensitivities (len 157, p 5) and Bartlett-like lag weights
-        // (L = 23): both edges, a tail shorter than the 8-wide chunks, lags reaching both ends
+        // (L = 23): both edges, lags reaching both ends, a size (157 + 23 → 256) with padding to spare
         let (len, p) = (157, 5);
-        let mut state = 0x2545F4914F6CDD1D_u64;
-        let s: Vec<f64> = (0..len * p)
-            .map(|_| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
+        let s = noise(len * p);
         let acf: Vec<f64> = (0..=23)
             .map(|l| (1.0 - l as f64 / 24.0) * (0.9f64).powi(l))
             .collect();
         let fast = lag_weighted_products(&s, &acf, len, p);
         let slow = by_definition(&s, &acf, len, p);
-        for (f, d) in fast.iter().zip(&slow) {
-            assert!((f - d).abs() <= 1e-12 * d.abs().max(1.0), "{f} vs {d}");
+        // FFT round-off is relative to the size of the whole product, √(W_aa W_bb)
+        for a in 0..p {
+            for b in 0..p {
+                let (f, d) = (fast[a * p + b], slow[a * p + b]);
+                let scale = (slow[a * p + a] * slow[b * p + b]).sqrt();
+                assert!((f - d).abs() <= 1e-12 * scale, "W[{a}][{b}]: {f} vs {d}");
+            }
         }
     }
 }

@@ -21,72 +21,64 @@
 //! fixed prefilter `(s + λ)^n`, tried for several λ; the one with the best simulation fit
 //! starts the iterations, and the iterate with the best simulation fit is returned.
 
-use super::filter::{Hold, Svf};
-use super::linalg::{poly_from_roots, solve_square, stabilize_continuous};
+use super::filter::{Columns, Hold, Svf};
+use super::linalg::{dot, poly_from_roots, solve_square, stabilize_continuous};
 use super::{nrmse_fit, ContinuousModel, IdentError};
 use num_complex::Complex64;
 
 /// Maximum SRIVC iterations (CONTSID's default is 10–20; convergence is usually reached in 5).
 const MAX_ITER: usize = 30;
 
-/// One IV step with prefilter `den_f`; `aux_num` = None means plain LS (instruments = regressors).
-/// With `with_offset` a constant output offset `c` is estimated too: for `y = B/A·u + c`, the
-/// filtered equation gains the term `c·A(s)/Â(s)·1(t)`, which is `c` itself once `Â = A`, so `c`
-/// enters as one more regressor (and instrument) equal to 1 (Young 2011, *Recursive Estimation
-/// and Time-Series Analysis*, §8.6, offset parameters). Returns `(num, den, c)`.
-#[allow(clippy::too_many_arguments)]
+/// One IV step with the prefilter `svf_y` (`1/Â_f`, first-order hold for the output) and the
+/// input already filtered by it (`xu`, zero-order hold and delay); `aux_num` = None means plain
+/// LS (instruments = regressors). With `with_offset` a constant output offset `c` is estimated
+/// too: for `y = B/A·u + c`, the filtered equation gains the term `c·A(s)/Â(s)·1(t)`, which is `c`
+/// itself once `Â = A`, so `c` enters as one more regressor (and instrument) equal to 1 (Young
+/// 2011, *Recursive Estimation and Time-Series Analysis*, §8.6, offset parameters). Returns
+/// `(num, den, c)`.
+///
+/// The normal equations are assembled column by column, `[Σ ζ̂_f φ_fᵀ]_rc = ⟨ζ̂_r, φ_c⟩` over the
+/// filtered signals, each inner product over contiguous memory.
 fn iv_step(
-    u: &[f64],
     y: &[f64],
-    dt_s: f64,
-    delay_s: f64,
     m: usize,
-    den_f: &[f64],
+    svf_y: &Svf,
+    xu: &Columns,
     aux_num: Option<&[f64]>,
     with_offset: bool,
 ) -> Option<(Vec<f64>, Vec<f64>, f64)> {
-    let n = den_f.len() - 1;
-    let len = y.len();
-    let svf_u = Svf::new(den_f, dt_s, Hold::Zoh { delay_s });
-    let svf_y = Svf::new(den_f, dt_s, Hold::Foh);
-    let xu = svf_u.run(u);
-    let xy = svf_y.run(y);
-    let xx = aux_num.map(|b| {
-        let xhat = super::filter::combine(&xu, n, b, len);
-        let s = svf_y.run(&xhat);
-        (xhat, s)
-    });
-    let p = n + m + 1 + usize::from(with_offset);
+    let n = svf_y.n;
+    let xy = svf_y.run_columns(y);
+    let target = svf_y.top_derivative_columns(&xy, y);
+    let sx = aux_num.map(|b| svf_y.run_columns(&xu.combine(b)));
+    let ones = vec![1.0; if with_offset { y.len() } else { 0 }];
+    // φ_f = [−y_f^{(n−1)} … −y_f, u_f^{(m)} … u_f, (1)], as (column, sign)
+    let mut phi: Vec<(&[f64], f64)> = (0..n).map(|i| (xy.col(n - 1 - i), -1.0)).collect();
+    phi.extend((0..=m).map(|j| (xu.col(m - j), 1.0)));
+    if with_offset {
+        phi.push((&ones, 1.0));
+    }
+    // ζ̂_f: the same with the auxiliary model's filtered output for y
+    let mut zeta = phi.clone();
+    if let Some(sx) = &sx {
+        for (i, z) in zeta.iter_mut().take(n).enumerate() {
+            *z = (sx.col(n - 1 - i), -1.0);
+        }
+    }
+    let p = phi.len();
+    // rows and columns where ζ̂ = φ form a symmetric block
+    let shared = |k: usize| k >= n || sx.is_none();
     let mut zphi = vec![0.0; p * p];
     let mut zy = vec![0.0; p];
-    let mut phi = vec![0.0; p];
-    let mut zeta = vec![0.0; p];
-    for k in 0..len {
-        for i in 0..n {
-            phi[i] = -xy[k * n + n - 1 - i];
-        }
-        for j in 0..=m {
-            phi[n + j] = xu[k * n + m - j];
-        }
-        if with_offset {
-            phi[p - 1] = 1.0;
-        }
-        let target = svf_y.top_derivative(&xy, k, y[k]);
-        match &xx {
-            Some((_, sx)) => {
-                for i in 0..n {
-                    zeta[i] = -sx[k * n + n - 1 - i];
-                }
-                zeta[n..].copy_from_slice(&phi[n..]);
-            }
-            None => zeta.copy_from_slice(&phi),
-        }
-        for r in 0..p {
-            let zr = zeta[r];
-            zy[r] += zr * target;
-            for c in 0..p {
-                zphi[r * p + c] += zr * phi[c];
-            }
+    for r in 0..p {
+        let (zr, sr) = zeta[r];
+        zy[r] = sr * dot(zr, &target);
+        for c in 0..p {
+            zphi[r * p + c] = if shared(r) && shared(c) && c < r {
+                zphi[c * p + r]
+            } else {
+                sr * phi[c].1 * dot(zr, phi[c].0)
+            };
         }
     }
     let theta = solve_square(&zphi, &zy)?;
@@ -96,19 +88,9 @@ fn iv_step(
     Some((theta[n..=n + m].to_vec(), den, c))
 }
 
-/// Simulation fit (%) of a candidate model plus output offset `c`; the caller reflects wild
-/// unstable poles first so a candidate cannot overflow.
-#[allow(clippy::too_many_arguments)]
-fn candidate_fit(
-    num: &[f64],
-    den: &[f64],
-    c: f64,
-    u: &[f64],
-    y: &[f64],
-    dt_s: f64,
-    delay_s: f64,
-) -> f64 {
-    let mut y_sim = super::filter::simulate(num, den, u, dt_s, delay_s);
+/// Simulation fit (%) of a candidate's simulated output plus output offset `c`; −∞ when the
+/// simulation overflowed (the caller reflects wild unstable poles first).
+fn candidate_fit(y: &[f64], mut y_sim: Vec<f64>, c: f64) -> f64 {
     y_sim.iter_mut().for_each(|v| *v += c);
     let f = nrmse_fit(y, &y_sim);
     if f.is_finite() {
@@ -127,6 +109,10 @@ type Iterate = (Vec<f64>, Vec<f64>, f64, f64);
 /// as in `oe`: the trim removed by [`super::identify`] is the mean of the few samples before the
 /// input moves, and its noise, left unmodelled, biases the slow poles (the spiral of the paper's
 /// φ/δa landed 5σ off).
+///
+/// One SVF run of the input per iteration serves twice: `u` filtered by the new `1/Â` gives the
+/// candidate's simulated output `B̂/Â · u` (its fit) and, being the next prefilter, the next
+/// iteration's filtered input and auxiliary-model output.
 fn iterate(
     u: &[f64],
     y: &[f64],
@@ -137,11 +123,13 @@ fn iterate(
 ) -> Option<Iterate> {
     let (mut num, mut den) = start;
     let record_s = y.len() as f64 * dt_s;
+    let input_filter = |den_f: &[f64]| Svf::new(den_f, dt_s, Hold::Zoh { delay_s }).run_columns(u);
+    let mut den_f = stabilize_if_wild(&den, record_s);
+    let mut xu = input_filter(&den_f);
     let mut best: Option<Iterate> = None;
     for _ in 0..MAX_ITER {
-        let den_f = stabilize_if_wild(&den, record_s);
-        let aux_num = num.clone();
-        let (num_new, den_new, c) = iv_step(u, y, dt_s, delay_s, m, &den_f, Some(&aux_num), true)?;
+        let svf_y = Svf::new(&den_f, dt_s, Hold::Foh);
+        let (num_new, den_new, c) = iv_step(y, m, &svf_y, &xu, Some(&num), true)?;
         if num_new.iter().chain(den_new.iter()).any(|v| !v.is_finite()) || !c.is_finite() {
             break;
         }
@@ -153,15 +141,9 @@ fn iterate(
             .fold(0.0_f64, f64::max);
         num = num_new;
         den = den_new;
-        let fit = candidate_fit(
-            &num,
-            &stabilize_if_wild(&den, record_s),
-            c,
-            u,
-            y,
-            dt_s,
-            delay_s,
-        );
+        den_f = stabilize_if_wild(&den, record_s);
+        xu = input_filter(&den_f);
+        let fit = candidate_fit(y, xu.combine(&num), c);
         if best.as_ref().is_none_or(|b| fit > b.3) {
             best = Some((num.clone(), den.clone(), c, fit));
         }
@@ -200,16 +182,12 @@ pub(crate) fn svf_ls_start(
     let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
     for lambda in lambdas(dt_s) {
         let den_f = poly_from_roots(&vec![Complex64::new(-lambda, 0.0); n]);
-        if let Some((num, den, _)) = iv_step(u, y, dt_s, delay_s, m, &den_f, None, false) {
-            let fit = candidate_fit(
-                &num,
-                &stabilize_if_wild(&den, record_s),
-                0.0,
-                u,
-                y,
-                dt_s,
-                delay_s,
-            );
+        let xu = Svf::new(&den_f, dt_s, Hold::Zoh { delay_s }).run_columns(u);
+        let svf_y = Svf::new(&den_f, dt_s, Hold::Foh);
+        if let Some((num, den, _)) = iv_step(y, m, &svf_y, &xu, None, false) {
+            let y_sim =
+                super::filter::simulate(&num, &stabilize_if_wild(&den, record_s), u, dt_s, delay_s);
+            let fit = candidate_fit(y, y_sim, 0.0);
             if best.as_ref().is_none_or(|b| fit > b.2) {
                 best = Some((num, den, fit));
             }
