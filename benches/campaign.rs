@@ -68,6 +68,8 @@ fn bench_campaign(name: &str) {
     let mut trim_s = 0.0;
     let mut start_s = 0.0;
     let mut ident_by_method_s = vec![0.0; methods.len()];
+    // (aircraft, fly s, identification s) per aircraft: how evenly the work splits between workers
+    let mut by_aircraft: Vec<(String, f64, f64)> = Vec::new();
     let cpu0 = tree_cpu_s();
     let mut current: Option<(String, JsbsimSim)> = None;
     for c in &cases {
@@ -106,12 +108,23 @@ fn bench_campaign(name: &str) {
         );
         let t = Instant::now();
         let rec = sim.fly(&plan).unwrap();
-        fly_s += t.elapsed().as_secs_f64();
+        let case_fly_s = t.elapsed().as_secs_f64();
+        fly_s += case_fly_s;
         let (du, dy) = perturbations(&rec, &c.surface, &c.tf_key).unwrap();
+        let mut case_ident_s = 0.0;
         for (k, &m) in methods.iter().enumerate() {
             let t = Instant::now();
             let _ = identify(&du, &dy, 1.0 / spec.rate_hz, &paper_options(m));
-            ident_by_method_s[k] += t.elapsed().as_secs_f64();
+            let s = t.elapsed().as_secs_f64();
+            ident_by_method_s[k] += s;
+            case_ident_s += s;
+        }
+        match by_aircraft.iter_mut().find(|(a, _, _)| *a == c.aircraft) {
+            Some(e) => {
+                e.1 += case_fly_s;
+                e.2 += case_ident_s;
+            }
+            None => by_aircraft.push((c.aircraft.clone(), case_fly_s, case_ident_s)),
         }
     }
     let ident_s: f64 = ident_by_method_s.iter().sum();
@@ -136,6 +149,15 @@ fn bench_campaign(name: &str) {
             .iter()
             .zip(&ident_by_method_s)
             .map(|(m, t)| format!("{m} {t:.3} s"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+
+    println!(
+        "[{name}] by aircraft (fly + identification): {}",
+        by_aircraft
+            .iter()
+            .map(|(a, f, i)| format!("{a} {f:.3} + {i:.3} s"))
             .collect::<Vec<_>>()
             .join(", ")
     );

@@ -35,6 +35,11 @@ impl Bridge {
         let mut child = Command::new(&python)
             .arg("-u")
             .arg(&script)
+            // jsbsim imports numpy, whose BLAS would start a thread per core at import: the bridge does no linear
+            // algebra, and those threads cost ~0.05 s CPU per process start (measured, 2 cores)
+            .env("OPENBLAS_NUM_THREADS", "1")
+            .env("OMP_NUM_THREADS", "1")
+            .env("MKL_NUM_THREADS", "1")
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
