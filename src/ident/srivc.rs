@@ -29,6 +29,13 @@ use num_complex::Complex64;
 /// Maximum SRIVC iterations (CONTSID's default is 10–20; convergence is usually reached in 5).
 const MAX_ITER: usize = 30;
 
+/// The iterations stop when no parameter moves by more than this, relative. The fixed-point
+/// iteration converges linearly (each step shrinks the change 3–15-fold on the JSBSim records),
+/// so what is left is of the order of this change, while the smallest relative standard error
+/// seen on clean 60 s JSBSim records is 2.5e-4: 1e-6 stops 250× below the statistical resolution,
+/// three to six iterations earlier than 1e-9 did.
+const CONVERGED: f64 = 1e-6;
+
 /// One IV step with the prefilter `svf_y` (`1/Â_f`, first-order hold for the output) and the
 /// input already filtered by it (`xu`, zero-order hold and delay); `aux_num` = None means plain
 /// LS (instruments = regressors). With `with_offset` a constant output offset `c` is estimated
@@ -147,7 +154,7 @@ fn iterate(
         if best.as_ref().is_none_or(|b| fit > b.3) {
             best = Some((num.clone(), den.clone(), c, fit));
         }
-        if change < 1e-9 {
+        if change < CONVERGED {
             break;
         }
     }
