@@ -200,4 +200,14 @@ fn bench_campaign(name: &str) {
         cpu_s[0],
         cpu_s[1]
     );
+    // The same ratio against what flying these cases costs JSBSim at the least (a process per aircraft, a trim
+    // per condition, the stepping), and the floor that CPU sets on 2 cores: work that is not stepping cannot hide.
+    let bare_run_s = fly_s + trim_s + start_s;
+    println!(
+        "[{name}] 2-job wall / (bare JSBSim runs incl. process starts and trims / 2): {:.2}x; \
+         floor on 2 cores = 2-job CPU / 2 = {:.2} s = {:.2}x bare stepping / 2",
+        wall[1] / (bare_run_s / 2.0),
+        cpu_s[1] / 2.0,
+        cpu_s[1] / fly_s
+    );
 }
