@@ -137,8 +137,8 @@ impl Worker {
 }
 
 /// Pending cases grouped by configuration, handed out so that a worker stays on one configuration while it has
-/// cases and workers spread over configurations: a switch to another aircraft costs a JSBSim process start
-/// (~0.3 s, more than a case's work in the example campaign) and each process trims a flight condition once, so
+/// cases and workers spread over configurations: a switch to another aircraft costs an aircraft load in the
+/// worker's process (a process start, ~0.08 s CPU, for its first) and each process trims a flight condition once, so
 /// two workers sharing every group would start and trim twice as often as one worker. When its group runs dry a
 /// worker moves to a group of its own aircraft if one is as free as any other (same process, new knobs).
 struct CaseQueue<'a> {
