@@ -681,7 +681,7 @@ pub fn nonsmooth_section(
             .collect();
         let effects = measured
             .iter()
-            .map(|(c, after)| format!("without {c} {before:.1} → {after:.1} %"))
+            .map(|(c, after)| format!("{after:.1} % without {c}"))
             .collect::<Vec<_>>()
             .join("; ");
         let culprits: Vec<&str> = measured
