@@ -1,6 +1,8 @@
 //! `flightid derivatives` from the command line: the default run prints the paper's tables, and bad input is a
 //! clear error with exit code 2.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -63,8 +65,7 @@ fn default_run_prints_tables_1_and_3_and_writes_json() {
     ] {
         assert!(text.contains(needle), "missing '{needle}' in:\n{text}");
     }
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = common::read_json(&json);
     // Two routes: the transfer functions and equation error, each with Cm_de scored.
     let cards = v["scorecards"].as_array().unwrap();
     assert_eq!(cards.len(), 2);
@@ -158,50 +159,39 @@ fn derivatives_from_a_jsbsim_csv_model_its_half_sample_lag_unless_told_it_is_sen
     let tmp = tempfile::tempdir().unwrap();
     let csv = tmp.path().join("lat.csv");
     let bin = env!("CARGO_BIN_EXE_flightid");
-    let out = std::process::Command::new(bin)
-        .args([
-            "fly",
-            "--aircraft",
-            "c172x",
-            "--surface",
-            "aileron",
-            "--maneuver",
-            "3211",
-        ])
-        .args([
-            "--amplitude-deg",
-            "2",
-            "--pulse-s",
-            "0.5",
-            "--duration-s",
-            "20",
-            "--out",
-        ])
-        .arg(&csv)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    common::run_ok(
+        std::process::Command::new(bin)
+            .args([
+                "fly",
+                "--aircraft",
+                "c172x",
+                "--surface",
+                "aileron",
+                "--maneuver",
+                "3211",
+            ])
+            .args([
+                "--amplitude-deg",
+                "2",
+                "--pulse-s",
+                "0.5",
+                "--duration-s",
+                "20",
+                "--out",
+            ])
+            .arg(&csv),
     );
     let error_percent = |extra: &[&str], name: &str| -> f64 {
         let json = tmp.path().join("d.json");
-        let out = std::process::Command::new(bin)
-            .args(["derivatives", "--aircraft", "c172x", "--data"])
-            .arg(&csv)
-            .args(extra)
-            .arg("--json")
-            .arg(&json)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        common::run_ok(
+            std::process::Command::new(bin)
+                .args(["derivatives", "--aircraft", "c172x", "--data"])
+                .arg(&csv)
+                .args(extra)
+                .arg("--json")
+                .arg(&json),
         );
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let v = common::read_json(&json);
         v["scorecards"][0]["rows"]
             .as_array()
             .unwrap()

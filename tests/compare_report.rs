@@ -1,6 +1,8 @@
 //! `flightid compare` on c172x: the report holds every plot inline and the numbers agree with the
 //! linearization where the flight is linear.
 
+mod common;
+
 use std::process::Command;
 
 #[test]
@@ -108,21 +110,16 @@ fn opens_in_headless_chromium_with_every_plot(dir: &std::path::Path, figures: us
 fn compare(args: &[&str]) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
     let tmp = tempfile::tempdir().unwrap();
     let (dir, json) = (tmp.path().join("report"), tmp.path().join("compare.json"));
-    let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
-        .args(["compare", "--aircraft", "c172x"])
-        .args(args)
-        .arg("--report")
-        .arg(&dir)
-        .arg("--json")
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    common::run_ok(
+        Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .args(["compare", "--aircraft", "c172x"])
+            .args(args)
+            .arg("--report")
+            .arg(&dir)
+            .arg("--json")
+            .arg(&json),
     );
-    let v = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = common::read_json(&json);
     (tmp, dir, v)
 }
 

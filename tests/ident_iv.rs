@@ -2,6 +2,8 @@
 //! transfer functions (Şahin & Kalyon 2021, eq. 65, 67, 69): exact on noise-free data like the paper's least
 //! squares, and consistent under output noise where that least squares collapses (tests/paper_acceptance.rs).
 
+mod common;
+
 use flightid::ident::{self, IdentOptions, Method};
 use flightid::paper::{self, PaperOptions};
 use flightid::signal::{self, Maneuver};
@@ -84,27 +86,22 @@ fn an_iv_fit_s_warnings_reach_stderr_and_the_run_still_succeeds() {
         text.push_str(&format!("{},{},{}\n", k as f64 * dt_s, u[k], y[k]));
     }
     std::fs::write(&csv, text).unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
-        .args(["identify", "--data"])
-        .arg(&csv)
-        .args([
-            "--input",
-            "elevator",
-            "--output",
-            "theta_rad",
-            "--method",
-            "iv",
-            "--poles",
-            "1",
-            "--zeros",
-            "0",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = common::run_ok(
+        std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .args(["identify", "--data"])
+            .arg(&csv)
+            .args([
+                "--input",
+                "elevator",
+                "--output",
+                "theta_rad",
+                "--method",
+                "iv",
+                "--poles",
+                "1",
+                "--zeros",
+                "0",
+            ]),
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("warning: pole"), "{stderr}");

@@ -1,6 +1,8 @@
 //! Issue 3 acceptance on the paper's three transfer functions (Şahin & Kalyon 2021, Section 4), through the
 //! `flightid::paper` library and the `flightid paper` binary.
 
+mod common;
+
 use flightid::ident::Method;
 use flightid::paper::{self, derivatives, PaperInput, PaperOptions, PaperRun};
 use num_complex::Complex64;
@@ -203,25 +205,19 @@ fn paper_command_writes_json_and_a_report_with_the_three_figures() {
     let dir = tempfile::tempdir().unwrap();
     let json_path = dir.path().join("paper.json");
     let report = dir.path().join("report");
-    let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
-        .args(["paper", "--json"])
-        .arg(&json_path)
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = common::run_ok(
+        Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .args(["paper", "--json"])
+            .arg(&json_path)
+            .arg("--report")
+            .arg(&report),
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("up to 64 %") && stdout.contains("100 Hz"),
         "{stdout}"
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    let v = common::read_json(&json_path);
     assert_eq!(v["theta/elevator"]["original"]["num"][0], -24.7885);
     assert_eq!(v["phi/rudder"]["paper_lsm"]["den"][4], -0.0031);
     assert!(v["phi/aileron"]["ise"]["ls"].as_f64().unwrap() < 1e-9);

@@ -1,5 +1,7 @@
 //! The JSBSim bridge, driven for real: trim, linearize, fly, and the ways it must fail cleanly.
 
+mod common;
+
 use flightid::aircraft;
 use flightid::lti;
 use flightid::sim::linear::{paper_transfer_functions, submodel_modes};
@@ -95,15 +97,10 @@ fn c172x_linearization_has_the_known_short_period_and_dutch_roll() {
     let dir = tempfile::tempdir().unwrap();
     let lin_path = dir.path().join("lin.json");
     std::fs::write(&lin_path, serde_json::to_string(&lin).unwrap()).unwrap();
-    let out = Command::new(flightid::sim::env::python().unwrap())
-        .arg(repo().join("scripts/oracle_linearize.py"))
-        .arg(&lin_path)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = common::run_ok(
+        Command::new(flightid::sim::env::python().unwrap())
+            .arg(repo().join("scripts/oracle_linearize.py"))
+            .arg(&lin_path),
     );
     let oracle: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     for (key, tf) in &tfs {
