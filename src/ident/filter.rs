@@ -89,23 +89,10 @@ impl Svf {
         }
     }
 
-    /// Runs the filter from rest on `v`; returns the states row by row (N × n, row k = x(kh)),
-    /// so `out[k*n + j]` is `(s^j / A(s) · v)(kh)`.
-    pub fn run(&self, v: &[f64]) -> Vec<f64> {
-        let n = self.n;
-        let mut out = vec![0.0; v.len() * n];
-        self.recurse(v, |k, x| {
-            for (o, xj) in out[k * n..(k + 1) * n].iter_mut().zip(x) {
-                *o = *xj;
-            }
-        });
-        out
-    }
-
     /// Runs the filter from rest on `v`; returns the states column by column (n × N), so
     /// `out.col(j)[k]` is `(s^j / A(s) · v)(kh)`: each filtered derivative is one contiguous
     /// signal, the layout the regressions' inner products want.
-    pub fn run_columns(&self, v: &[f64]) -> Columns {
+    pub fn run(&self, v: &[f64]) -> Columns {
         let len = v.len();
         let mut data = vec![0.0; len * self.n];
         self.recurse(v, |k, x| {
@@ -179,9 +166,9 @@ impl Svf {
         }
     }
 
-    /// The top derivative `s^n / A(s) · v` at every sample, from a column-major run of this
-    /// filter (see [`Svf::top_derivative`]).
-    pub fn top_derivative_columns(&self, states: &Columns, v: &[f64]) -> Vec<f64> {
+    /// The top derivative `(s^n / A(s) · v)(kh) = v(kh) − Σ a_i (s^{n−i}/A · v)(kh)` at every
+    /// sample, from a run of this filter on `v` (the delayed values for a delayed ZOH input).
+    pub fn top_derivative(&self, states: &Columns, v: &[f64]) -> Vec<f64> {
         let n = self.n;
         let mut out = v.to_vec();
         for i in 1..=n {
@@ -192,20 +179,9 @@ impl Svf {
         }
         out
     }
-
-    /// `(s^n / A(s) · v)(kh) = v(kh) − Σ a_i (s^{n−i}/A · v)(kh)` from a run of this filter; `v_k`
-    /// is the signal value at the sample (the delayed value for a delayed ZOH input).
-    pub fn top_derivative(&self, states: &[f64], k: usize, v_k: f64) -> f64 {
-        let n = self.n;
-        let mut s = v_k;
-        for i in 1..=n {
-            s -= self.den[i] * states[k * n + n - i];
-        }
-        s
-    }
 }
 
-/// SVF states stored column by column (see [`Svf::run_columns`]).
+/// SVF states stored column by column (see [`Svf::run`]).
 #[derive(Clone, Debug)]
 pub(crate) struct Columns {
     len: usize,
@@ -218,7 +194,17 @@ impl Columns {
         &self.data[j * self.len..(j + 1) * self.len]
     }
 
-    /// `Σ_j b_j s^j/A · v`, `num` highest power first with degree < n (as [`combine`]).
+    /// The same states without their first `k` samples (sample 0 is then `k·h`).
+    pub fn skip(&self, k: usize) -> Columns {
+        let len = self.len.saturating_sub(k);
+        let n = self.data.len() / self.len.max(1);
+        let data = (0..n)
+            .flat_map(|j| self.col(j)[k.min(self.len)..].to_vec())
+            .collect();
+        Columns { len, data }
+    }
+
+    /// `Σ_j b_j s^j/A · v`, `num` highest power first with degree < n.
     pub fn combine(&self, num: &[f64]) -> Vec<f64> {
         let m = num.len() - 1;
         let mut out = vec![0.0; self.len];
@@ -274,20 +260,6 @@ pub(crate) fn simulate(
     delay_s: f64,
 ) -> Vec<f64> {
     Svf::new(den_monic, dt_s, Hold::Zoh { delay_s })
-        .run_columns(u)
+        .run(u)
         .combine(num)
-}
-
-/// `Σ_j b_j s^j/A · v` from SVF states, `num` highest power first with degree < n.
-pub(crate) fn combine(states: &[f64], n: usize, num: &[f64], len: usize) -> Vec<f64> {
-    let m = num.len() - 1;
-    (0..len)
-        .map(|k| {
-            let row = &states[k * n..(k + 1) * n];
-            num.iter()
-                .enumerate()
-                .map(|(i, b)| b * row[m - i])
-                .sum::<f64>()
-        })
-        .collect()
 }

@@ -44,9 +44,8 @@ pub(crate) fn refit_numerator(
     delay_s: f64,
 ) -> Result<Vec<f64>, IdentError> {
     let svf = Svf::new(den, dt_s, Hold::Zoh { delay_s });
-    let n = svf.n;
     let states = svf.run(u);
-    let mat = Mat::<f64>::from_fn(y.len(), m + 1, |k, c| states[k * n + (m - c)]);
+    let mat = Mat::<f64>::from_fn(y.len(), m + 1, |k, c| states.col(m - c)[k]);
     lstsq_qr(&mat, y, "numerator re-estimation")
 }
 

@@ -29,7 +29,7 @@
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
-use super::filter::{combine, simulate, Hold, Svf};
+use super::filter::{simulate, Columns, Hold, Svf};
 use super::linalg::{inverse, lstsq_qr, poly_from_roots, solve_square, stabilize_continuous};
 use super::ls::{arx_regressor, arx_to_continuous, continuous_poles};
 use super::{metrics, nrmse_fit, ContinuousModel, IdentError, IdentOptions, IdentResult, Method};
@@ -414,14 +414,12 @@ fn iv_joint(
     })
 }
 
-/// Free-response basis of `1/A` for `len` samples: `n` state trajectories (row-major, N × n)
-/// leaving a unit pulse, shifted so that sample 0 is the first state after the pulse.
-fn free_basis(svf: &Svf, len: usize) -> Vec<f64> {
+/// Free-response basis of `1/A` for `len` samples: `n` state trajectories leaving a unit pulse,
+/// shifted so that sample 0 is the first state after the pulse.
+fn free_basis(svf: &Svf, len: usize) -> Columns {
     let mut pulse = vec![0.0; len + 1];
     pulse[0] = 1.0;
-    let mut states = svf.run(&pulse);
-    states.drain(..svf.n);
-    states
+    svf.run(&pulse).skip(1)
 }
 
 /// Columns of the joint linear problem for a fixed `A`: `m+1` shared numerator columns
@@ -437,7 +435,7 @@ fn linear_system(
     let n = den.len() - 1;
     let svf_u = Svf::new(den, dt_s, Hold::Zoh { delay_s });
     let svf_free = Svf::new(den, dt_s, Hold::Zoh { delay_s: 0.0 });
-    let states: Vec<Vec<f64>> = recs.iter().map(|r| svf_u.run(&r.u)).collect();
+    let states: Vec<Columns> = recs.iter().map(|r| svf_u.run(&r.u)).collect();
     let longest = recs.iter().map(|r| r.y.len()).max().unwrap_or(0);
     let free = free_basis(&svf_free, longest);
     let rows: usize = recs.iter().map(|r| r.y.len()).sum();
@@ -450,14 +448,14 @@ fn linear_system(
     let mat = Mat::<f64>::from_fn(rows, cols, |i, c| {
         let (r, k) = row_of[i];
         if c <= m {
-            return states[r][k * n + (m - c)];
+            return states[r].col(m - c)[k];
         }
         let own = c - (m + 1);
         if own / (n + 1) != r {
             return 0.0;
         }
         match own % (n + 1) {
-            j if j < n => free[k * n + j],
+            j if j < n => free.col(j)[k],
             _ => 1.0,
         }
     });
@@ -497,7 +495,7 @@ fn nuisances(
             let forced = simulate(&model.num, &model.den, &r.u, dt_s, model.delay_s);
             let free = free_basis(&svf_free, len);
             let mat =
-                Mat::<f64>::from_fn(len, n + 1, |k, c| if c < n { free[k * n + c] } else { 1.0 });
+                Mat::<f64>::from_fn(len, n + 1, |k, c| if c < n { free.col(c)[k] } else { 1.0 });
             let resid: Vec<f64> = r.y.iter().zip(&forced).map(|(y, f)| y - f).collect();
             let coef = lstsq_qr(&mat, &resid, "initial condition")?;
             let y_model = (0..len)
@@ -590,25 +588,28 @@ fn srivc_step(
         let xy = svf_y.run(&rec.y);
         let step = svf_0.run(&vec![1.0; len]);
         let free = free_basis(&svf_0, len);
-        let sx = aux_num.map(|b| svf_y.run(&combine(&xu, n, b, len)));
+        let sx = aux_num.map(|b| svf_y.run(&xu.combine(b)));
+        let target = svf_y.top_derivative(&xy, &rec.y);
         let own = shared + r * (n + 1);
         for k in 0..len {
             phi.iter_mut().for_each(|v| *v = 0.0);
-            for i in 0..n {
-                phi[i] = -xy[k * n + n - 1 - i];
+            for (i, v) in phi.iter_mut().take(n).enumerate() {
+                *v = -xy.col(n - 1 - i)[k];
             }
             for j in 0..=m {
-                phi[n + j] = xu[k * n + m - j];
+                phi[n + j] = xu.col(m - j)[k];
             }
-            phi[own] = step[k * n];
-            phi[own + 1..own + 1 + n].copy_from_slice(&free[k * n..(k + 1) * n]);
+            phi[own] = step.col(0)[k];
+            for j in 0..n {
+                phi[own + 1 + j] = free.col(j)[k];
+            }
             zeta.copy_from_slice(&phi);
             if let Some(sx) = &sx {
-                for i in 0..n {
-                    zeta[i] = -sx[k * n + n - 1 - i];
+                for (i, z) in zeta.iter_mut().take(n).enumerate() {
+                    *z = -sx.col(n - 1 - i)[k];
                 }
             }
-            let target = svf_y.top_derivative(&xy, k, rec.y[k]);
+            let target = target[k];
             for a in 0..p {
                 let z = zeta[a];
                 if z == 0.0 {

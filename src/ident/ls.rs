@@ -171,7 +171,6 @@ pub(crate) fn d2c_numerator(
     dt_s: f64,
     zeros: usize,
 ) -> Result<Vec<f64>, IdentError> {
-    let n = den_c.len() - 1;
     let nb = b.len();
     // discrete denominator of the ZOH model, from the same poles
     let p_c = roots(den_c);
@@ -188,7 +187,7 @@ pub(crate) fn d2c_numerator(
         (0..i)
             .map(|l| {
                 let al = if l < a_d.len() { a_d[l] } else { 0.0 };
-                al * states[(i - l) * n + j]
+                al * states.col(j)[i - l]
             })
             .sum()
     };

@@ -19,7 +19,7 @@
 //! `Cov = M⁻¹ [Σ_i Σ_j s_i R_vv(i−j) s_jᵀ] M⁻¹`, `M = SᵀS`, summed over the lags where the
 //! residuals are correlated (see [`coloured_covariance`]).
 
-use super::filter::{combine, simulate, Hold, Svf};
+use super::filter::{simulate, Hold, Svf};
 use super::linalg::{inverse, matmul, poly_mul, solve_square};
 use super::{ContinuousModel, IdentError};
 use num_complex::Complex64;
@@ -62,7 +62,7 @@ fn sensitivities(
     for c in 0..=m {
         let mut poly = den.clone();
         poly.extend(std::iter::repeat_n(0.0, m - c));
-        let col = combine(&xi, 2 * n, &poly, len);
+        let col = xi.combine(&poly);
         for k in 0..len {
             s[k * p + c] = col[k];
         }
@@ -71,7 +71,7 @@ fn sensitivities(
     for i in 1..=n {
         let mut poly: Vec<f64> = num.iter().map(|b| -b).collect();
         poly.extend(std::iter::repeat_n(0.0, n - i));
-        let col = combine(&xi, 2 * n, &poly, len);
+        let col = xi.combine(&poly);
         for k in 0..len {
             s[k * p + m + i] = col[k];
         }

@@ -55,9 +55,9 @@ fn iv_step(
     with_offset: bool,
 ) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     let n = svf_y.n;
-    let xy = svf_y.run_columns(y);
-    let target = svf_y.top_derivative_columns(&xy, y);
-    let sx = aux_num.map(|b| svf_y.run_columns(&xu.combine(b)));
+    let xy = svf_y.run(y);
+    let target = svf_y.top_derivative(&xy, y);
+    let sx = aux_num.map(|b| svf_y.run(&xu.combine(b)));
     let ones = vec![1.0; if with_offset { y.len() } else { 0 }];
     // φ_f = [−y_f^{(n−1)} … −y_f, u_f^{(m)} … u_f, (1)], as (column, sign)
     let mut phi: Vec<(&[f64], f64)> = (0..n).map(|i| (xy.col(n - 1 - i), -1.0)).collect();
@@ -130,7 +130,7 @@ fn iterate(
 ) -> Option<Iterate> {
     let (mut num, mut den) = start;
     let record_s = y.len() as f64 * dt_s;
-    let input_filter = |den_f: &[f64]| Svf::new(den_f, dt_s, Hold::Zoh { delay_s }).run_columns(u);
+    let input_filter = |den_f: &[f64]| Svf::new(den_f, dt_s, Hold::Zoh { delay_s }).run(u);
     let mut den_f = stabilize_if_wild(&den, record_s);
     let mut xu = input_filter(&den_f);
     let mut best: Option<Iterate> = None;
@@ -189,7 +189,7 @@ pub(crate) fn svf_ls_start(
     let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
     for lambda in lambdas(dt_s) {
         let den_f = poly_from_roots(&vec![Complex64::new(-lambda, 0.0); n]);
-        let xu = Svf::new(&den_f, dt_s, Hold::Zoh { delay_s }).run_columns(u);
+        let xu = Svf::new(&den_f, dt_s, Hold::Zoh { delay_s }).run(u);
         let svf_y = Svf::new(&den_f, dt_s, Hold::Foh);
         if let Some((num, den, _)) = iv_step(y, m, &svf_y, &xu, None, false) {
             let y_sim =
