@@ -170,6 +170,7 @@ pub fn classify(e: compare::CompareError) -> anyhow::Error {
 
 /// Runs `flightid compare`.
 pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
+    crate::report::check_output_dir(&args.report)?;
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;
     let methods: Vec<Method> = args

@@ -35,6 +35,7 @@ pub struct DemoCmd {
 
 /// Runs `flightid demo`.
 pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
+    crate::report::check_output_dir(&args.report)?;
     let quiet = args.json.as_deref() == Some("-");
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;

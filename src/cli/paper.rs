@@ -83,6 +83,9 @@ pub(crate) fn text_table(t: &Table) -> String {
 
 /// Runs `flightid paper`.
 pub fn run(args: &PaperCmd) -> anyhow::Result<()> {
+    if let Some(dir) = &args.report {
+        crate::report::check_output_dir(dir)?;
+    }
     let mut opts = PaperOptions::new(args.noise);
     opts.seed = args.seed;
     opts.duration_s = args.duration_s;
@@ -124,7 +127,7 @@ pub fn run(args: &PaperCmd) -> anyhow::Result<()> {
     }
     let json = run.to_json();
     if let Some(dir) = &args.report {
-        let index = report::write_report(dir, &run.report(), &json)?;
+        let index = report::write_report_dir(dir, &run.report(), &json)?;
         if !quiet {
             println!("\nreport: {}", index.display());
         }
