@@ -11,6 +11,7 @@ pub mod compare;
 pub mod data;
 pub mod diagnose;
 pub mod ident;
+pub mod limits;
 pub mod lti;
 pub mod paper;
 pub mod report;

@@ -29,6 +29,9 @@ mod tests {
         assert_eq!(escape_control("alpha_rad"), "alpha_rad");
         assert_eq!(escape_control("Höhe_m"), "Höhe_m");
         assert_eq!(escape_control("\u{1b}[31mred"), "\\u{1b}[31mred");
-        assert_eq!(escape_control("a\nb\tc\u{7f}\u{9b}"), "a\\nb\\tc\\u{7f}\\u{9b}");
+        assert_eq!(
+            escape_control("a\nb\tc\u{7f}\u{9b}"),
+            "a\\nb\\tc\\u{7f}\\u{9b}"
+        );
     }
 }

@@ -34,7 +34,7 @@ pub struct PaperCmd {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Record length, s.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::limits::DURATION_S.parser())]
     pub duration_s: f64,
     /// Input shape.
     #[arg(long, value_enum, default_value = "doublet")]

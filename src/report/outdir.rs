@@ -64,12 +64,10 @@ pub fn check_output_dir(dir: &Path) -> Result<(), ReportError> {
     }
     let listed = match std::fs::read_to_string(dir.join(MARKER)) {
         Ok(text) => text,
-        Err(_) => {
-            return Err(refused(
-                dir,
-                "exists, is not empty and was not made by flightid; choose a new or empty directory",
-            ))
-        }
+        Err(_) => return Err(refused(
+            dir,
+            "exists, is not empty and was not made by flightid; choose a new or empty directory",
+        )),
     };
     let listed: Vec<&str> = listed.lines().collect();
     for (name, is_file) in &names {
