@@ -44,7 +44,16 @@ fn cites_issue_number(line: &str) -> bool {
 #[test]
 fn no_file_cites_an_outside_design_file_or_an_issue_number() {
     let mut all = Vec::new();
-    for dir in ["src", "tests", "scripts", "aircraft", "benches", "campaigns", "docs", ".ci"] {
+    for dir in [
+        "src",
+        "tests",
+        "scripts",
+        "aircraft",
+        "benches",
+        "campaigns",
+        "docs",
+        ".ci",
+    ] {
         files(&root().join(dir), &mut all);
     }
     all.push(root().join("README.md"));
@@ -115,7 +124,11 @@ fn architecture_module_table_matches_the_source_tree() {
         .lines()
         .filter(|l| l.starts_with("| `src/"))
         .filter_map(|l| l.split('`').nth(1))
-        .map(|m| m.trim_start_matches("src/").trim_end_matches('/').to_string())
+        .map(|m| {
+            m.trim_start_matches("src/")
+                .trim_end_matches('/')
+                .to_string()
+        })
         .collect();
     let mut in_tree = std::collections::BTreeSet::new();
     for e in std::fs::read_dir(root().join("src")).unwrap().flatten() {
