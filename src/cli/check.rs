@@ -37,6 +37,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         crate::limits::check_order("--from-s", from_s, "--to-s", to_s)?;
     }
     let mut rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
+    crate::limits::check_rows(&args.file.display().to_string(), rec.len())?;
     if let Some(hz) = args.resample_hz {
         rec = data::resample_uniform(&rec, hz)
             .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;

@@ -55,7 +55,9 @@ pub struct DiagnoseCmd {
 
 /// Reads a record; unreadable data are a usage error (exit 2).
 pub fn read_record(path: &Path) -> anyhow::Result<FlightRecord> {
-    read_csv(path).map_err(|e| UsageError(e.to_string()).into())
+    let rec = read_csv(path).map_err(|e| UsageError(e.to_string()))?;
+    crate::limits::check_rows(&path.display().to_string(), rec.len())?;
+    Ok(rec)
 }
 
 /// Maps diagnose errors on the user's input to exit code 2.
@@ -210,7 +212,7 @@ fn summary(d: &Diagnosis) {
         println!("no validation record (--validate): the gain on unseen data is not measured");
     }
     for w in &d.warnings {
-        println!("warning: {w}");
+        super::warn(w);
     }
     for s in &d.skipped {
         if s.effect != "aero_derivative" {

@@ -78,7 +78,7 @@ pub fn run(args: &IngestArgs) -> anyhow::Result<()> {
             s.truncated_tail_bytes
         );
         for w in report.warnings.iter().chain(&unit_warnings) {
-            eprintln!("warning: {w}");
+            super::warn(w);
         }
     }
     Ok(())

@@ -102,10 +102,19 @@ pub fn main() -> i32 {
     }
 }
 
+/// Prints a warning on stderr, control characters escaped (warnings echo user data too).
+pub fn warn(message: &dyn std::fmt::Display) {
+    eprintln!(
+        "warning: {}",
+        crate::text::escape_control(&message.to_string())
+    );
+}
+
 /// Prints an error chain on one line and picks the exit code.
 pub fn report_error(e: &anyhow::Error) -> i32 {
     let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-    eprintln!("error: {}", chain.join(": "));
+    // messages echo user data (column names, cells, paths): no control character reaches the terminal
+    eprintln!("error: {}", crate::text::escape_control(&chain.join(": ")));
     if e.chain().any(|c| {
         c.downcast_ref::<UsageError>().is_some()
             || c.downcast_ref::<crate::data::DataError>().is_some()

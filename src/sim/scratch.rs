@@ -83,7 +83,10 @@ pub fn remove_stale(dir: &Path) -> usize {
         let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
             continue; // not one of ours (older versions made random names): leave it
         };
-        if pid != std::process::id() && !process_alive(pid) && std::fs::remove_dir_all(e.path()).is_ok() {
+        if pid != std::process::id()
+            && !process_alive(pid)
+            && std::fs::remove_dir_all(e.path()).is_ok()
+        {
             removed += 1;
         }
     }
