@@ -35,6 +35,7 @@ use super::layout::{Layout, Nuisance, NuisanceKind, RecordTerms};
 use super::model::{Model, Parameter, SimError};
 use super::record::{InputHold, InputSignal, Record, Run};
 use super::EstimateError;
+use crate::ident::nrmse_fit as fit_percent;
 
 /// Which estimator [`fit`] runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -247,19 +248,6 @@ pub fn fit(
     }
     let solution = problem.minimise(options)?;
     Ok(problem.summarise(solution, options.method, started))
-}
-
-/// Fit percent 100 (1 − ‖z − ŷ‖ / ‖z − z̄‖); 0 for a constant measurement.
-pub fn fit_percent(z: &[f64], y: &[f64]) -> f64 {
-    let n = z.len().max(1) as f64;
-    let mean = z.iter().sum::<f64>() / n;
-    let num: f64 = z.iter().zip(y).map(|(a, b)| (a - b) * (a - b)).sum();
-    let den: f64 = z.iter().map(|a| (a - mean) * (a - mean)).sum();
-    if den > 0.0 {
-        100.0 * (1.0 - (num / den).sqrt())
-    } else {
-        0.0
-    }
 }
 
 /// Outputs of every record, `[record][output][k]`.
