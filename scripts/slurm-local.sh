@@ -11,11 +11,11 @@
 # /etc is changed, so clients must be told where the configuration is: `export SLURM_CONF=$DIR/slurm.conf`.
 # Daemons run as root (SlurmUser=root) with ProctrackType=proctrack/linuxproc and TaskPlugin=task/none (no
 # cgroups needed, so it works in a container), traffic on 127.0.0.1 only (ports $FLIGHTID_SLURM_PORT and the next
-# one, default 6817/6818), one node with this machine's CPUs and one partition `debug`.
+# one: the first free pair from 6817/6818 on, unless set), one node with this machine's CPUs and one partition
+# `debug`.
 set -euo pipefail
 
 DIR="${FLIGHTID_SLURM_DIR:-${TMPDIR:-/tmp}/flightid-slurm}"
-PORT="${FLIGHTID_SLURM_PORT:-6817}"
 CONF="$DIR/slurm.conf"
 
 say() { echo "slurm-local: $*" >&2; }
@@ -41,8 +41,26 @@ install_packages() {
 # Is the process in pid file $1 alive?
 alive() { [ -s "$1" ] && kill -0 "$(cat "$1")" 2>/dev/null; }
 
+# Is something listening on 127.0.0.1:$1?
+listening() { (exec 3<>"/dev/tcp/127.0.0.1/$1") 2>/dev/null; }
+
+# The controller's port: $FLIGHTID_SLURM_PORT, else the first pair (P, P+1) from 6817 that nobody listens on.
+pick_port() {
+    if [ -n "${FLIGHTID_SLURM_PORT:-}" ]; then
+        echo "$FLIGHTID_SLURM_PORT"
+        return
+    fi
+    local p=6817
+    while listening "$p" || listening $((p + 1)); do
+        p=$((p + 2))
+        [ "$p" -lt 6917 ] || { say "no free port pair in 6817..6916"; return 1; }
+    done
+    echo "$p"
+}
+
 write_conf() {
-    local host cpus mem_mb
+    local host cpus mem_mb PORT
+    PORT="$(pick_port)"
     host="$(hostname -s)"
     cpus="$(nproc)"
     mem_mb=$(( $(awk '/^MemTotal:/ {print $2}' /proc/meminfo) / 1024 * 9 / 10 ))
