@@ -178,6 +178,7 @@ fn bench_campaign(name: &str) {
             &RunOptions {
                 jobs,
                 progress: false,
+                ..Default::default()
             },
         )
         .unwrap();
