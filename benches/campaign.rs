@@ -248,9 +248,8 @@ fn profile(name: &str, spec: &CampaignSpec) -> Bare {
 /// A generated campaign of 1,000 short flights: c172x and 737, 10 trim points each, 5 maneuvers, 10 amplitudes;
 /// 10 s at 60 Hz, least squares only (so per-case and per-task costs show, not the estimators).
 fn scale_campaign_toml() -> String {
-    let mut t = String::from(
-        "name = \"scale\"\nrate_hz = 60.0\nduration_s = 10.0\nmethods = [\"ls\"]\n",
-    );
+    let mut t =
+        String::from("name = \"scale\"\nrate_hz = 60.0\nduration_s = 10.0\nmethods = [\"ls\"]\n");
     let c172x = [3000.0, 4000.0, 5000.0, 6000.0, 8000.0]
         .iter()
         .flat_map(|&h| [100.0, 110.0].map(|v| (h, v)))
@@ -260,7 +259,9 @@ fn scale_campaign_toml() -> String {
         .flat_map(|&h| [400.0, 450.0].map(|v| (h, v)))
         .collect::<Vec<_>>();
     for (name, points) in [("c172x", c172x), ("737", b737)] {
-        t += &format!("[[configurations]]\nname = \"{name}\"\naircraft = \"{name}\"\nconditions = [\n");
+        t += &format!(
+            "[[configurations]]\nname = \"{name}\"\naircraft = \"{name}\"\nconditions = [\n"
+        );
         for (h, v) in points {
             t += &format!("  {{ altitude_ft = {h:.1}, speed_kts = {v:.1} }},\n");
         }
