@@ -90,7 +90,7 @@ impl Default for DiagnoseOptions {
     }
 }
 
-/// One evaluated candidate (contract: `candidates`).
+/// One evaluated candidate (docs/diagnose.md `candidates`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Candidate {
     /// Effect.
@@ -124,7 +124,7 @@ pub struct Candidate {
     pub full_fit: bool,
 }
 
-/// A named cause (contract: `named_cause`).
+/// A named cause (docs/diagnose.md `named_cause`).
 #[derive(Debug, Clone, Serialize)]
 pub struct NamedCause {
     /// Effect.
@@ -139,7 +139,7 @@ pub struct NamedCause {
     pub ambiguous_with: Vec<String>,
 }
 
-/// Validation on a record the fit never saw (contract: `validation`).
+/// Validation on a record the fit never saw (docs/diagnose.md `validation`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Validation {
     /// Noise-weighted ISE, Σ_c ISE_c / σ_c², without the named effects.
@@ -167,7 +167,7 @@ pub struct Skipped {
     pub reason: String,
 }
 
-/// The whole diagnosis (the contract's keys first, extras after).
+/// The whole diagnosis (docs/diagnose.md keys first, extras after).
 #[derive(Debug, Clone, Serialize)]
 pub struct Diagnosis {
     /// Significant effects, in order of selection; empty when nothing is significant.
