@@ -66,7 +66,8 @@ pub fn read_record(path: &Path) -> anyhow::Result<FlightRecord> {
 /// Maps diagnose errors on the user's input to exit code 2.
 pub fn classify(e: DiagnoseError) -> anyhow::Error {
     match e {
-        DiagnoseError::Sim { .. } | DiagnoseError::Report(_) => e.into(),
+        DiagnoseError::Sim { .. } => e.into(),
+        DiagnoseError::Report(r) => r.into(),
         other => UsageError(other.to_string()).into(),
     }
 }
@@ -115,6 +116,9 @@ fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
 
 /// Runs `flightid diagnose`.
 pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
+    for dir in [&args.report, &args.model_out].into_iter().flatten() {
+        crate::report::check_output_dir(dir)?;
+    }
     let train = read_record(&args.data)?;
     let valid = args.validate.as_deref().map(read_record).transpose()?;
     let source = match &args.linear {
