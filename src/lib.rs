@@ -16,3 +16,4 @@ pub mod paper;
 pub mod report;
 pub mod signal;
 pub mod sim;
+pub mod study;
