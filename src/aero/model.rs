@@ -602,7 +602,7 @@ pub(crate) mod tests {
 
     #[test]
     fn c172x_short_period_matches_jsbsim_linearization_within_5_percent() {
-        // Acceptance (issue 4): the paper-structure model from the truth derivatives within 5 % of JSBSim.
+        // Specification: the paper-structure model from the truth derivatives within 5 % of JSBSim.
         for (label, a) in [
             ("textbook", jsbsim_assumptions()),
             ("paper", Assumptions::paper()),

@@ -39,7 +39,7 @@ pub struct DerivativesCmd {
     /// May carry `mass` / `geometry` objects replacing the JSBSim model's.
     #[arg(long, value_name = "IDENTIFIED.json", conflicts_with = "data")]
     pub from: Vec<PathBuf>,
-    /// A flight-data CSV (DESIGN.md §4) for equation error on the full state. Taken as a JSBSim record
+    /// A flight-data CSV (docs/data.md) for equation error on the full state. Taken as a JSBSim record
     /// (`flightid fly`): its differentiated rates lag the moments by half a sample, which is modelled.
     #[arg(long, value_name = "FLIGHT.csv")]
     pub data: Option<PathBuf>,
@@ -86,6 +86,9 @@ fn classify(e: AeroError) -> anyhow::Error {
 
 /// Runs `flightid derivatives`.
 pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
+    if let Some(dir) = &args.report {
+        crate::report::check_output_dir(dir)?;
+    }
     let free = match &args.free {
         Some(names) => Some(parse_derivatives(names).map_err(classify)?),
         None => None,
@@ -150,7 +153,7 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     }
     let json = result.to_json();
     if let Some(dir) = &args.report {
-        let index = report::write_report(dir, &result.report(), &json)?;
+        let index = report::write_report_dir(dir, &result.report(), &json)?;
         if !quiet {
             println!("\nreport: {}", index.display());
         }
