@@ -18,4 +18,5 @@ pub mod paper;
 pub mod report;
 pub mod signal;
 pub mod sim;
+pub mod study;
 pub mod text;
