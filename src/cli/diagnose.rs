@@ -4,10 +4,10 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 
-use super::common::{emit_json, write_atomic};
+use super::common::{emit_json, write_atomic, ColumnsArg};
 use super::UsageError;
 use crate::aircraft;
-use crate::data::{read_csv, FlightRecord};
+use crate::data::FlightRecord;
 use crate::diagnose::model::{write_model, ExtendedModel};
 use crate::diagnose::replay::LinearReplay;
 use crate::diagnose::search::Worker;
@@ -51,11 +51,8 @@ pub struct DiagnoseCmd {
     /// Parallel simulations (one JSBSim process each).
     #[arg(long, default_value_t = 2)]
     pub workers: usize,
-}
-
-/// Reads a record; unreadable data are a usage error (exit 2).
-pub fn read_record(path: &Path) -> anyhow::Result<FlightRecord> {
-    read_csv(path).map_err(|e| UsageError(e.to_string()).into())
+    #[command(flatten)]
+    pub columns: ColumnsArg,
 }
 
 /// Maps diagnose errors on the user's input to exit code 2.
@@ -113,8 +110,12 @@ fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
 
 /// Runs `flightid diagnose`.
 pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
-    let train = read_record(&args.data)?;
-    let valid = args.validate.as_deref().map(read_record).transpose()?;
+    let train = args.columns.read(&args.data)?;
+    let valid = args
+        .validate
+        .as_deref()
+        .map(|p| args.columns.read(p))
+        .transpose()?;
     let source = match &args.linear {
         Some(p) => SimSource::Linear(p),
         None => SimSource::Aircraft(&args.aircraft),
