@@ -56,7 +56,7 @@ fn demo_writes_a_report_with_ls_robust_and_linearization_and_prints_its_path() {
             .as_f64()
             .unwrap()
     };
-    // DESIGN.md: c172x short period 6.1 rad/s, Dutch roll 2.13 rad/s (linearization). The robust estimates on a
+    // docs/jsbsim.md: c172x short period 6.1 rad/s, Dutch roll 2.13 rad/s (linearization). The robust estimates on a
     // 2 deg doublet of the nonlinear model land within 5 % (measured 0.8-3 %: actuator and nonlinearity).
     assert!((wn("theta/elevator", "jsbsim_linearization") - 6.11).abs() < 0.05);
     assert!((wn("phi/aileron", "jsbsim_linearization") - 2.13).abs() < 0.03);

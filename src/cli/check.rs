@@ -10,7 +10,7 @@ use crate::data::{self, CheckOptions};
 /// Check the kinematic consistency of a flight-data CSV.
 #[derive(clap::Args, Debug, Clone)]
 pub struct CheckArgs {
-    /// Flight-data CSV (DESIGN.md §4); best a maneuver segment of some tens of seconds.
+    /// Flight-data CSV (docs/data.md); best a maneuver segment of some tens of seconds.
     pub file: PathBuf,
     /// Only use samples from this time on, s.
     #[arg(long)]

@@ -38,7 +38,7 @@ pub struct DerivativesCmd {
     /// May carry `mass` / `geometry` objects replacing the JSBSim model's.
     #[arg(long, value_name = "IDENTIFIED.json", conflicts_with = "data")]
     pub from: Vec<PathBuf>,
-    /// A flight-data CSV (DESIGN.md §4) for equation error on the full state. Taken as a JSBSim record
+    /// A flight-data CSV (docs/data.md) for equation error on the full state. Taken as a JSBSim record
     /// (`flightid fly`): its differentiated rates lag the moments by half a sample, which is modelled.
     #[arg(long, value_name = "FLIGHT.csv")]
     pub data: Option<PathBuf>,

@@ -35,7 +35,7 @@ pub struct DiagnoseCmd {
     /// Validation record (flight-data CSV) the fit never sees.
     #[arg(long)]
     pub validate: Option<PathBuf>,
-    /// Write the JSON result (DESIGN.md §7) to this file (`-` for stdout).
+    /// Write the JSON result (docs/diagnose.md) to this file (`-` for stdout).
     #[arg(long)]
     pub json: Option<String>,
     /// Write the fitted effects as an extension file (JSON, loadable by `flightid replay --extension`).

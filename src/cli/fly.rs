@@ -138,7 +138,7 @@ impl ManeuverArgs {
     }
 }
 
-/// Fly a maneuver from trim and write the flight-data CSV (DESIGN.md section 4, all columns, SI units), sampled
+/// Fly a maneuver from trim and write the flight-data CSV (docs/data.md: all columns, SI units), sampled
 /// at the simulation rate. The first sample is the trim state. Nothing is written if anything fails.
 #[derive(clap::Args, Debug)]
 #[command(

@@ -7,7 +7,7 @@ use anyhow::Context;
 use super::UsageError;
 use crate::data::{self, Airframe, TlogOptions};
 
-/// Convert a MAVLink `.tlog` into a flight-data CSV (DESIGN.md §4).
+/// Convert a MAVLink `.tlog` into a flight-data CSV (docs/data.md).
 #[derive(clap::Args, Debug, Clone)]
 pub struct IngestArgs {
     /// The telemetry log ([8-byte µs timestamp][MAVLink frame] records).

@@ -9,7 +9,7 @@ use crate::data::{self, SegmentOptions};
 /// Find maneuvers in a flight-data CSV.
 #[derive(clap::Args, Debug, Clone)]
 pub struct SegmentsArgs {
-    /// Flight-data CSV (DESIGN.md §4).
+    /// Flight-data CSV (docs/data.md).
     pub file: PathBuf,
     /// Smallest input that counts as a maneuver, degrees.
     #[arg(long, default_value_t = 0.25)]

@@ -1,4 +1,4 @@
-//! The extended model on disk (issue 7 item 5): a directory holding a private copy of the JSBSim aircraft with
+//! The extended model on disk: a directory holding a private copy of the JSBSim aircraft with
 //! the fitted coefficient factors and added terms written into its XML, plus `extension.json` with the
 //! signal-path and sensor effects, which live outside the aerodynamic model. `flightid fly --model DIR` and
 //! `flightid replay --model DIR` load it.
