@@ -58,7 +58,8 @@ pub struct DiagnoseCmd {
 /// Maps diagnose errors on the user's input to exit code 2.
 pub fn classify(e: DiagnoseError) -> anyhow::Error {
     match e {
-        DiagnoseError::Sim { .. } | DiagnoseError::Report(_) => e.into(),
+        DiagnoseError::Sim { .. } => e.into(),
+        DiagnoseError::Report(r) => r.into(),
         other => UsageError(other.to_string()).into(),
     }
 }
@@ -110,6 +111,9 @@ fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
 
 /// Runs `flightid diagnose`.
 pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
+    for dir in [&args.report, &args.model_out].into_iter().flatten() {
+        crate::report::check_output_dir(dir)?;
+    }
     let train = args.columns.read(&args.data)?;
     let valid = args
         .validate

@@ -39,7 +39,7 @@ pub enum DiagnoseError {
     ExtensionFile { path: String, message: String },
     /// The report could not be written.
     #[error("report: {0}")]
-    Report(String),
+    Report(#[from] crate::report::ReportError),
     /// The simulation failed (trim at the measured condition, bridge error).
     #[error("simulation during {during}: {source}")]
     Sim { during: String, source: SimError },
