@@ -13,6 +13,9 @@
 //! - [`identifiability`]: which derivatives a set of transfer functions determines, in plain words.
 //! - [`attribution`]: why an estimate misses the truth, term by term (TF route by releasing assumptions,
 //!   equation error by projecting each JSBSim coefficient function's remainder on the regressors).
+//! - [`airframe`]: an aircraft's mass, inertia, geometry, thrust line and sensor positions (`--airframe`).
+//! - [`flight_models`]: the nondimensional longitudinal and lateral models fitted to measured records.
+//! - [`measured`]: derivatives from measured records of any aircraft (air data, sensors moved to the CG).
 //! - [`regression`]: equation-error estimates from flight-data channels (SIDPAC `lesq` style) and the
 //!   Savitzky–Golay differentiator it needs.
 //!
@@ -25,9 +28,12 @@
 //! Transfer functions are computed by a private Faddeev–LeVerrier recursion (exact for these 4×4 systems);
 //! `crate::lti` offers the general `ss2tf`.
 
+pub mod airframe;
 pub mod attribution;
 pub mod fit;
+pub mod flight_models;
 pub mod identifiability;
+pub mod measured;
 pub mod model;
 pub mod params;
 pub mod regression;
@@ -36,6 +42,7 @@ pub mod spec;
 pub mod study;
 pub mod trials;
 
+pub use airframe::{Airframe, AirframeError};
 pub use fit::{estimate_derivatives, DerivativeEstimate, FitOptions, IdentifiedTf, IdentifiedTfs};
 pub use identifiability::{
     analyse_identifiability, DerivativeVerdict, IdentifiabilityReport, Verdict,
