@@ -2,7 +2,7 @@
 //! over `fdm.run()` with the same property reads (`scripts/bench_bare_loop.py`), measured in one run; and the
 //! cold start of `flightid trim` with the environment already provisioned.
 //!
-//! Run: `cargo bench --bench bridge`. Issue 2 targets: ratio <= 1.15, cold start < 0.5 s.
+//! Run: `cargo bench --bench bridge`. Targets: ratio <= 1.15, cold start < 0.5 s.
 
 use flightid::aircraft;
 use flightid::sim::{FlightPlan, JsbsimSim, Simulator, SurfaceInput, TrimPoint};

@@ -1,4 +1,4 @@
-//! Campaign throughput (issue 5) on two campaigns: the example `campaigns/c172x_737.toml` (36 short cases:
+//! Campaign throughput on two campaigns: the example `campaigns/c172x_737.toml` (36 short cases:
 //! 20 s at 60 Hz) and `campaigns/throughput.toml` (24 flight-test-length cases: 60 s at 120 Hz), each with 1 and
 //! 2 jobs, against the bare JSBSim stepping time of the same flights (the `fly` calls only: same steps, same
 //! recorded properties; trims, process starts and identification excluded and reported beside it).

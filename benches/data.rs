@@ -1,4 +1,4 @@
-//! Reader throughput: CSV of 1,000,000 rows × 18 schema columns (target < 1 s, issue 6) and a
+//! Reader throughput: CSV of 1,000,000 rows × 18 schema columns (target < 1 s) and a
 //! `.tlog` of 1,000,000 MAVLink messages (target ≥ 1 M messages/s). The CSV is read twice: with
 //! full round-trip precision (17 significant digits, the worst case) and rounded to 7 digits.
 //! The bench files are written to the temp dir and removed at the end.

@@ -1,5 +1,5 @@
 //! `diagnose` on a 60 s record at 50 Hz with the full c172x catalogue, two JSBSim workers
-//! (issue 7 target: under 60 s wall on 2 cores). The record hides an 80 ms elevator delay and carries noise.
+//! (target: under 60 s wall on 2 cores). The record hides an 80 ms elevator delay and carries noise.
 //!
 //! Run: `cargo bench --bench diagnose`.
 

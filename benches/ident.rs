@@ -1,4 +1,4 @@
-//! Benchmarks for `ident` (issue 3 performance targets):
+//! Benchmarks for `ident` (performance targets):
 //! - ARX least squares on 200,000 samples with 8 parameters (compare with
 //!   `scripts/bench_lstsq.py`, numpy.linalg.lstsq on the same-size regressor);
 //! - `srivc` and `oe` on a 60 s, 120 Hz doublet record of the paper's θ/δe with 1 % noise

@@ -1,4 +1,4 @@
-//! Issue 3 performance targets, all in one run (`cargo bench --bench paper`):
+//! The paper's performance targets, all in one run (`cargo bench --bench paper`):
 //! 1. ARX least squares on 200,000 samples × 8 parameters against `numpy.linalg.lstsq` on the same-size ARX(4, 4)
 //!    regressor of the same record type (`scripts/bench_lstsq.py`, run here with the provisioned venv's Python),
 //!    with the ratio — target: flightid at least as fast (ratio ≤ 1);

@@ -10,7 +10,7 @@ Protocol (one request = one whole job, arrays come back whole):
 The protocol stream is a duplicate of the original stdout; file descriptor 1 itself is pointed at stderr so that
 JSBSim's C++ console output (trim reports, warnings) cannot corrupt the protocol.
 
-Well-behaved simulation (DESIGN.md section 3):
+Well-behaved simulation (docs/jsbsim.md):
   * every process works in its own temporary root: a private copy of the aircraft directory with the aircraft
     XML rewritten, `engine/` and `systems/` linked to the package's, and a private output path;
   * root-level <input> and <output> elements are removed from the private copy: no network listeners, no logs;
@@ -330,7 +330,7 @@ class Sim:
             fdm[f"flightid/lin/{s}"] = 0.0
         for s, spec in self.surfaces.items():
             fdm[spec["command"]] = 0.0
-        # Initial-condition order matters (DESIGN.md section 3): position, altitude, speed, heading, gamma.
+        # Initial-condition order matters (docs/jsbsim.md): position, altitude, speed, heading, gamma.
         fdm.load_ic(self.blank_ic_path, False)
         fdm["ic/lat-geod-deg"] = float(req.get("latitude_deg", 0.0))
         fdm["ic/long-gc-deg"] = float(req.get("longitude_deg", 0.0))

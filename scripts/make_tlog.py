@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Encode a flightid flight CSV (DESIGN.md section 4) into a MAVLink telemetry log (.tlog) with pymavlink.
+"""Encode a flightid flight CSV (docs/data.md) into a MAVLink telemetry log (.tlog) with pymavlink.
 
-Test fixture generator for flightid's .tlog reader (issue 6). A .tlog is a sequence of
+Test fixture generator for flightid's .tlog reader. A .tlog is a sequence of
 [8-byte big-endian microsecond Unix timestamp][MAVLink frame]; pymavlink's own log writer omits the
 timestamps, so they are written here explicitly.
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Fly a JSBSim c172x maneuver and write it as a flightid flight CSV (DESIGN.md section 4).
+"""Fly a JSBSim c172x maneuver and write it as a flightid flight CSV (docs/data.md).
 
-Oracle data for the data-compatibility check (`flightid check`, issue 6 item 5): a trimmed c172x
+Oracle data for the data-compatibility check (`flightid check`): a trimmed c172x
 at 4000 ft / 100 KTAS gets an elevator doublet, an aileron doublet and a rudder doublet; the
 measured channels come straight from JSBSim's state, so the record is kinematically consistent
 (up to JSBSim's round-earth terms, below 1e-4 rad/s here).

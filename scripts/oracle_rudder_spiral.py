@@ -35,7 +35,7 @@ OUT_DIR = tempfile.mkdtemp(prefix="flightid-oracle-")
 
 
 def trimmed():
-    """c172x trimmed like flightid trims it (DESIGN.md section 3)."""
+    """c172x trimmed like flightid trims it (docs/jsbsim.md)."""
     fdm = jsbsim.FGFDMExec(None)
     fdm.set_debug_level(0)
     fdm.set_dt(1.0 / RATE_HZ)

@@ -1,5 +1,5 @@
 //! Aerodynamic derivatives from real JSBSim c172x doublet flights (4000 ft, 100 KTAS), scored against the
-//! derivatives the model itself uses (issue 4 acceptance). Each test flies its own doublets (~1 s of work).
+//! derivatives the model itself uses. Each test flies its own doublets (~1 s of work).
 
 use flightid::aero::score::{score_equation_error, score_tf_fit, Scorecard, CMQ_SUM};
 use flightid::aero::spec::{model_from_truth, truth_derivatives, Structure};

@@ -39,7 +39,7 @@ fn compare_report_holds_every_plot_and_srivc_matches_the_linearized_short_period
             .as_f64()
             .unwrap()
     };
-    // DESIGN.md: linearized short period 6.1 rad/s at 4000 ft, 100 kts; SRIVC on a 2 deg doublet of the
+    // docs/jsbsim.md: linearized short period 6.1 rad/s at 4000 ft, 100 kts; SRIVC on a 2 deg doublet of the
     // nonlinear model lands within 3 % (measured 1.3 %: the nonlinearity at 2 deg is small).
     assert!((wn("jsbsim_linearization") - 6.11).abs() < 0.05);
     assert!((wn("srivc") / wn("jsbsim_linearization") - 1.0).abs() < 0.03);

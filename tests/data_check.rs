@@ -1,4 +1,4 @@
-//! Specification of the data compatibility check (issue 6 item 5): flight-path reconstruction
+//! Specification of the data compatibility check: flight-path reconstruction
 //! recovers an injected pitch-rate bias and an angle-of-attack time skew, and finds nothing on
 //! clean data.
 
@@ -259,7 +259,7 @@ fn jsbsim_flight_with_q_bias_and_alpha_skew_is_diagnosed_and_clean_flight_is_not
         assert!(!e.significant, "clean JSBSim flight: spurious {e:?}");
     }
 
-    // Issue 6 acceptance: +0.5 °/s on q and α delayed by 60 ms, both recovered within 20 %.
+    // Specification: +0.5 °/s on q and α delayed by 60 ms, both recovered within 20 %.
     let q_bias = 0.5_f64.to_radians();
     let mut bad = clean.clone();
     let q: Vec<f64> = bad

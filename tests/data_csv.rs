@@ -1,4 +1,4 @@
-//! Specification of the flight-data CSV reader/writer (DESIGN.md §4, issue 6 item 1).
+//! Specification of the flight-data CSV reader/writer (docs/data.md).
 
 use flightid::data::{
     parse_csv_bytes, read_csv, resample_uniform, write_csv_atomic, DataError, FlightRecord,

@@ -1,4 +1,4 @@
-//! Issue 6 item 4: `identify` on several segments or files at once, fitted jointly
+//! `identify` on several segments or files at once, fitted jointly
 //! (`flightid::ident::identify_joint`), and `--segment` on the command line.
 //!
 //! Recipe (as tests/ident_jsbsim.rs): JSBSim c172x trimmed at 4000 ft / 100 KTAS, 120 Hz, elevator

@@ -1,4 +1,4 @@
-//! Specification of maneuver detection (issue 6 item 4): a 10-minute synthetic log with six
+//! Specification of maneuver detection: a 10-minute synthetic log with six
 //! maneuvers separated by steady flight and turns; every maneuver found, start/end within 0.5 s.
 
 use flightid::data::{find_segments, FlightRecord, ManeuverKind, SegmentOptions};

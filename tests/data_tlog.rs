@@ -1,5 +1,5 @@
-//! Specification of the MAVLink `.tlog` reader (issue 6 item 2) and the pymavlink fixture
-//! round trip (item 3).
+//! Specification of the MAVLink `.tlog` reader and the pymavlink fixture
+//! round trip.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,4 +1,4 @@
-//! Diagnose names hidden effects (issue 7 acceptance). "Measured" data are generated with JSBSim itself with one
+//! Diagnose names hidden effects. "Measured" data are generated with JSBSim itself with one
 //! effect hidden — a modified coefficient, a delayed/lagged/scaled surface, a biased sensor — whose size is a
 //! seeded random draw (uniform over a physically sensible range, both directions where both exist), plus the noise
 //! of a small-aircraft sensor suite. Each case has one training and one validation maneuver, each exciting all

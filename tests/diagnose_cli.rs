@@ -1,4 +1,4 @@
-//! `flightid diagnose` / `replay` / `fly --model` from the command line, and bad input (issue 7): a record missing
+//! `flightid diagnose` / `replay` / `fly --model` from the command line, and bad input: a record missing
 //! the channels an extension needs (the extension is skipped and the output says so), a record too short to
 //! identify anything (exit 2), a trim that fails at the measured condition (exit 1, the reason named), a linear
 //! model used far from its trim point (exit 1, the reason named).

@@ -1,4 +1,4 @@
-//! Issue 3 acceptance on JSBSim data: c172x at 4000 ft, 100 KTAS, doublets flown through the bridge; srivc and oe
+//! Identification on JSBSim data: c172x at 4000 ft, 100 KTAS, doublets flown through the bridge; srivc and oe
 //! against JSBSim's own linearization (decoupled 4-state submodels). Target: short-period ωn and ζ from θ/δe and
 //! Dutch-roll ωn from φ/δa within 3 %.
 //!

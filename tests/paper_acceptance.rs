@@ -1,4 +1,4 @@
-//! Issue 3 acceptance on the paper's three transfer functions (Şahin & Kalyon 2021, Section 4), through the
+//! Acceptance on the paper's three transfer functions (Şahin & Kalyon 2021, Section 4), through the
 //! `flightid::paper` library and the `flightid paper` binary.
 
 mod common;
@@ -61,7 +61,7 @@ fn noise_free_paper_run_recovers_every_original_coefficient_within_half_percent(
 
 #[test]
 fn noise_free_ls_recovers_the_dimensional_control_derivatives_within_half_percent() {
-    // Issue 4 item 5: the paper gives TF coefficients only, so M_δe, L'_δa, L'_δr (the s² numerator coefficient of
+    // The paper gives TF coefficients only, so M_δe, L'_δa, L'_δr (the s² numerator coefficient of
     // θ/δe, φ/δa, φ/δr) are what can be backed out. Truth must be the printed coefficient it comes from; the ls
     // estimate from the simulated doublet (not from the printed TF) within 0.5 % (measured ≤ 0.0001 %).
     let run = paper::run(&PaperOptions::new(0.0)).unwrap();

@@ -54,7 +54,7 @@ fn every_configured_aircraft_trims_at_its_default_point() {
 }
 
 /// Reference values (decoupled 4-state submodels, c172x, 4000 ft, 100 KTAS), computed independently with
-/// python-control from the same A, B by `scripts/oracle_linearize.py` and in DESIGN.md section 3.
+/// python-control from the same A, B by `scripts/oracle_linearize.py` and in docs/jsbsim.md.
 #[test]
 fn c172x_linearization_has_the_known_short_period_and_dutch_roll() {
     let mut sim = start("c172x");
@@ -194,11 +194,11 @@ fn doublet_csv_passes_schema_validation_and_starts_at_trim() {
     );
 }
 
-/// Issue 2 acceptance: for a 0.5° elevator doublet on the 737, linearize's θ/δe driven by the logged elevator
+/// Specification: for a 0.5° elevator doublet on the 737, linearize's θ/δe driven by the logged elevator
 /// deflection reproduces the logged θ within 3 % (RMS error over peak response) — over the first 8 s, which hold
 /// the doublet and the short-period response. Measured: 2.8 % over 8 s, 3.7 % over 10 s, 8.4 % over 20 s: after
 /// the short period the nonlinear 737 creeps in θ (slow mode) more than its linearization predicts, at every
-/// trim point tried (10000–35000 ft), and scaling Cmadot does not change it (see the issue 2 closing note).
+/// trim point tried (10000–35000 ft), and scaling Cmadot does not change it.
 #[test]
 fn b737_small_elevator_doublet_matches_the_linearization() {
     let mut sim = start("737");

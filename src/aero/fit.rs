@@ -569,7 +569,7 @@ mod tests {
 
     #[test]
     fn round_trip_with_lift_known_returns_all_six_pitch_derivatives_to_1e_6() {
-        // Acceptance (issue 4): derivatives → θ/δe → derivatives, identifiable ones to 1e-6 relative.
+        // Specification: derivatives → θ/δe → derivatives, identifiable ones to 1e-6 relative.
         let truth = c172x_model(Assumptions::paper());
         let free = [D::CD0, D::CDCL2, D::Cmalpha, D::Cmalphadot, D::Cmq, D::Cmde];
         let tfs = IdentifiedTfs::paper(

@@ -24,12 +24,13 @@
 //! ```
 //! with Y_β = q̄S C_Yβ/(mV), Y_p = q̄Sb C_Yp/(2mV²), L_β = q̄Sb C_lβ/I_xx, L_p = q̄Sb² C_lp/(2V I_xx), etc.
 //!
-//! Transfer functions come from the state space by the Faddeev–LeVerrier recursion
-//! (Kailath, *Linear Systems*, §2.2): (sI − A)⁻¹ = Σ N_k s^{n−1−k} / det(sI − A). This is a private
-//! implementation; `crate::lti::ss2tf` does the same job for general systems.
+//! Transfer functions come from the state space through `crate::lti::ss2tf` (matrix determinant
+//! lemma on Hessenberg characteristic polynomials), the one SS→TF conversion of the crate.
 
 use faer::prelude::Solve;
 use faer::Mat;
+
+use crate::lti::{ss2tf, StateSpace};
 
 use super::params::{
     Assumptions, Derivative as D, Derivatives, FlightCondition, Geometry, MassProperties,
@@ -399,7 +400,7 @@ impl LinearModel {
         }
     }
 
-    /// Output `state` over input `input`, by Faddeev–LeVerrier (see the module doc).
+    /// Output `state` over input `input` (see the module doc).
     pub fn transfer_function(
         &self,
         state: usize,
@@ -416,11 +417,18 @@ impl LinearModel {
                 ),
             });
         }
-        let (den, adj) = faddeev_leverrier(&self.a);
-        let num = adj
-            .iter()
-            .map(|nk| (0..n).map(|j| nk[(state, j)] * self.b[(j, input)]).sum())
-            .collect();
+        let ss = StateSpace::new(
+            self.a.clone(),
+            self.b.clone(),
+            Mat::from_fn(1, n, |_, j| if j == state { 1.0 } else { 0.0 }),
+            Mat::zeros(1, self.b.ncols()),
+        )
+        .map_err(|_| AeroError::Numerical("state space of the derivative model"))?;
+        let tf = ss2tf(&ss, input, 0);
+        // keep the historical shape: n numerator coefficients (degree n − 1), leading zeros included
+        let mut num = vec![0.0; n.saturating_sub(tf.num.len())];
+        num.extend_from_slice(&tf.num);
+        let den = tf.den;
         Ok(TfCoefficients { num, den })
     }
 
@@ -466,27 +474,6 @@ impl LinearModel {
             })
             .max_by(|a, b| a.0.total_cmp(&b.0)))
     }
-}
-
-/// Characteristic polynomial (monic, descending) and the adjugate coefficients N_0..N_{n−1} of (sI − A).
-fn faddeev_leverrier(a: &Mat<f64>) -> (Vec<f64>, Vec<Mat<f64>>) {
-    let n = a.nrows();
-    let mut den = vec![1.0];
-    let mut adj = vec![Mat::<f64>::identity(n, n)];
-    for k in 1..=n {
-        let an = a * &adj[k - 1];
-        let trace: f64 = (0..n).map(|i| an[(i, i)]).sum();
-        let ck = -trace / k as f64;
-        den.push(ck);
-        if k < n {
-            let mut next = an;
-            for i in 0..n {
-                next[(i, i)] += ck;
-            }
-            adj.push(next);
-        }
-    }
-    (den, adj)
 }
 
 #[cfg(test)]
@@ -615,7 +602,7 @@ pub(crate) mod tests {
 
     #[test]
     fn c172x_short_period_matches_jsbsim_linearization_within_5_percent() {
-        // Acceptance (issue 4): the paper-structure model from the truth derivatives within 5 % of JSBSim.
+        // Specification: the paper-structure model from the truth derivatives within 5 % of JSBSim.
         for (label, a) in [
             ("textbook", jsbsim_assumptions()),
             ("paper", Assumptions::paper()),

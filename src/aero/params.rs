@@ -156,7 +156,7 @@ impl Geometry {
 
 macro_rules! derivatives {
     ($( $variant:ident => $name:literal, $doc:literal; )*) => {
-        /// A named nondimensional derivative (names as in `DESIGN.md` §7: `Cm_q`, `Cl_beta`, …).
+        /// A named nondimensional derivative (names as in docs/diagnose.md: `Cm_q`, `Cl_beta`, …).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         pub enum Derivative { $( #[doc = $doc] $variant, )* }
 
@@ -256,7 +256,7 @@ impl fmt::Display for Derivative {
 impl FromStr for Derivative {
     type Err = AeroError;
 
-    /// Parse a flightid derivative name (case-sensitive, as in `DESIGN.md` §7).
+    /// Parse a flightid derivative name (case-sensitive, as in docs/diagnose.md).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Derivative::ALL
             .iter()

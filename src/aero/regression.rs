@@ -971,7 +971,7 @@ mod tests {
 
     #[test]
     fn equation_error_with_sensor_noise_keeps_key_lateral_derivatives_within_15_percent() {
-        // Acceptance (issue 4) on simulated data: Gaussian noise of 0.1° on β and 0.3 °/s on p, r (a
+        // Specification on simulated data: Gaussian noise of 0.1° on β and 0.3 °/s on p, r (a
         // MEMS-grade IMU and vane). C_lp, C_lδa, C_nβ, C_nδr within 15 %, and the coloured-residual 3σ
         // interval covers the truth for those four.
         use rand::{rngs::StdRng, SeedableRng};

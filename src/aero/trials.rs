@@ -1,4 +1,4 @@
-//! The estimation experiment of issue 4: fly doublets on a simulator, identify the paper's transfer functions
+//! The estimation experiment behind `flightid derivatives`: fly doublets on a simulator, identify the paper's transfer functions
 //! (θ/δe, φ/δa, φ/δr) and read the same flights as full-state records for equation-error regression.
 //!
 //! Four flights from one trim, each a doublet (±A for one pulse each, from t = `start_s`): elevator, aileron,
@@ -54,7 +54,7 @@ impl SensorNoise {
         }
     }
 
-    /// The standard deviation for a flight-data column (DESIGN.md §4 names), 0 for unmeasured ones.
+    /// The standard deviation for a flight-data column (docs/data.md names), 0 for unmeasured ones.
     fn std_of(&self, column: &str) -> f64 {
         match column {
             "alpha_rad" | "beta_rad" => self.flow_angle_rad,

@@ -103,8 +103,9 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
             Ok(())
         }
         CampaignAction::Report { dir, report } => {
-            let (rep, json) = campaign::campaign_report(dir).map_err(classify)?;
             let target = report.clone().unwrap_or_else(|| dir.join("report"));
+            crate::report::check_output_dir(&target)?;
+            let (rep, json) = campaign::campaign_report(dir).map_err(classify)?;
             let index = crate::report::write_report_dir(&target, &rep, &json)?;
             println!("report: {}", index.display());
             Ok(())

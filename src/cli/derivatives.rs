@@ -114,6 +114,9 @@ fn classify(e: AeroError) -> anyhow::Error {
 
 /// Runs `flightid derivatives`.
 pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
+    if let Some(dir) = &args.report {
+        crate::report::check_output_dir(dir)?;
+    }
     if let Some(airframe) = &args.airframe {
         return run_measured(args, airframe);
     }
@@ -194,7 +197,7 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     }
     let json = result.to_json();
     if let Some(dir) = &args.report {
-        let index = report::write_report(dir, &result.report(), &json)?;
+        let index = report::write_report_dir(dir, &result.report(), &json)?;
         if !quiet {
             println!("\nreport: {}", index.display());
         }

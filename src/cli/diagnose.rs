@@ -35,7 +35,7 @@ pub struct DiagnoseCmd {
     /// Validation record (flight-data CSV) the fit never sees.
     #[arg(long)]
     pub validate: Option<PathBuf>,
-    /// Write the JSON result (DESIGN.md §7) to this file (`-` for stdout).
+    /// Write the JSON result (docs/diagnose.md) to this file (`-` for stdout).
     #[arg(long)]
     pub json: Option<String>,
     /// Write the fitted effects as an extension file (JSON, loadable by `flightid replay --extension`).
@@ -61,7 +61,8 @@ pub fn read_record(path: &Path) -> anyhow::Result<FlightRecord> {
 /// Maps diagnose errors on the user's input to exit code 2.
 pub fn classify(e: DiagnoseError) -> anyhow::Error {
     match e {
-        DiagnoseError::Sim { .. } | DiagnoseError::Report(_) => e.into(),
+        DiagnoseError::Sim { .. } => e.into(),
+        DiagnoseError::Report(r) => r.into(),
         other => UsageError(other.to_string()).into(),
     }
 }
@@ -113,6 +114,9 @@ fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
 
 /// Runs `flightid diagnose`.
 pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
+    for dir in [&args.report, &args.model_out].into_iter().flatten() {
+        crate::report::check_output_dir(dir)?;
+    }
     let train = read_record(&args.data)?;
     let valid = args.validate.as_deref().map(read_record).transpose()?;
     let source = match &args.linear {

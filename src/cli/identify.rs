@@ -19,7 +19,7 @@ use std::path::PathBuf;
     after_help = "Examples:\n  flightid identify --data doublet.csv --input elevator --output theta_rad --method srivc\n  flightid identify --data roll.csv --input aileron_rad --output phi_rad --method oe --json out.json"
 )]
 pub struct IdentifyCmd {
-    /// Flight-data CSV (DESIGN.md §4 schema; any columns). Repeat to fit several files jointly.
+    /// Flight-data CSV (docs/data.md; any columns). Repeat to fit several files jointly.
     #[arg(long, value_name = "FLIGHT.csv", required = true)]
     pub data: Vec<PathBuf>,
     /// Input: a surface (elevator, aileron, rudder → <surface>_rad) or any column name.
@@ -49,7 +49,7 @@ pub struct IdentifyCmd {
     #[arg(long, value_name = "SECONDS")]
     pub window_s: Option<f64>,
     /// Resample every record onto a uniform grid at this rate first (linear interpolation).
-    #[arg(long = "resample-hz", value_name = "HZ")]
+    #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
     /// Write the result as JSON (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]

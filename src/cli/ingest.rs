@@ -7,7 +7,7 @@ use anyhow::Context;
 use super::UsageError;
 use crate::data::{self, ServoMap, TlogOptions};
 
-/// Convert a MAVLink `.tlog` into a flight-data CSV (DESIGN.md §4).
+/// Convert a MAVLink `.tlog` into a flight-data CSV (docs/data.md).
 #[derive(clap::Args, Debug, Clone)]
 pub struct IngestArgs {
     /// The telemetry log ([8-byte µs timestamp][MAVLink frame] records).
@@ -25,7 +25,7 @@ pub struct IngestArgs {
     #[arg(long)]
     pub sysid: Option<u8>,
     /// Output sample rate, Hz (default: the ATTITUDE rate). Linear interpolation.
-    #[arg(long = "resample-hz")]
+    #[arg(long = "resample-hz", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
     /// Print the summary as JSON on stdout.
     #[arg(long)]

@@ -8,7 +8,7 @@ use crate::data::{self, SegmentOptions};
 /// Find maneuvers in a flight-data CSV.
 #[derive(clap::Args, Debug, Clone)]
 pub struct SegmentsArgs {
-    /// Flight-data CSV (DESIGN.md §4).
+    /// Flight-data CSV (docs/data.md).
     pub file: PathBuf,
     /// Smallest input that counts as a maneuver, degrees.
     #[arg(long, default_value_t = 0.25)]
@@ -17,7 +17,7 @@ pub struct SegmentsArgs {
     #[arg(long)]
     pub json: bool,
     /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
-    #[arg(long = "resample-hz", value_name = "HZ")]
+    #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
 }
 

@@ -1,4 +1,4 @@
-//! Flight-data CSV reader and atomic writer (schema: DESIGN.md §4).
+//! Flight-data CSV reader and atomic writer (schema: docs/data.md).
 //!
 //! Reading: `#` lines before the header are metadata; the header names the columns (`time_s`
 //! required, any order, unknown columns kept); every data cell must be a finite number. The body is

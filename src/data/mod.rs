@@ -1,6 +1,6 @@
 //! Flight-data schema, CSV and MAVLink readers/writers, units and validation.
 //!
-//! The exchange format is the CSV schema of DESIGN.md §4 ([`SCHEMA_COLUMNS`]): SI units, radians,
+//! The exchange format is the CSV schema of docs/data.md ([`SCHEMA_COLUMNS`]): SI units, radians,
 //! `time_s` strictly increasing, unknown columns kept. [`FlightRecord`] is its in-memory form.
 
 mod csv_io;

@@ -1,8 +1,8 @@
-//! The in-memory flight record (DESIGN.md §4), its validation and unit-sanity checks.
+//! The in-memory flight record (docs/data.md), its validation and unit-sanity checks.
 
 use super::error::{DataError, Warning, WarningKind, IN_MEMORY};
 
-/// The schema columns of DESIGN.md §4, in their canonical order.
+/// The schema columns of docs/data.md, in their canonical order.
 pub const SCHEMA_COLUMNS: &[&str] = &[
     "time_s",
     "elevator_rad",

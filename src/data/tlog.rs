@@ -5,7 +5,7 @@
 //! with the message's CRC_EXTRA, MAVLink serialization spec) and resynchronisation after corrupt
 //! bytes are done here; payloads are decoded by the `mavlink` crate (`Message::parse`).
 //!
-//! Mapping onto the schema (DESIGN.md §4), all onto one uniform grid:
+//! Mapping onto the schema (docs/data.md), all onto one uniform grid:
 //! - ATTITUDE → `phi_rad theta_rad psi_rad` (yaw unwrapped), `p_rad_s q_rad_s r_rad_s`;
 //! - HIGHRES_IMU (m/s²) or else SCALED_IMU / RAW_IMU (milli-g) → `ax_m_s2 ay_m_s2 az_m_s2`
 //!   (body FRD specific force, 1-g level flight gives az ≈ −9.81);

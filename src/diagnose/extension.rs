@@ -1,4 +1,4 @@
-//! The catalogue of model extensions: one small type per effect (DESIGN.md §7 vocabulary).
+//! The catalogue of model extensions: one small type per effect (docs/diagnose.md vocabulary).
 //!
 //! An extension acts at one of three places of the replay: on the model before trimming (aerodynamic
 //! coefficient scales), on the surface inputs before simulating (signal path), or on the simulated
@@ -40,7 +40,7 @@ pub struct ParamSpec {
 
 /// A model extension: an effect on a target with parameters fitted by output error.
 pub trait Extension: Send + Sync {
-    /// Effect name from the DESIGN.md §7 vocabulary (`input_delay`, `sensor_bias`, ...).
+    /// Effect name from the docs/diagnose.md vocabulary (`input_delay`, `sensor_bias`, ...).
     fn effect(&self) -> &'static str;
     /// Target: a surface, a CSV column or a derivative name.
     fn target(&self) -> &str;
@@ -72,7 +72,7 @@ pub struct SensorBias(pub String);
 pub struct SensorScale(pub String);
 /// Factor on one aerodynamic coefficient function of the simulation. Value: factor.
 pub struct AeroDerivative {
-    /// DESIGN.md §7 name, e.g. `Cm_alpha`.
+    /// docs/diagnose.md name, e.g. `Cm_alpha`.
     pub name: String,
     /// The simulation's coefficient (knob) name, e.g. `Cmalpha`.
     pub knob: String,
@@ -308,7 +308,7 @@ impl Extension for AeroDerivative {
     }
 }
 
-/// DESIGN.md §7 derivative names and the coefficient function names of JSBSim's c172x that carry them.
+/// docs/diagnose.md derivative names and the coefficient function names of JSBSim's c172x that carry them.
 pub const DERIVATIVE_KNOBS: [(&str, &str); 23] = [
     ("CL_alpha", "CLwbh"),
     ("CL_q", "CLq"),

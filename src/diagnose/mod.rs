@@ -1,5 +1,5 @@
 //! Diagnose: show what the simulation gets wrong on measured data, name the cause from a catalogue of
-//! model extensions, and measure the gain on a validation record (issue 7, JSON contract DESIGN.md §7).
+//! model extensions, and measure the gain on a validation record (JSON contract: docs/diagnose.md).
 //!
 //! Pipeline: [`replay`] the record → [`residual`] analysis → fit every [`extension`] by output error
 //! ([`search`]) → forward selection by BIC → re-simulate the validation record with the chosen effects.
@@ -39,7 +39,7 @@ pub enum DiagnoseError {
     ExtensionFile { path: String, message: String },
     /// The report could not be written.
     #[error("report: {0}")]
-    Report(String),
+    Report(#[from] crate::report::ReportError),
     /// The simulation failed (trim at the measured condition, bridge error).
     #[error("simulation during {during}: {source}")]
     Sim { during: String, source: SimError },
@@ -83,7 +83,7 @@ impl Default for DiagnoseOptions {
     }
 }
 
-/// One evaluated candidate (DESIGN.md §7 `candidates`).
+/// One evaluated candidate (docs/diagnose.md `candidates`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Candidate {
     /// Effect.
@@ -116,7 +116,7 @@ pub struct Candidate {
     pub full_fit: bool,
 }
 
-/// A named cause (DESIGN.md §7 `named_cause`).
+/// A named cause (docs/diagnose.md `named_cause`).
 #[derive(Debug, Clone, Serialize)]
 pub struct NamedCause {
     /// Effect.
@@ -131,7 +131,7 @@ pub struct NamedCause {
     pub ambiguous_with: Vec<String>,
 }
 
-/// Validation on a record the fit never saw (DESIGN.md §7 `validation`).
+/// Validation on a record the fit never saw (docs/diagnose.md `validation`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Validation {
     /// Noise-weighted ISE, Σ_c ISE_c / σ_c², without the named effects.
@@ -159,7 +159,7 @@ pub struct Skipped {
     pub reason: String,
 }
 
-/// The whole diagnosis (DESIGN.md §7 keys first, extras after).
+/// The whole diagnosis (docs/diagnose.md keys first, extras after).
 #[derive(Debug, Clone, Serialize)]
 pub struct Diagnosis {
     /// Significant effects, in order of selection; empty when nothing is significant.

@@ -1,4 +1,4 @@
-//! The extended model on disk (issue 7 item 5): a directory holding a private copy of the JSBSim aircraft with
+//! The extended model on disk: a directory holding a private copy of the JSBSim aircraft with
 //! the fitted coefficient factors and added terms written into its XML, plus `extension.json` with the
 //! signal-path and sensor effects, which live outside the aerodynamic model. `flightid fly --model DIR` and
 //! `flightid replay --model DIR` load it.
@@ -57,7 +57,6 @@ pub fn write_model(
             signal.push(f.clone());
         }
     }
-    sim.export_model(dir).map_err(|e| file_err(dir, e))?;
     let extension = ExtensionFile {
         aircraft: file.aircraft.clone(),
         effects: signal,
@@ -65,8 +64,12 @@ pub fn write_model(
         notes: file.notes.clone(),
     };
     let text = serde_json::to_string_pretty(&extension).map_err(|e| file_err(dir, e))?;
-    crate::report::write_atomic(&dir.join(EXTENSION_FILE), text.as_bytes())
-        .map_err(|e| file_err(dir, e))?;
+    // the whole directory is replaced at once, and only when it is new or an earlier flightid output
+    crate::report::replace_output_dir(dir, |tmp| -> Result<(), DiagnoseError> {
+        sim.export_model(tmp).map_err(|e| file_err(dir, e))?;
+        crate::report::write_atomic(&tmp.join(EXTENSION_FILE), text.as_bytes())
+            .map_err(|e| file_err(dir, e))
+    })?;
     Ok(ExtendedModel {
         dir: dir.to_path_buf(),
         extension,

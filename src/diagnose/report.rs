@@ -9,7 +9,7 @@ use super::replay::ReplayCase;
 use super::search::Worker;
 use super::{analyse_replay, DiagnoseError, Diagnosis};
 use crate::data::FlightRecord;
-use crate::report::{write_report as write_files, LinePlot, Report, Section, Series, Table};
+use crate::report::{write_report_dir as write_files, LinePlot, Report, Section, Series, Table};
 
 fn f(v: f64) -> String {
     if v.is_finite() {
@@ -311,5 +311,5 @@ pub fn write_report(
         ],
     };
     let json = serde_json::to_value(d).unwrap_or_default();
-    write_files(dir, &report, &json).map_err(|e| DiagnoseError::Report(e.to_string()))
+    Ok(write_files(dir, &report, &json)?)
 }

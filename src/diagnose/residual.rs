@@ -1,6 +1,8 @@
 //! Residual analysis per output channel: fit %, ISE, RMS, whiteness, cross-correlation with the inputs.
 
 use serde::Serialize;
+
+use crate::ident::nrmse_fit;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Statistics of one channel's residual (measured − simulated).
@@ -29,21 +31,6 @@ pub struct InputCorrelation {
     pub peak: f64,
     /// Lag of the peak, s.
     pub lag_s: f64,
-}
-
-/// Fit percent: 100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖) (Ljung, System Identification, 2nd ed., §16.6 "fit").
-pub fn fit_percent(measured: &[f64], simulated: &[f64]) -> f64 {
-    let n = measured.len().min(simulated.len());
-    if n == 0 {
-        return f64::NAN;
-    }
-    let mean = measured[..n].iter().sum::<f64>() / n as f64;
-    let num: f64 = (0..n).map(|k| (measured[k] - simulated[k]).powi(2)).sum();
-    let den: f64 = (0..n).map(|k| (measured[k] - mean).powi(2)).sum();
-    if den <= 0.0 {
-        return if num <= 0.0 { 100.0 } else { f64::NEG_INFINITY };
-    }
-    100.0 * (1.0 - (num / den).sqrt())
 }
 
 /// Ljung–Box Q statistic p-value for `lags` autocorrelation lags (Ljung & Box 1978, Biometrika 65, eq. 2.1).
@@ -124,7 +111,7 @@ pub fn analyse(
         rms: (ss / n.max(1) as f64).sqrt(),
         mean: e.iter().sum::<f64>() / n.max(1) as f64,
         ise: ss * dt_s,
-        fit_percent: fit_percent(&measured[..n], &simulated[..n]),
+        fit_percent: nrmse_fit(&measured[..n], &simulated[..n]),
         whiteness_p: whiteness_p(&e, 20),
         input_correlation,
     }

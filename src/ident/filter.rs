@@ -13,7 +13,8 @@
 //!   with a pure delay that need not be a multiple of the sample time (modified z-transform);
 //! - [`Hold::Foh`] — piecewise-linear input (a sampled smooth response such as `y`), error O(h²).
 
-use super::linalg::{expm, identity};
+use super::linalg::identity;
+use crate::lti::expm_rows;
 
 /// Inter-sample behaviour assumed for the filtered signal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,7 +71,7 @@ impl Svf {
                 }
                 big[(n - 1) * m + n] = dt_s;
                 big[n * m + n + 1] = dt_s;
-                let e = expm(&big, m);
+                let e = expm_rows(&big, m);
                 let phi: Vec<f64> = (0..n * n).map(|k| e[(k / n) * m + k % n]).collect();
                 let g0: Vec<f64> = (0..n).map(|i| e[i * m + n]).collect();
                 // e[i, n+1] = ∫₀^h e^{Aσ}B (h−σ)/h dσ · h / h → divide by h for the slope weight
@@ -244,7 +245,7 @@ fn phi_gamma(a: &[f64], n: usize, t: f64) -> (Vec<f64>, Vec<f64>) {
         }
     }
     big[(n - 1) * m + n] = t;
-    let e = expm(&big, m);
+    let e = expm_rows(&big, m);
     let phi: Vec<f64> = (0..n * n).map(|k| e[(k / n) * m + k % n]).collect();
     let g: Vec<f64> = (0..n).map(|i| e[i * m + n]).collect();
     (phi, g)

@@ -1,5 +1,5 @@
-//! Small numerical helpers private to `ident`: least squares by column-pivoted QR, a small
-//! dense matrix exponential, polynomial roots and products.
+//! Small numerical helpers private to `ident`: least squares by column-pivoted QR, small dense
+//! solves and products. Polynomial roots and products are the `lti` ones, re-exported here.
 //!
 //! Square matrices here are tiny (model order ≤ ~10) and stored row-major in a `Vec<f64>`.
 
@@ -7,6 +7,8 @@ use faer::prelude::*;
 use num_complex::Complex64;
 
 use super::IdentError;
+
+pub(crate) use crate::lti::{poly_from_roots, poly_mul, roots};
 
 /// Least-squares solution of `phi θ ≈ y` by Householder QR, column-pivoted when the
 /// diagonal of R shows poor conditioning (Golub & Van Loan, *Matrix Computations*, 4th ed.,
@@ -107,37 +109,6 @@ pub(crate) fn matmul(a: &[f64], b: &[f64], n: usize) -> Vec<f64> {
     c
 }
 
-/// Matrix exponential of a small row-major n×n matrix by scaling and squaring with a
-/// degree-18 Taylor polynomial (Moler & Van Loan, "Nineteen dubious ways…", SIAM Rev. 2003,
-/// method 3). After scaling ‖A‖₁ ≤ 0.5 the truncation error is below 1e-21.
-pub(crate) fn expm(a: &[f64], n: usize) -> Vec<f64> {
-    let norm1 = (0..n)
-        .map(|j| (0..n).map(|i| a[i * n + j].abs()).sum::<f64>())
-        .fold(0.0_f64, f64::max);
-    let mut squarings = 0_u32;
-    if norm1 > 0.5 {
-        squarings = (norm1 / 0.5).log2().ceil() as u32;
-    }
-    let scale = 0.5_f64.powi(squarings as i32);
-    let a_s: Vec<f64> = a.iter().map(|v| v * scale).collect();
-    // Horner: I + A(I + A/2(I + A/3(...)))
-    let mut e = identity(n);
-    for k in (1..=18).rev() {
-        let mut t = matmul(&a_s, &e, n);
-        for v in t.iter_mut() {
-            *v /= k as f64;
-        }
-        for i in 0..n {
-            t[i * n + i] += 1.0;
-        }
-        e = t;
-    }
-    for _ in 0..squarings {
-        e = matmul(&e, &e, n);
-    }
-    e
-}
-
 /// The n×n identity, row-major.
 pub(crate) fn identity(n: usize) -> Vec<f64> {
     let mut m = vec![0.0; n * n];
@@ -145,59 +116,6 @@ pub(crate) fn identity(n: usize) -> Vec<f64> {
         m[i * n + i] = 1.0;
     }
     m
-}
-
-/// Roots of a polynomial given highest power first, as eigenvalues of its companion matrix
-/// (Golub & Van Loan §7.4.6). Leading zeros are stripped; a constant has no roots.
-pub(crate) fn roots(coeffs: &[f64]) -> Vec<Complex64> {
-    let first = coeffs.iter().position(|c| *c != 0.0);
-    let Some(first) = first else {
-        return Vec::new();
-    };
-    let c = &coeffs[first..];
-    let n = c.len() - 1;
-    if n == 0 {
-        return Vec::new();
-    }
-    let comp = Mat::<f64>::from_fn(n, n, |i, j| {
-        if i == 0 {
-            -c[j + 1] / c[0]
-        } else if i == j + 1 {
-            1.0
-        } else {
-            0.0
-        }
-    });
-    match comp.eigenvalues() {
-        Ok(ev) => ev.into_iter().map(|z| Complex64::new(z.re, z.im)).collect(),
-        Err(_) => vec![Complex64::new(f64::NAN, f64::NAN); n],
-    }
-}
-
-/// Monic real polynomial (highest power first) with the given roots; complex roots are
-/// expected in conjugate pairs, the imaginary round-off of the product is dropped.
-pub(crate) fn poly_from_roots(r: &[Complex64]) -> Vec<f64> {
-    let mut p = vec![Complex64::new(1.0, 0.0)];
-    for root in r {
-        let mut next = vec![Complex64::new(0.0, 0.0); p.len() + 1];
-        for (i, c) in p.iter().enumerate() {
-            next[i] += c;
-            next[i + 1] -= c * root;
-        }
-        p = next;
-    }
-    p.into_iter().map(|c| c.re).collect()
-}
-
-/// Product of two polynomials (any consistent coefficient order).
-pub(crate) fn poly_mul(a: &[f64], b: &[f64]) -> Vec<f64> {
-    let mut c = vec![0.0; a.len() + b.len() - 1];
-    for (i, x) in a.iter().enumerate() {
-        for (j, y) in b.iter().enumerate() {
-            c[i + j] += x * y;
-        }
-    }
-    c
 }
 
 /// Reflects right-half-plane roots into the left half plane (s → −s̄); used to keep the

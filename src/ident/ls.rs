@@ -11,11 +11,17 @@
 //! - poles: `z = e^{ph}` ⇒ `p = ln z / h` (a discrete pole on the negative real axis has no real
 //!   continuous equivalent; its magnitude `ln|z|/h` is kept, which only happens on noisy data);
 //! - numerator: ZOH discretisation is linear in the continuous numerator once the poles are
-//!   fixed, so the discrete numerator of each basis term `s^j/A(s)` (j = 0..m) is computed and
-//!   the continuous coefficients `c_j` solve `Σ c_j b_d^{(j)} ≈ b̂_d` in least squares. With
-//!   `m = n − 1` this is exactly MATLAB's `d2c(…, 'zoh')`; with fewer zeros it is `d2c` followed
-//!   by dropping the negligible highest numerator terms, done as a projection so the kept terms
-//!   absorb the dropped ones' tiny contribution.
+//!   fixed, so the discrete numerator `b_d^{(j)}` of each basis term `s^j/A(s)` (j = 0..m) is
+//!   computed and the continuous coefficients `c_j` make the frequency responses agree:
+//!   `Σ c_j B_d^{(j)}(z)/A_d(z) ≈ B̂_d(z)/A_d(z)` in least squares over `z = e^{iωh}`, ω on a
+//!   logarithmic grid up to the Nyquist frequency. With `m = n − 1` the residual is zero and this
+//!   is exactly MATLAB's `d2c(…, 'zoh')`; with fewer zeros it is the continuous model of that
+//!   structure whose response is closest to the discrete model's. The response must be compared,
+//!   not the numerator coefficients: near a pole at z ≈ 1 (a slow phugoid or spiral, or an
+//!   integrator-like pole of a biased fit) a tiny change of a coefficient moves the low-frequency
+//!   gain by orders of magnitude, and a coefficient-space projection turned a discrete ARX model
+//!   simulating at 45 % into a continuous one at −1492 % (c172x θ/δe doublet at 120 Hz, checked
+//!   against an exact d2c by scipy's matrix logarithm in `scripts/oracle_ls_d2c.py`).
 
 use faer::Mat;
 use num_complex::Complex64;
@@ -163,8 +169,9 @@ pub(crate) fn continuous_poles(a: &[f64], dt_s: f64) -> Result<Vec<Complex64>, I
     Ok(p)
 }
 
-/// Exact ZOH d2c of a discrete numerator `b` (on u(k−1)…u(k−nb)) given the continuous monic
-/// denominator, projected onto a continuous numerator with `zeros` zeros (see module docs).
+/// ZOH d2c of a discrete numerator `b` (on u(k−1)…u(k−nb)) given the continuous monic
+/// denominator: the continuous numerator with `zeros` zeros whose ZOH frequency response matches
+/// the discrete model's in least squares (exact when `zeros = nb − 1`; see module docs).
 pub(crate) fn d2c_numerator(
     b: &[f64],
     den_c: &[f64],
@@ -191,10 +198,47 @@ pub(crate) fn d2c_numerator(
             })
             .sum()
     };
-    // columns ordered highest power first: column c ↔ s^{m−c}
-    let mat = Mat::<f64>::from_fn(nb, m + 1, |r, c| basis_num(m - c, r + 1));
-    lstsq_qr(&mat, b, "ls (d2c numerator)")
+    // frequency responses on z = e^{iωh}: ω log-spaced from below the slowest pole to Nyquist
+    let nyquist = std::f64::consts::PI / dt_s;
+    let slowest = p_c
+        .iter()
+        .map(|p| p.norm())
+        .filter(|w| *w > 0.0)
+        .fold(nyquist, f64::min);
+    let w_lo = (0.1 * slowest).min(1e-3 * nyquist);
+    let at = |coeffs: &dyn Fn(usize) -> f64, len: usize, w: f64| -> Complex64 {
+        (0..len)
+            .map(|i| coeffs(i) * Complex64::from_polar(1.0, -w * dt_s * i as f64))
+            .sum()
+    };
+    let grid: Vec<(Vec<Complex64>, Complex64)> = (0..FREQ_POINTS)
+        .map(|k| {
+            let w = w_lo * (nyquist / w_lo).powf(k as f64 / (FREQ_POINTS - 1) as f64);
+            let inv_a = 1.0 / at(&|l| a_d[l], a_d.len(), w);
+            // discrete numerators: coefficient i ↔ z^{−i}, i = 1..nb (index 0 is zero)
+            let num_at =
+                |f: &dyn Fn(usize) -> f64| at(&|i| if i == 0 { 0.0 } else { f(i) }, nb + 1, w);
+            // columns ordered highest power first: column c ↔ s^{m−c}
+            let basis = (0..=m)
+                .map(|c| num_at(&|i| basis_num(m - c, i)) * inv_a)
+                .collect();
+            (basis, num_at(&|i| b[i - 1]) * inv_a)
+        })
+        .collect();
+    let mat = Mat::<f64>::from_fn(2 * FREQ_POINTS, m + 1, |r, c| {
+        let v = grid[r / 2].0[c];
+        if r % 2 == 0 {
+            v.re
+        } else {
+            v.im
+        }
+    });
+    let target: Vec<f64> = grid.iter().flat_map(|(_, t)| [t.re, t.im]).collect();
+    lstsq_qr(&mat, &target, "ls (d2c numerator)")
 }
+
+/// Frequencies on which [`d2c_numerator`] matches the discrete and continuous responses.
+const FREQ_POINTS: usize = 256;
 
 /// The paper's estimator end to end: ARX fit, continuous poles, continuous numerator.
 pub(crate) fn ls(

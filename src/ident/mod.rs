@@ -252,11 +252,20 @@ impl ContinuousModel {
     }
 }
 
-/// NRMSE fit in percent: 100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖).
+/// Fit in percent, 100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖) (Ljung, *System Identification*, 2nd ed., §16.6
+/// "fit"): the crate's one fit measure. Extra samples of the longer series are ignored; an empty
+/// series gives NaN, a constant one 100 when matched exactly and −∞ otherwise.
 pub fn nrmse_fit(y: &[f64], y_hat: &[f64]) -> f64 {
-    let mean = y.iter().sum::<f64>() / y.len() as f64;
-    let num: f64 = y.iter().zip(y_hat).map(|(a, b)| (a - b) * (a - b)).sum();
-    let den: f64 = y.iter().map(|a| (a - mean) * (a - mean)).sum();
+    let n = y.len().min(y_hat.len());
+    if n == 0 {
+        return f64::NAN;
+    }
+    let mean = y[..n].iter().sum::<f64>() / n as f64;
+    let num: f64 = (0..n).map(|k| (y[k] - y_hat[k]).powi(2)).sum();
+    let den: f64 = (0..n).map(|k| (y[k] - mean).powi(2)).sum();
+    if den <= 0.0 {
+        return if num <= 0.0 { 100.0 } else { f64::NEG_INFINITY };
+    }
     100.0 * (1.0 - (num / den).sqrt())
 }
 

@@ -90,7 +90,7 @@ fn dominant_pole_error(truth_den: &[f64], est: &[Complex64]) -> f64 {
 
 #[test]
 fn ls_noise_free_recovers_every_paper_coefficient_within_half_percent() {
-    // Issue 3 acceptance: noise-free doublet data of the paper's TFs give back every original
+    // Specification: noise-free doublet data of the paper's TFs give back every original
     // coefficient within 0.5 % relative (the paper's own estimates miss the smallest by up to 64 %).
     for (name, tf) in PAPER_TFS {
         let (u, y) = record(&tf, 60.0, 0.01);
@@ -148,9 +148,9 @@ fn arx_regression_matches_numpy_lstsq_oracle() {
 
 #[test]
 fn with_one_percent_noise_ls_fails_while_srivc_iv_and_oe_hold_the_dominant_poles() {
-    // Issue 3 acceptance: 60 s doublet at 100 Hz, white output noise of 1 % of std(y).
+    // Specification: 60 s doublet at 100 Hz, white output noise of 1 % of std(y).
     // Consistent estimators place short period / Dutch roll / roll within 3 %; plain LS is
-    // biased (DESIGN §5: poles off by a large factor) — shown here as an error above 20 %.
+    // biased (docs/methods.md: poles off by a large factor) — shown here as an error above 20 %.
     for (i, (name, tf)) in PAPER_TFS.iter().enumerate() {
         let (u, y0) = record(tf, 60.0, 0.01);
         let y = add_noise(&y0, 0.01, 7 + i as u64);
@@ -198,7 +198,7 @@ fn with_one_percent_noise_ls_fails_while_srivc_iv_and_oe_hold_the_dominant_poles
 
 #[test]
 fn oe_three_sigma_band_of_the_phugoid_covers_the_truth() {
-    // Issue 3 acceptance: the phugoid of θ/δe, barely excited by one doublet, is reported with
+    // Specification: the phugoid of θ/δe, barely excited by one doublet, is reported with
     // standard errors whose 3σ band covers the true value; the spiral of φ/δa, φ/δr too, now
     // that oe estimates the output trim offset (before that it landed 5-20σ away).
     for (i, (name, tf)) in PAPER_TFS.iter().enumerate() {

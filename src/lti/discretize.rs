@@ -78,6 +78,13 @@ pub fn expm(a: &Mat<f64>) -> Mat<f64> {
     f
 }
 
+/// [`expm`] of a row-major n×n matrix given as a flat slice, returned the same way (for the
+/// state-variable filters, which keep their matrices flat).
+pub fn expm_rows(a: &[f64], n: usize) -> Vec<f64> {
+    let e = expm(&Mat::<f64>::from_fn(n, n, |i, j| a[i * n + j]));
+    (0..n * n).map(|k| e[(k / n, k % n)]).collect()
+}
+
 /// Principal square root by the product form of the Denman–Beavers iteration (Higham, *Functions of
 /// Matrices*, 2008, eq. 6.29). `None` if it does not converge (eigenvalues on the closed negative axis).
 fn sqrtm(a: &Mat<f64>) -> Option<Mat<f64>> {

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::poly::{polyval, polyval_complex, roots, strip_leading};
 
 /// Relative size below which leading numerator coefficients count as round-off (JSBSim's linear
-/// models give ~1e-14 leading terms after `ss2tf`, see DESIGN.md §3).
+/// models give ~1e-14 leading terms after `ss2tf`, see docs/jsbsim.md).
 pub const LEADING_ZERO_REL_TOL: f64 = 1e-12;
 
 /// `num(s)/den(s)` (or in z), coefficients highest power first.

@@ -1,5 +1,5 @@
 //! The dimensional control derivatives that the paper's transfer functions determine on their own
-//! (issue 4 item 5): truth from the original TF, estimate from the paper's LSM TF and from ours.
+//! truth from the original TF, estimate from the paper's LSM TF and from ours.
 //!
 //! Şahin & Kalyon 2021 print only TF coefficients, no flight condition, mass, inertia or geometry, so
 //! only what one TF fixes exactly can be backed out. With the paper's model (`crate::aero::model`,

@@ -34,7 +34,7 @@ pub struct PaperTf {
     pub paper_lsm: TransferFunction,
 }
 
-/// The paper's three transfer functions, coefficients as printed (issue 3), monic denominators.
+/// The paper's three transfer functions, coefficients as printed, monic denominators.
 pub fn paper_tfs() -> Vec<PaperTf> {
     let lat_den = vec![1.0, 1.8683, 3.6856, 6.2648, -0.0085];
     vec![

@@ -534,7 +534,7 @@ const SLUG_FT3_TO_KG_M3: f64 = 515.378_818;
 /// mass, inertia and geometry — SI units.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct AeroTruth {
-    /// Derivatives by the DESIGN.md section 7 names (`CL_alpha`, `Cm_q`, `Cn_beta`, …), per rad; rate derivatives
+    /// Derivatives by the names of docs/diagnose.md (`CL_alpha`, `Cm_q`, `Cn_beta`, …), per rad; rate derivatives
     /// nondimensionalised with c̄/2V (pitch) and b/2V (roll, yaw); moments about the CG, in the axes the model
     /// declares (c172x: lift/drag/side in wind axes, moments in body axes).
     pub derivatives: BTreeMap<String, f64>,

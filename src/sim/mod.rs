@@ -164,6 +164,6 @@ pub trait Simulator {
     fn trim(&mut self, point: &TrimPoint) -> Result<TrimState, SimError>;
     /// Linear model at the current trim, inputs per radian of surface deflection where possible.
     fn linearize(&mut self) -> Result<Linearization, SimError>;
-    /// Flies a maneuver from the current trim and returns the flight-data record (DESIGN.md section 4).
+    /// Flies a maneuver from the current trim and returns the flight-data record (docs/data.md).
     fn fly(&mut self, plan: &FlightPlan) -> Result<FlightRecord, SimError>;
 }
