@@ -31,7 +31,8 @@ fn assert_bad_input(out: &Output, needles: &[&str]) {
 
 /// A small record in the schema with an elevator doublet (enough for the axis detection).
 fn doublet_record(dir: &Path) -> PathBuf {
-    let mut text = String::from("time_s,airspeed_m_s,alpha_rad,q_rad_s,theta_rad,elevator_rad,az_m_s2\n");
+    let mut text =
+        String::from("time_s,airspeed_m_s,alpha_rad,q_rad_s,theta_rad,elevator_rad,az_m_s2\n");
     for k in 0..500 {
         let t = k as f64 * 0.02;
         let de = if (1.0..1.5).contains(&t) {

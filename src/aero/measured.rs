@@ -288,6 +288,9 @@ pub struct MeasuredEquationError {
     pub skews: Vec<(String, String, f64)>,
 }
 
+/// One coefficient's regression over all records: term names, regressor columns, response.
+type Stacked = (Vec<String>, Vec<Vec<f64>>, Vec<f64>);
+
 /// The equation-error channels of a record already moved to the CG.
 fn channels(rec: &data::FlightRecord) -> Channels<'_> {
     let col = |c: &str| rec.column(c);
@@ -352,8 +355,7 @@ pub fn equation_error_measured(
     if !geometry.chord_m.is_finite() {
         geometry.chord_m = geometry.span_m;
     }
-    let mut stacked: BTreeMap<&'static str, (Vec<String>, Vec<Vec<f64>>, Vec<f64>)> =
-        BTreeMap::new();
+    let mut stacked: BTreeMap<&'static str, Stacked> = BTreeMap::new();
     let mut air = Vec::new();
     let mut skipped = Vec::new();
     let mut skews = Vec::new();

@@ -120,10 +120,15 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     if let Some(airframe) = &args.airframe {
         return run_measured(args, airframe);
     }
-    if args.sensor_data {
+    // Measured data scored against a JSBSim model only when the user named that model: never the default
+    // c172x by accident.
+    let named_aircraft =
+        std::env::args().any(|a| a == "--aircraft" || a.starts_with("--aircraft="));
+    if args.sensor_data && !named_aircraft {
         return Err(UsageError(
             "--sensor-data: measured data need the aircraft that flew them: give --airframe FILE.toml \
-             (mass, inertia, geometry) or --airframe NAME for a JSBSim model"
+             (mass, inertia, geometry) or --airframe NAME for a JSBSim model (or --aircraft NAME to score \
+             them against that model's own derivatives)"
                 .into(),
         )
         .into());
