@@ -1,5 +1,6 @@
 //! Airframe descriptions: the mass, inertia, geometry, thrust line and sensor positions of an aircraft that
-//! has no JSBSim model (`--airframe FILE.toml`), or of one that has (`--airframe NAME`, read from the model).
+//! has no JSBSim model (`--airframe FILE.toml`), or of one that has (`--airframe NAME`: the CLI fills it from
+//! the model's trim).
 //!
 //! The file format is documented in `docs/airframe.md`. A quantity a command needs and the file does not give
 //! is an error naming the key ([`AirframeError::Missing`]); nothing falls back to another aircraft. Inertias
@@ -11,7 +12,6 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::params::{Geometry, MassProperties};
-use crate::sim::jsbsim::AeroTruth;
 
 /// Why an airframe description cannot serve a command.
 #[derive(Debug, thiserror::Error)]
@@ -188,32 +188,6 @@ impl Airframe {
             source,
         })?;
         Self::from_toml_str(&text, &path.display().to_string())
-    }
-
-    /// The mass, inertia and geometry a JSBSim model uses at its trim (sensors at the CG, no thrust line,
-    /// the trim's density).
-    pub fn from_truth(name: &str, truth: &AeroTruth) -> Self {
-        Airframe {
-            name: name.to_string(),
-            mass_kg: Some(truth.mass_kg),
-            inertia_kg_m2: Inertia {
-                ixx: truth.ixx_kg_m2,
-                iyy: truth.iyy_kg_m2,
-                izz: truth.izz_kg_m2,
-                ixz: truth.ixz_kg_m2,
-            },
-            wing: Wing {
-                area_m2: Some(truth.wing_area_m2),
-                span_m: Some(truth.span_m),
-                mac_m: Some(truth.chord_m),
-            },
-            thrust: None,
-            sensors: SensorPositions::default(),
-            flight: FlightDefaults {
-                density_kg_m3: Some(truth.rho_kg_m3),
-            },
-            source: format!("JSBSim {name}"),
-        }
     }
 
     fn missing(&self, key: &'static str, needed_for: &str) -> AirframeError {

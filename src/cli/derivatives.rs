@@ -3,14 +3,14 @@
 
 use super::common::{emit_json, TrimArgs};
 use super::paper::text_table;
-use crate::aero::spec::{parse_derivatives, Structure};
-use crate::aero::study::{self, Source, StudyOptions};
-use crate::aero::trials::{SensorNoise, TrialOptions};
 use crate::aero::AeroError;
 use crate::cli::UsageError;
 use crate::data;
 use crate::ident::Method;
 use crate::report;
+use crate::study::spec::{parse_derivatives, Structure};
+use crate::study::trials::{SensorNoise, TrialOptions};
+use crate::study::{self, Source, StudyOptions};
 use std::path::PathBuf;
 
 /// Which axis `--data … --airframe …` estimates.
@@ -294,5 +294,32 @@ fn load_airframe(args: &DerivativesCmd, arg: &str) -> anyhow::Result<crate::aero
     };
     let (mut sim, _) = trim.start_and_trim()?;
     let truth = sim.aero_truth()?;
-    Ok(Airframe::from_truth(arg, &truth))
+    Ok(airframe_of_model(arg, &truth))
+}
+
+/// The mass, inertia and geometry a JSBSim model uses at its trim (sensors at the CG, no thrust line, the
+/// trim's density).
+fn airframe_of_model(name: &str, truth: &crate::sim::jsbsim::AeroTruth) -> crate::aero::Airframe {
+    use crate::aero::airframe::{Airframe, FlightDefaults, Inertia, SensorPositions, Wing};
+    Airframe {
+        name: name.to_string(),
+        mass_kg: Some(truth.mass_kg),
+        inertia_kg_m2: Inertia {
+            ixx: truth.ixx_kg_m2,
+            iyy: truth.iyy_kg_m2,
+            izz: truth.izz_kg_m2,
+            ixz: truth.ixz_kg_m2,
+        },
+        wing: Wing {
+            area_m2: Some(truth.wing_area_m2),
+            span_m: Some(truth.span_m),
+            mac_m: Some(truth.chord_m),
+        },
+        thrust: None,
+        sensors: SensorPositions::default(),
+        flight: FlightDefaults {
+            density_kg_m3: Some(truth.rho_kg_m3),
+        },
+        source: format!("JSBSim {name}"),
+    }
 }
