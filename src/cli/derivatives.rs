@@ -1,11 +1,10 @@
 //! `flightid derivatives`: aerodynamic derivatives backed out of identified transfer functions (the paper's
 //! Section 5) and by equation error, scored against the JSBSim model's own values (Tables 1 and 3).
 
-use super::common::{emit_json, TrimArgs};
+use super::common::{emit_json, ColumnsArg, TrimArgs};
 use super::paper::text_table;
 use crate::aero::AeroError;
 use crate::cli::UsageError;
-use crate::data;
 use crate::ident::Method;
 use crate::report;
 use crate::study::spec::{parse_derivatives, Structure};
@@ -58,6 +57,8 @@ pub struct DerivativesCmd {
     /// own derivatives (its differentiated rates lag the moments by half a sample, which is modelled).
     #[arg(long, value_name = "FLIGHT.csv")]
     pub data: Vec<PathBuf>,
+    #[command(flatten)]
+    pub columns: ColumnsArg,
     /// With --data: the aircraft that flew, as an airframe description (FILE.toml: mass, inertia, geometry,
     /// thrust line, sensor positions; docs/airframe.md) or a JSBSim aircraft name (quantities read from
     /// its model). Nothing falls back to another aircraft: a missing key is named (exit 2).
@@ -147,7 +148,7 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
         .parse()
         .map_err(|e| UsageError(format!("--method: {e}")))?;
     let source = if let Some(path) = args.data.first() {
-        let record = data::read_csv(path).map_err(|e| UsageError(e.to_string()))?;
+        let record = args.columns.read(path)?;
         Source::Data {
             record,
             simulated: !args.sensor_data,
@@ -219,10 +220,7 @@ fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()>
     let airframe = load_airframe(args, airframe_arg)?;
     let mut records = Vec::new();
     for p in &args.data {
-        let rec = data::read_csv(p).map_err(|e| UsageError(e.to_string()))?;
-        for w in rec.warnings() {
-            eprintln!("warning: {}: {w}", p.display());
-        }
+        let rec = args.columns.read(p)?;
         records.push((p.display().to_string(), rec));
     }
     let axis = match args.axis {
