@@ -10,6 +10,7 @@ pub mod cli;
 pub mod compare;
 pub mod data;
 pub mod diagnose;
+pub mod estimate;
 pub mod ident;
 pub mod limits;
 pub mod lti;
