@@ -3,14 +3,14 @@
 
 use super::common::{emit_json, TrimArgs};
 use super::paper::text_table;
-use crate::aero::spec::{parse_derivatives, Structure};
-use crate::aero::study::{self, Source, StudyOptions};
-use crate::aero::trials::{SensorNoise, TrialOptions};
 use crate::aero::AeroError;
 use crate::cli::UsageError;
 use crate::data;
 use crate::ident::Method;
 use crate::report;
+use crate::study::spec::{parse_derivatives, Structure};
+use crate::study::trials::{SensorNoise, TrialOptions};
+use crate::study::{self, Source, StudyOptions};
 use std::path::PathBuf;
 
 /// Model structure for the transfer-function route.
