@@ -1,11 +1,10 @@
 //! `flightid derivatives`: aerodynamic derivatives backed out of identified transfer functions (the paper's
 //! Section 5) and by equation error, scored against the JSBSim model's own values (Tables 1 and 3).
 
-use super::common::{emit_json, TrimArgs};
+use super::common::{emit_json, ColumnsArg, TrimArgs};
 use super::paper::text_table;
 use crate::aero::AeroError;
 use crate::cli::UsageError;
-use crate::data;
 use crate::ident::Method;
 use crate::report;
 use crate::study::spec::{parse_derivatives, Structure};
@@ -43,6 +42,8 @@ pub struct DerivativesCmd {
     /// (`flightid fly`): its differentiated rates lag the moments by half a sample, which is modelled.
     #[arg(long, value_name = "FLIGHT.csv")]
     pub data: Option<PathBuf>,
+    #[command(flatten)]
+    pub columns: ColumnsArg,
     /// With --data: the CSV is measured sensor data, sampled together, with no integrator lag to model.
     #[arg(long, requires = "data")]
     pub sensor_data: bool,
@@ -98,7 +99,7 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
         .parse()
         .map_err(|e| UsageError(format!("--method: {e}")))?;
     let source = if let Some(path) = &args.data {
-        let record = data::read_csv(path).map_err(|e| UsageError(e.to_string()))?;
+        let record = args.columns.read(path)?;
         Source::Data {
             record,
             simulated: !args.sensor_data,
