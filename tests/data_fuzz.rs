@@ -153,17 +153,17 @@ fn tlog_seed() -> Vec<u8> {
     out
 }
 
-fn airframe() -> flightid::data::Airframe {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("aircraft/airframes/c172x.toml");
-    flightid::data::Airframe::load(&p).unwrap()
+fn servo_map() -> flightid::data::ServoMap {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("aircraft/servo_maps/c172x.toml");
+    flightid::data::ServoMap::load(&p).unwrap()
 }
 
-fn check_tlog(bytes: &[u8], airframe: &flightid::data::Airframe, sysid: Option<u8>) {
+fn check_tlog(bytes: &[u8], servo_map: &flightid::data::ServoMap, sysid: Option<u8>) {
     let opts = TlogOptions {
         sysid,
         rate_hz: None,
     };
-    match parse_tlog_bytes(bytes, "fuzz.tlog", Some(airframe), &opts) {
+    match parse_tlog_bytes(bytes, "fuzz.tlog", Some(servo_map), &opts) {
         Ok(rep) => {
             rep.record
                 .validate()
@@ -203,7 +203,7 @@ fn csv_reader_survives_80k_mutated_inputs() {
 #[test]
 fn tlog_reader_survives_50k_mutated_inputs() {
     let seed = tlog_seed();
-    let af = airframe();
+    let af = servo_map();
     let mut rng = StdRng::seed_from_u64(0x71);
     let all_bytes: Vec<u8> = (0..=255).collect();
     let mut accepted = 0;
@@ -231,7 +231,7 @@ proptest! {
     #[test]
     fn arbitrary_bytes_never_panic_either_reader(bytes in proptest::collection::vec(any::<u8>(), 0..600)) {
         check_csv(&bytes);
-        check_tlog(&bytes, &airframe(), None);
+        check_tlog(&bytes, &servo_map(), None);
     }
 
     #[test]
