@@ -119,6 +119,8 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         Some(p) => SimSource::Linear(p),
         None => SimSource::Aircraft(&args.aircraft),
     };
+    let progress =
+        super::common::spinner("diagnose: replay, fit each candidate extension, validate");
     let mut workers = start_workers(&source, rate_of(&train)?, args.workers)?;
     let d = diagnose(
         &mut workers,
@@ -126,7 +128,9 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         valid.as_ref(),
         &DiagnoseOptions::default(),
     )
-    .map_err(classify)?;
+    .map_err(classify);
+    progress.finish_and_clear();
+    let d = d?;
     summary(&d);
     if let Some(target) = &args.json {
         emit_json(target, &d)?;
