@@ -117,7 +117,33 @@ fn parse(name: &str, file: &str, text: &str) -> Result<AircraftConfig, AircraftE
             });
         }
     }
+    validate(&cfg).map_err(|e| AircraftError::Malformed {
+        file: file.to_string(),
+        detail: e.to_string(),
+    })?;
     Ok(cfg)
+}
+
+/// The numbers of a configuration within their documented ranges ([`crate::limits`]): trim point, surface limits
+/// (`min_rad < 0 < max_rad`, within ±π), `|rad_per_norm|` within 0.001..=10 rad, 1..=16 engines.
+fn validate(cfg: &AircraftConfig) -> Result<(), crate::limits::LimitError> {
+    use crate::limits::{check_order, Range, ALTITUDE_FT, SPEED_KTS, SURFACE_RAD};
+    ALTITUDE_FT
+        .named("trim.altitude_ft")
+        .check(cfg.trim.altitude_ft)?;
+    SPEED_KTS
+        .named("trim.speed_kts")
+        .check(cfg.trim.speed_kts)?;
+    Range::new("engines", 1.0, 16.0, "").check(cfg.engines as f64)?;
+    for s in cfg.surfaces.values() {
+        SURFACE_RAD.named("min_rad").check(s.min_rad)?;
+        SURFACE_RAD.named("max_rad").check(s.max_rad)?;
+        check_order("min_rad", s.min_rad, "max_rad", s.max_rad)?;
+        check_order("min_rad", s.min_rad, "zero deflection", 0.0)?;
+        check_order("zero deflection", 0.0, "max_rad", s.max_rad)?;
+        Range::new("|rad_per_norm|", 1e-3, 10.0, "rad").check(s.rad_per_norm.abs())?;
+    }
+    Ok(())
 }
 
 /// Loads an aircraft by name (embedded or in `FLIGHTID_AIRCRAFT_DIR`) or from a `.toml` path.

@@ -1,17 +1,17 @@
 //! Aerodynamic derivatives from real JSBSim c172x doublet flights (4000 ft, 100 KTAS), scored against the
 //! derivatives the model itself uses. Each test flies its own doublets (~1 s of work).
 
-use flightid::aero::score::{score_equation_error, score_tf_fit, Scorecard, CMQ_SUM};
-use flightid::aero::spec::{model_from_truth, truth_derivatives, Structure};
-use flightid::aero::study::default_free;
-use flightid::aero::trials::{
-    equation_error_flights, fly_doublets, identify_paper_tfs, SensorNoise, TrialOptions,
-};
 use flightid::aero::{estimate_derivatives, Assumptions, FitOptions, TfOutput};
 use flightid::aircraft;
 use flightid::sim::jsbsim::AeroTruth;
 use flightid::sim::linear::submodel_modes;
 use flightid::sim::{JsbsimSim, Simulator, TrimPoint};
+use flightid::study::default_free;
+use flightid::study::score::{score_equation_error, score_tf_fit, Scorecard, CMQ_SUM};
+use flightid::study::spec::{model_from_truth, truth_derivatives, Structure};
+use flightid::study::trials::{
+    equation_error_flights, fly_doublets, identify_paper_tfs, SensorNoise, TrialOptions,
+};
 
 const POINT: (f64, f64) = (4000.0, 100.0);
 
@@ -126,7 +126,7 @@ fn equation_error_on_doublets_meets_the_targets() {
         );
         let cm_alpha = card.row("Cm_alpha").unwrap();
         assert!(cm_alpha.note.contains("α̇ not a regressor"), "{label}");
-        let alias = flightid::aero::score::cm_alpha_alias(&model);
+        let alias = flightid::study::score::cm_alpha_alias(&model);
         let corrected = cm_alpha.truth + alias;
         assert!(
             (cm_alpha.estimate / corrected - 1.0).abs() < 0.10,
@@ -185,7 +185,7 @@ fn transfer_function_route_on_doublets() {
 /// α̇ alias, attributed to Cmadot).
 #[test]
 fn study_meets_targets_and_attributes_every_miss() {
-    use flightid::aero::study::{run, Source, StudyOptions};
+    use flightid::study::{run, Source, StudyOptions};
     // 120 Hz, the CLI's default (at 60 Hz the TF route's C_mq + C_mα̇ is +16 %, just outside its target).
     let (mut sim, point, _) = trimmed(120.0);
     for noisy in [false, true] {

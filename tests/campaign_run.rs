@@ -1,4 +1,5 @@
-//! Campaigns run for real on JSBSim: resumption after kill -9, failed trims, bad campaign files.
+//! Campaigns run for real on JSBSim: resumption after kill -9, failed trims, bad campaign files, and the store's
+//! rules: concurrent runs share the cases, a changed campaign file is refused, failed cases are retried on request.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -230,10 +231,17 @@ amplitudes_deg = [2.0]
         .args(["--jobs", "2", "--json"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "a campaign with failed cases exits 1: {}",
         String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("2 of 3 cases failed")
+            && stderr.contains("c172x_4000ft_15kts_elevator_doublet_2deg"),
+        "the failed cases are named: {stderr}"
     );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["total"], 3);
@@ -322,4 +330,208 @@ fn malformed_or_meaningless_campaign_files_are_usage_errors_that_say_what_is_wro
     let (code, err) = run_bad(&good.replace("rate_hz = 60.0", "rate_hz = 60.0\ncolour = 1"));
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("colour"), "unknown keys are named: {err}");
+}
+
+fn run_into(spec: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    flightid()
+        .args(["campaign", "run"])
+        .arg(spec)
+        .arg("--out")
+        .arg(out)
+        .args(["--jobs", "2"])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+/// 2 cases of 6 s: enough to see what the store does with them.
+const TWO: &str = r#"
+name = "two"
+rate_hz = 60.0
+duration_s = 6.0
+methods = ["ls"]
+[[configurations]]
+name = "c172x"
+aircraft = "c172x"
+conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
+[[maneuvers]]
+surface = "elevator"
+shape = "doublet"
+amplitudes_deg = [1.0, 2.0]
+"#;
+
+#[test]
+fn a_changed_campaign_file_is_refused_naming_the_changed_cases_unless_they_are_rerun() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (spec, out) = (tmp.path().join("two.toml"), tmp.path().join("out"));
+    std::fs::write(&spec, TWO).unwrap();
+    let first = run_into(&spec, &out, &[]);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let before = case_files(&out);
+    let one = case_json(&out, "c172x_4000ft_100kts_elevator_doublet_1deg");
+    assert_eq!(
+        (one["rate_hz"].as_f64(), one["duration_s"].as_f64()),
+        (Some(60.0), Some(6.0))
+    );
+    assert_eq!(one["definition_sha256"].as_str().map(str::len), Some(64));
+
+    // a longer record: both results no longer describe their case
+    std::fs::write(&spec, TWO.replace("duration_s = 6.0", "duration_s = 7.0")).unwrap();
+    let refused = run_into(&spec, &out, &[]);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("2 case(s) changed definition")
+            && err.contains("c172x_4000ft_100kts_elevator_doublet_1deg")
+            && err.contains("c172x_4000ft_100kts_elevator_doublet_2deg")
+            && err.contains("--rerun-changed"),
+        "{err}"
+    );
+    assert_eq!(case_files(&out), before, "a refused run touches no result");
+
+    // one amplitude dropped, one changed: the dropped case's result is named too
+    std::fs::write(
+        &spec,
+        TWO.replace("duration_s = 6.0", "duration_s = 7.0")
+            .replace("[1.0, 2.0]", "[2.0]"),
+    )
+    .unwrap();
+    let refused = run_into(&spec, &out, &[]);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("1 case(s) changed definition")
+            && err.contains("1 result(s) belong to no case of the campaign: c172x_4000ft_100kts_elevator_doublet_1deg"),
+        "{err}"
+    );
+
+    let rerun = run_into(&spec, &out, &["--rerun-changed", "--json"]);
+    assert!(
+        rerun.status.success(),
+        "{}",
+        String::from_utf8_lossy(&rerun.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&rerun.stdout).unwrap();
+    assert_eq!(summary["ran"], 1);
+    assert_eq!(
+        summary["prepared"]["rerun_changed"]
+            .as_array()
+            .map(Vec::len),
+        Some(1)
+    );
+    assert_eq!(
+        summary["prepared"]["removed"].as_array().map(Vec::len),
+        Some(1)
+    );
+    let after = case_files(&out);
+    assert_eq!(after.len(), 1, "{:?}", after.keys());
+    let two = case_json(&out, "c172x_4000ft_100kts_elevator_doublet_2deg");
+    assert_eq!(two["duration_s"].as_f64(), Some(7.0));
+    assert_ne!(two["definition_sha256"], one["definition_sha256"]);
+    // and now the store matches the file: a plain run has nothing to do
+    let again = run_into(&spec, &out, &["--json"]);
+    assert!(again.status.success());
+    let summary: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
+    assert_eq!(
+        (summary["skipped"].as_u64(), summary["ran"].as_u64()),
+        (Some(1), Some(0))
+    );
+}
+
+#[test]
+fn failed_cases_fail_the_run_until_retried_with_retry_failed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (spec, out) = (tmp.path().join("two.toml"), tmp.path().join("out"));
+    std::fs::write(&spec, TWO).unwrap();
+    // a simulator that cannot start: every case fails
+    let broken = flightid()
+        .env("FLIGHTID_PYTHON", "/bin/false")
+        .args(["campaign", "run"])
+        .arg(&spec)
+        .arg("--out")
+        .arg(&out)
+        .args(["--jobs", "2", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        broken.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&broken.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&broken.stdout).unwrap();
+    assert_eq!(summary["failed"], 2);
+    assert_eq!(case_files(&out).len(), 2, "failures are results too");
+
+    // resuming does not rerun failures, and still exits 1
+    let resumed = run_into(&spec, &out, &["--json"]);
+    assert_eq!(resumed.status.code(), Some(1));
+    let summary: serde_json::Value = serde_json::from_slice(&resumed.stdout).unwrap();
+    assert_eq!(
+        (summary["ran"].as_u64(), summary["failed"].as_u64()),
+        (Some(0), Some(2))
+    );
+
+    let retried = run_into(&spec, &out, &["--retry-failed", "--json"]);
+    assert!(
+        retried.status.success(),
+        "{}",
+        String::from_utf8_lossy(&retried.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&retried.stdout).unwrap();
+    assert_eq!(
+        (summary["ran"].as_u64(), summary["failed"].as_u64()),
+        (Some(2), Some(0))
+    );
+    let clean = tmp.path().join("clean");
+    assert!(run_into(&spec, &clean, &[]).status.success());
+    assert_eq!(
+        case_files(&out),
+        case_files(&clean),
+        "retried = never failed, byte for byte"
+    );
+}
+
+#[test]
+fn two_runs_on_one_directory_at_once_run_each_case_exactly_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = tmp.path().join("small.toml");
+    std::fs::write(&spec, SMALL).unwrap();
+    let out = tmp.path().join("shared");
+    let start = || {
+        flightid()
+            .args(["campaign", "run"])
+            .arg(&spec)
+            .arg("--out")
+            .arg(&out)
+            .args(["--jobs", "1", "--json"])
+            .stderr(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (a, b) = (start(), start());
+    let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    assert!(a.status.success() && b.status.success());
+    let sa: serde_json::Value = serde_json::from_slice(&a.stdout).unwrap();
+    let sb: serde_json::Value = serde_json::from_slice(&b.stdout).unwrap();
+    let ran = |s: &serde_json::Value| s["ran"].as_u64().unwrap();
+    // each case ran in exactly one of the two processes; the other skipped it, found it claimed, or found it done
+    assert_eq!(ran(&sa) + ran(&sb), 6, "{sa}\n{sb}");
+    for s in [&sa, &sb] {
+        assert_eq!(
+            s["ran"].as_u64().unwrap()
+                + s["skipped"].as_u64().unwrap()
+                + s["claimed_elsewhere"].as_u64().unwrap(),
+            6,
+            "{s}"
+        );
+    }
+    let full = tmp.path().join("alone");
+    assert!(run_into(&spec, &full, &[]).status.success());
+    assert_eq!(case_files(&out), case_files(&full));
 }

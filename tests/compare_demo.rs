@@ -66,10 +66,16 @@ fn demo_writes_a_report_with_ls_robust_and_linearization_and_prints_its_path() {
             assert!((ratio - 1.0).abs() < 0.05, "{tf} {model}: ratio {ratio}");
         }
     }
-    // a second run replaces the directory whole and leaves nothing beside it
-    std::fs::write(dir.join("stale.svg"), "<svg/>").unwrap();
+    // a file flightid did not write makes the directory the user's: refused before any work (exit 2), kept
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+    let refused = run();
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("notes.txt"));
+    assert!(dir.join("notes.txt").exists());
+    // without it, a second run replaces flightid's directory whole and leaves nothing beside it
+    std::fs::remove_file(dir.join("notes.txt")).unwrap();
     assert!(run().status.success());
-    assert!(!dir.join("stale.svg").exists());
+    assert!(dir.join("index.html").exists());
     let names: Vec<String> = std::fs::read_dir(tmp.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().to_string())

@@ -17,7 +17,7 @@ use std::fmt::Write as _;
 
 use faer::Mat;
 
-use super::fit::{model_coefficients, relative_whitening, scales, with_values};
+use super::coefficients::{model_coefficients, relative_whitening, scales, with_values};
 use super::model::{AeroModel, Axis, TfOutput};
 use super::params::Derivative;
 use super::AeroError;
@@ -835,7 +835,8 @@ mod tests {
         let n = &r.null_space[0];
         let free = lon_paper();
         let c0 =
-            crate::aero::fit::model_coefficients(&m, &[TfOutput::THETA_ELEVATOR], &[3]).unwrap();
+            crate::aero::coefficients::model_coefficients(&m, &[TfOutput::THETA_ELEVATOR], &[3])
+                .unwrap();
         let moved = |dir: &[f64]| {
             let vals: Vec<f64> = free
                 .iter()
@@ -843,8 +844,12 @@ mod tests {
                 .map(|(&d, x)| m.derivatives.get(d) + 1e-4 * x)
                 .collect();
             let mm = with_values(&m, &free, &vals);
-            let c = crate::aero::fit::model_coefficients(&mm, &[TfOutput::THETA_ELEVATOR], &[3])
-                .unwrap();
+            let c = crate::aero::coefficients::model_coefficients(
+                &mm,
+                &[TfOutput::THETA_ELEVATOR],
+                &[3],
+            )
+            .unwrap();
             c.iter()
                 .zip(&c0)
                 .map(|(a, b)| ((a - b) / b.abs().max(1e-12)).powi(2))

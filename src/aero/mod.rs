@@ -11,8 +11,6 @@
 //! - [`model`]: longitudinal (u, α, q, θ) and lateral (β, p, r, φ) state space, θ/δe, φ/δa, φ/δr, modes.
 //! - [`fit`]: derivatives from identified transfer functions by Levenberg–Marquardt, with covariance.
 //! - [`identifiability`]: which derivatives a set of transfer functions determines, in plain words.
-//! - [`attribution`]: why an estimate misses the truth, term by term (TF route by releasing assumptions,
-//!   equation error by projecting each JSBSim coefficient function's remainder on the regressors).
 //! - [`regression`]: equation-error estimates from flight-data channels (SIDPAC `lesq` style) and the
 //!   Savitzky–Golay differentiator it needs.
 //!
@@ -22,19 +20,15 @@
 //! [`analyse_identifiability`] to see what a manoeuvre can determine, then [`estimate_derivatives`] from
 //! identified transfer functions, or [`equation_error`] from flight-data channels.
 //!
-//! Transfer functions are computed by a private Faddeev–LeVerrier recursion (exact for these 4×4 systems);
-//! `crate::lti` offers the general `ss2tf`.
+//! Transfer functions come from `crate::lti::ss2tf`. The JSBSim derivative study (truth, trials, scores,
+//! attribution) that builds on this model is [`crate::study`].
 
-pub mod attribution;
+pub mod coefficients;
 pub mod fit;
 pub mod identifiability;
 pub mod model;
 pub mod params;
 pub mod regression;
-pub mod score;
-pub mod spec;
-pub mod study;
-pub mod trials;
 
 pub use fit::{estimate_derivatives, DerivativeEstimate, FitOptions, IdentifiedTf, IdentifiedTfs};
 pub use identifiability::{

@@ -4,14 +4,15 @@
 
 pub mod baseline;
 pub mod run;
+pub mod slurm;
 pub mod spec;
+pub mod store;
 pub mod summary;
 
 pub use baseline::{compare_baseline, quantities, Baseline, BaselineEntry, Deviation};
-pub use run::{
-    load_results, run_campaign, run_case, CaseResult, Identification, RunOptions, RunSummary,
-};
+pub use run::{run_campaign, run_case, CaseResult, Identification, RunOptions, RunSummary};
 pub use spec::{CampaignSpec, CaseSpec};
+pub use store::{load_results, StorePolicy};
 pub use summary::campaign_report;
 
 use std::path::PathBuf;

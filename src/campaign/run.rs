@@ -1,14 +1,16 @@
 //! Campaign execution: a pool of JSBSim processes (one per worker thread), one atomic JSON result per case,
-//! resume by skipping cases whose result file exists.
+//! resume by skipping cases whose result file exists; each case runs under a claim in the store (see
+//! [`super::store`]), so any number of runs, local or Slurm array tasks, can work on one directory at once.
 
 use super::spec::{CampaignSpec, CaseSpec};
+use super::store::{self, case_path, StorePolicy};
 use super::CampaignError;
 use crate::compare::{modal_summary, paper_options, perturbations, single_surface_plan};
 use crate::ident::{self, Method};
 use crate::sim::{JsbsimSim, Simulator, TrimPoint};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Mutex;
 
 /// One identification of a case's record.
@@ -40,6 +42,18 @@ pub struct Identification {
 pub struct CaseResult {
     /// The case.
     pub case: CaseSpec,
+    /// Simulation and sampling rate of the record, Hz (0 in results written before it was recorded).
+    #[serde(default)]
+    pub rate_hz: f64,
+    /// Record length, s.
+    #[serde(default)]
+    pub duration_s: f64,
+    /// Maneuver start, s.
+    #[serde(default)]
+    pub start_s: f64,
+    /// SHA-256 of the case's definition (see [`store::definition_sha256`]); empty in old results.
+    #[serde(default)]
+    pub definition_sha256: String,
     /// `ok` or `failed`.
     pub status: String,
     /// Why the case failed (trim, simulator).
@@ -53,32 +67,38 @@ pub struct CaseResult {
 }
 
 /// Options of a run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct RunOptions {
     /// Worker threads, each with its own JSBSim process.
     pub jobs: usize,
     /// Show a progress bar (only drawn on a terminal).
     pub progress: bool,
+    /// Changed and failed results: refuse, rerun or retry (applied before any case runs).
+    pub policy: StorePolicy,
+    /// Only these case ids, in this order, in a store already prepared by someone else (a task of a submitted
+    /// job: its shard of the queue). `None`: the whole campaign, preparing the store first.
+    pub queue: Option<Vec<String>>,
 }
 
 /// What a run did.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunSummary {
-    /// Cases in the campaign.
+    /// Cases this run was given (the campaign, or the task's queue).
     pub total: usize,
     /// Cases already done before this run (resumed).
     pub skipped: usize,
     /// Cases run now.
     pub ran: usize,
-    /// Cases (of all) whose result is `failed`.
+    /// Cases left to another process that had claimed them (or finished them meanwhile).
+    pub claimed_elsewhere: usize,
+    /// Cases (of those given) whose result is `failed`.
     pub failed: usize,
+    /// Their ids.
+    pub failed_ids: Vec<String>,
+    /// What was removed from the store before the run (changed, retried, orphaned results).
+    pub prepared: store::Prepared,
     /// Wall-clock time of this run, s.
     pub elapsed_s: f64,
-}
-
-/// `DIR/cases/<id>.json`.
-pub fn case_path(out: &Path, id: &str) -> PathBuf {
-    out.join("cases").join(format!("{id}.json"))
 }
 
 /// The configuration a process is set up for: coefficient scales and pre-trim properties (values as text).
@@ -202,6 +222,10 @@ pub fn run_case<S: Simulator>(
 ) -> CaseResult {
     let mut result = CaseResult {
         case: case.clone(),
+        rate_hz: spec.rate_hz,
+        duration_s: spec.duration_s,
+        start_s: spec.start_s,
+        definition_sha256: store::definition_sha256(spec, case),
         status: "failed".into(),
         error: None,
         trim_alpha_rad: None,
@@ -240,15 +264,12 @@ pub fn run_case<S: Simulator>(
         }
     };
     let dt_s = 1.0 / spec.rate_hz;
-    for &noise in &spec.noise_std_deg {
-        let seeds: &[u64] = if noise > 0.0 { &spec.seeds } else { &[0] };
-        for &seed in seeds {
-            let y = crate::signal::add_white_noise(&dy, noise.to_radians(), seed);
-            for &method in methods {
-                result
-                    .identifications
-                    .push(identify_one(&du, &y, dt_s, method, noise, seed));
-            }
+    for (noise, seed) in store::noise_seeds(spec) {
+        let y = crate::signal::add_white_noise(&dy, noise.to_radians(), seed);
+        for &method in methods {
+            result
+                .identifications
+                .push(identify_one(&du, &y, dt_s, method, noise, seed));
         }
     }
     result.status = "ok".into();
@@ -289,7 +310,8 @@ fn identify_one(
     }
 }
 
-/// Runs every case of `spec` that has no result file in `out/cases` yet, over `opts.jobs` JSBSim processes.
+/// Runs every case of `spec` (or of `opts.queue`) that has no result in `out/cases` yet, over `opts.jobs` JSBSim
+/// processes, each case under its claim in the store.
 pub fn run_campaign(
     spec: &CampaignSpec,
     out: &Path,
@@ -297,22 +319,25 @@ pub fn run_campaign(
 ) -> Result<RunSummary, CampaignError> {
     let t0 = std::time::Instant::now();
     let methods = spec.parsed_methods().map_err(CampaignError::Run)?;
-    let cases_dir = out.join("cases");
-    std::fs::create_dir_all(&cases_dir).map_err(|source| CampaignError::Io {
-        path: cases_dir.clone(),
-        source,
-    })?;
-    let spec_text = toml::to_string(spec).map_err(|e| CampaignError::Run(e.to_string()))?;
-    crate::report::write_atomic(&out.join("campaign.toml"), spec_text.as_bytes())
-        .map_err(|e| CampaignError::Run(e.to_string()))?;
     let all = spec.cases();
-    let pending: Vec<&CaseSpec> = all
+    let (prepared, mine) = match &opts.queue {
+        None => (
+            store::prepare(spec, out, opts.policy)?,
+            all.iter().collect::<Vec<_>>(),
+        ),
+        Some(ids) => (
+            store::Prepared::default(),
+            queued_cases(spec, out, &all, ids)?,
+        ),
+    };
+    let pending: Vec<&CaseSpec> = mine
         .iter()
+        .copied()
         .filter(|c| !case_path(out, &c.id).exists())
         .collect();
-    let skipped = all.len() - pending.len();
+    let skipped = mine.len() - pending.len();
     let bar = if opts.progress && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-        let b = indicatif::ProgressBar::new(all.len() as u64);
+        let b = indicatif::ProgressBar::new(mine.len() as u64);
         b.set_style(
             indicatif::ProgressStyle::with_template(
                 "{bar:40} {pos}/{len} cases  {elapsed} elapsed, ~{eta} left  {msg}",
@@ -326,6 +351,8 @@ pub fn run_campaign(
     };
     let queue = Mutex::new(CaseQueue::new(&pending));
     let first_error: Mutex<Option<CampaignError>> = Mutex::new(None);
+    let ran = std::sync::atomic::AtomicUsize::new(0);
+    let elsewhere = std::sync::atomic::AtomicUsize::new(0);
     let jobs = opts.jobs.max(1).min(pending.len().max(1));
     std::thread::scope(|scope| {
         for _ in 0..jobs {
@@ -339,6 +366,24 @@ pub fn run_campaign(
                     // two statements, so the queue is unlocked while the case runs
                     let next = queue.lock().ok().and_then(|mut q| q.next(&mut group));
                     let Some(case) = next else { break };
+                    let fail = |e: CampaignError| {
+                        if let Ok(mut slot) = first_error.lock() {
+                            slot.get_or_insert(e);
+                        }
+                    };
+                    // held until the result is written
+                    let _claim = match store::claim(out, &case.id) {
+                        Ok(Some(c)) => c,
+                        Ok(None) => {
+                            elsewhere.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                            bar.inc(1);
+                            continue;
+                        }
+                        Err(e) => {
+                            fail(e);
+                            break;
+                        }
+                    };
                     let result = match worker.sim_for(case, spec.rate_hz) {
                         Ok(sim) => {
                             let r = run_case(sim, spec, &methods, case);
@@ -351,6 +396,10 @@ pub fn run_campaign(
                         }
                         Err(e) => CaseResult {
                             case: (*case).clone(),
+                            rate_hz: spec.rate_hz,
+                            duration_s: spec.duration_s,
+                            start_s: spec.start_s,
+                            definition_sha256: store::definition_sha256(spec, case),
                             status: "failed".into(),
                             error: Some(format!("simulator: {e}")),
                             trim_alpha_rad: None,
@@ -358,12 +407,11 @@ pub fn run_campaign(
                             identifications: vec![],
                         },
                     };
-                    if let Err(e) = write_result(out, &result) {
-                        if let Ok(mut slot) = first_error.lock() {
-                            slot.get_or_insert(e);
-                        }
+                    if let Err(e) = store::write_result(out, &result) {
+                        fail(e);
                         break;
                     }
+                    ran.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     bar.set_message(case.id.clone());
                     bar.inc(1);
                 }
@@ -374,51 +422,58 @@ pub fn run_campaign(
     if let Some(e) = first_error.into_inner().ok().flatten() {
         return Err(e);
     }
-    let results = load_results(out)?;
+    let failed_ids: Vec<String> = mine
+        .iter()
+        .filter(|c| store::case_state(spec, out, c) == store::CaseState::Failed)
+        .map(|c| c.id.clone())
+        .collect();
     Ok(RunSummary {
-        total: all.len(),
+        total: mine.len(),
         skipped,
-        ran: pending.len(),
-        failed: results.iter().filter(|r| r.status != "ok").count(),
+        ran: ran.into_inner(),
+        claimed_elsewhere: elsewhere.into_inner(),
+        failed: failed_ids.len(),
+        failed_ids,
+        prepared,
         elapsed_s: t0.elapsed().as_secs_f64(),
     })
 }
 
-fn write_result(out: &Path, result: &CaseResult) -> Result<(), CampaignError> {
-    let mut text =
-        serde_json::to_string_pretty(result).map_err(|e| CampaignError::Run(e.to_string()))?;
-    text.push('\n');
-    let path = case_path(out, &result.case.id);
-    crate::report::write_atomic(&path, text.as_bytes())
-        .map_err(|e| CampaignError::Run(e.to_string()))
-}
-
-/// Reads every `DIR/cases/*.json` (temporary files are ignored), sorted by case id.
-pub fn load_results(out: &Path) -> Result<Vec<CaseResult>, CampaignError> {
-    let dir = out.join("cases");
-    let entries = std::fs::read_dir(&dir).map_err(|source| CampaignError::Io {
-        path: dir.clone(),
-        source,
-    })?;
-    let mut results = Vec::new();
-    for entry in entries.flatten() {
-        let path = entry.path();
-        let name = entry.file_name().to_string_lossy().to_string();
-        if name.starts_with('.') || !name.ends_with(".json") {
-            continue;
-        }
-        let text = std::fs::read_to_string(&path).map_err(|source| CampaignError::Io {
-            path: path.clone(),
-            source,
+/// The cases of a task's queue, in queue order: every id must be a case of the campaign, and none may hold a
+/// result of another definition (the store was prepared for this campaign when the job was submitted).
+fn queued_cases<'a>(
+    spec: &CampaignSpec,
+    out: &Path,
+    all: &'a [CaseSpec],
+    ids: &[String],
+) -> Result<Vec<&'a CaseSpec>, CampaignError> {
+    let by_id: BTreeMap<&str, &CaseSpec> = all.iter().map(|c| (c.id.as_str(), c)).collect();
+    let invalid = |message: String| CampaignError::Invalid {
+        path: out.to_path_buf(),
+        message,
+    };
+    let mut mine = Vec::with_capacity(ids.len());
+    for id in ids {
+        let case = by_id.get(id.as_str()).ok_or_else(|| {
+            invalid(format!(
+                "queued case '{id}' is not a case of campaign '{}'",
+                spec.name
+            ))
         })?;
-        let r: CaseResult = serde_json::from_str(&text).map_err(|e| CampaignError::Parse {
-            path: path.clone(),
-            message: e.to_string(),
-        })?;
-        results.push(r);
+        mine.push(*case);
     }
-    results.sort_by(|a, b| a.case.id.cmp(&b.case.id));
-    Ok(results)
+    let changed: Vec<&str> = mine
+        .iter()
+        .filter(|c| store::case_state(spec, out, c) == store::CaseState::Changed)
+        .map(|c| c.id.as_str())
+        .collect();
+    if !changed.is_empty() {
+        return Err(invalid(format!(
+            "results of another definition for queued cases: {} (resubmit with --rerun-changed)",
+            changed.join(", ")
+        )));
+    }
+    Ok(mine)
 }
 
 #[cfg(test)]

@@ -198,11 +198,48 @@ impl CampaignSpec {
     }
 
     fn validate(&self) -> Result<(), String> {
-        if !(self.rate_hz.is_finite() && (10.0..=2000.0).contains(&self.rate_hz)) {
-            return Err(format!(
-                "rate_hz must be within 10..2000, got {}",
-                self.rate_hz
-            ));
+        use crate::limits::{
+            self, ALTITUDE_FT, DURATION_S, NOISE_DEG, PULSE_S, RATE_HZ, SCALE, SPEED_KTS, START_S,
+        };
+        let text = |e: limits::LimitError| e.to_string();
+        RATE_HZ.named("rate_hz").check(self.rate_hz).map_err(text)?;
+        DURATION_S
+            .named("duration_s")
+            .check(self.duration_s)
+            .map_err(text)?;
+        START_S.named("start_s").check(self.start_s).map_err(text)?;
+        limits::check_samples(
+            "a case (duration_s × rate_hz)",
+            self.duration_s,
+            self.rate_hz,
+        )
+        .map_err(text)?;
+        for n in &self.noise_std_deg {
+            NOISE_DEG.check(*n).map_err(text)?;
+        }
+        for c in &self.configurations {
+            for cond in &c.conditions {
+                ALTITUDE_FT
+                    .named("altitude_ft")
+                    .check(cond.altitude_ft)
+                    .map_err(text)?;
+                SPEED_KTS
+                    .named("speed_kts")
+                    .check(cond.speed_kts)
+                    .map_err(text)?;
+            }
+            for v in c.coefficient_scales.values() {
+                SCALE.named("coefficient_scales").check(*v).map_err(text)?;
+            }
+        }
+        for m in &self.maneuvers {
+            PULSE_S.named("pulse_s").check(m.pulse_s).map_err(text)?;
+            if m.pulse_s * self.rate_hz < 2.0 {
+                return Err(format!(
+                    "maneuver on {}: pulse_s {} is shorter than two samples at rate_hz {}",
+                    m.surface, m.pulse_s, self.rate_hz
+                ));
+            }
         }
         if !(self.duration_s > self.start_s && self.start_s >= 0.0) {
             return Err(format!(

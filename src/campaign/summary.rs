@@ -1,7 +1,8 @@
 //! `flightid campaign report`: modal parameters and control derivatives across flight conditions, and where each
 //! method fails.
 
-use super::run::{load_results, CaseResult};
+use super::run::CaseResult;
+use super::store::load_results;
 use super::CampaignError;
 use crate::report::{LinePlot, Report, Section, Series, Table};
 use serde_json::json;

@@ -15,10 +15,10 @@ pub struct CheckArgs {
     /// Flight-data CSV (docs/data.md); best a maneuver segment of some tens of seconds.
     pub file: PathBuf,
     /// Only use samples from this time on, s.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::limits::TIME_S.parser())]
     pub from_s: Option<f64>,
     /// Only use samples up to this time, s.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::limits::TIME_S.parser())]
     pub to_s: Option<f64>,
     /// Do not estimate scale factors on V, α, β.
     #[arg(long)]
@@ -30,12 +30,15 @@ pub struct CheckArgs {
     #[arg(long)]
     pub json: bool,
     /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
-    #[arg(long = "resample-hz", value_name = "HZ")]
+    #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
 }
 
 /// Runs `flightid check`.
 pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
+    if let (Some(from_s), Some(to_s)) = (args.from_s, args.to_s) {
+        crate::limits::check_order("--from-s", from_s, "--to-s", to_s)?;
+    }
     let mut rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
     if let Some(hz) = args.resample_hz {
         rec = data::resample_uniform(&rec, hz)
@@ -46,6 +49,17 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     if args.from_s.is_some() || args.to_s.is_some() {
         let start = rec.time_s.partition_point(|&t| t < from);
         let end = rec.time_s.partition_point(|&t| t <= to);
+        if end <= start {
+            return Err(UsageError(format!(
+                "{}: no sample lies within --from-s {} .. --to-s {} (the record spans {} .. {} s)",
+                args.file.display(),
+                from,
+                to,
+                rec.time_s.first().copied().unwrap_or(f64::NAN),
+                rec.time_s.last().copied().unwrap_or(f64::NAN)
+            ))
+            .into());
+        }
         rec = rec.slice(start, end);
     }
     let opts = CheckOptions {

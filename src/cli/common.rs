@@ -14,13 +14,13 @@ pub struct TrimArgs {
     #[arg(long, default_value = "c172x")]
     pub aircraft: String,
     /// Trim altitude above sea level, ft [default: the aircraft's default trim point].
-    #[arg(long)]
+    #[arg(long, value_parser = crate::limits::ALTITUDE_FT.parser())]
     pub altitude_ft: Option<f64>,
     /// Trim true airspeed, kts [default: the aircraft's default trim point].
-    #[arg(long)]
+    #[arg(long, value_parser = crate::limits::SPEED_KTS.parser())]
     pub speed_kts: Option<f64>,
     /// Simulation rate, Hz (JSBSim integrates at this rate; records are sampled at it).
-    #[arg(long, default_value_t = 120.0)]
+    #[arg(long, default_value_t = 120.0, value_parser = crate::limits::RATE_HZ.parser())]
     pub rate_hz: f64,
 }
 

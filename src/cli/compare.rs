@@ -22,13 +22,13 @@ pub struct CompareCmd {
     #[command(flatten)]
     pub trim: TrimArgs,
     /// Doublet amplitude of the main comparison, deg.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = crate::limits::AMPLITUDE_DEG.parser())]
     pub amplitude_deg: f64,
     /// Doublet pulse width, s.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::limits::PULSE_S.parser())]
     pub pulse_s: f64,
     /// Record length, s.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 20.0, value_parser = crate::limits::DURATION_S.parser())]
     pub duration_s: f64,
     /// Estimators, comma separated (ls, iv, srivc, oe).
     #[arg(long, value_delimiter = ',', default_value = "ls,srivc,oe")]
@@ -171,6 +171,7 @@ pub fn classify(e: compare::CompareError) -> anyhow::Error {
 
 /// Runs `flightid compare`.
 pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
+    crate::report::check_output_dir(&args.report)?;
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;
     let methods: Vec<Method> = args

@@ -20,10 +20,10 @@ pub struct DemoCmd {
     #[command(flatten)]
     pub trim: TrimArgs,
     /// Doublet amplitude, deg of surface deflection.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = crate::limits::AMPLITUDE_DEG.parser())]
     pub amplitude_deg: f64,
     /// Record length per doublet, s.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = crate::limits::DURATION_S.parser())]
     pub duration_s: f64,
     /// Report directory (replaced whole; index.html, report.md, *.svg, report.json).
     #[arg(long, default_value = "flightid-out/demo")]
@@ -35,6 +35,7 @@ pub struct DemoCmd {
 
 /// Runs `flightid demo`.
 pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
+    crate::report::check_output_dir(&args.report)?;
     let quiet = args.json.as_deref() == Some("-");
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;

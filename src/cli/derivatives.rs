@@ -3,15 +3,15 @@
 
 use super::common::{emit_json, TrimArgs};
 use super::paper::text_table;
-use crate::aero::spec::{parse_derivatives, Structure};
-use crate::aero::study::{self, Source, StudyOptions};
-use crate::aero::trials::{SensorNoise, TrialOptions};
 use crate::aero::AeroError;
 use crate::cli::UsageError;
 use crate::data;
 use crate::ident::Method;
 use crate::report;
 use crate::report::text::{wrap, TERMINAL_WIDTH};
+use crate::study::spec::{parse_derivatives, Structure};
+use crate::study::trials::{SensorNoise, TrialOptions};
+use crate::study::{self, Source, StudyOptions};
 use std::path::PathBuf;
 
 /// Model structure for the transfer-function route.
@@ -87,6 +87,9 @@ fn classify(e: AeroError) -> anyhow::Error {
 
 /// Runs `flightid derivatives`.
 pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
+    if let Some(dir) = &args.report {
+        crate::report::check_output_dir(dir)?;
+    }
     let free = match &args.free {
         Some(names) => Some(parse_derivatives(names).map_err(classify)?),
         None => None,
@@ -163,7 +166,7 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     }
     let json = result.to_json();
     if let Some(dir) = &args.report {
-        let index = report::write_report(dir, &result.report(), &json)?;
+        let index = report::write_report_dir(dir, &result.report(), &json)?;
         if !quiet {
             println!("\nreport: {}", index.display());
         }

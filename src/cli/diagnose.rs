@@ -9,7 +9,7 @@ use super::UsageError;
 use crate::aircraft;
 use crate::data::{read_csv, FlightRecord};
 use crate::diagnose::model::{write_model, ExtendedModel};
-use crate::diagnose::replay::LinearReplay;
+use crate::diagnose::replay::{LinearReplay, ReplayCase};
 use crate::diagnose::search::Worker;
 use crate::diagnose::{diagnose, report, DiagnoseError, DiagnoseOptions, Diagnosis};
 use crate::sim::JsbsimSim;
@@ -51,6 +51,11 @@ pub struct DiagnoseCmd {
     /// Parallel simulations (one JSBSim process each).
     #[arg(long, default_value_t = 2)]
     pub workers: usize,
+    /// Rate the replay integrates at, Hz: a whole multiple of the record's rate (default: the smallest one of
+    /// at least 100 Hz). The surfaces move in straight lines between the record's samples; at the record's own
+    /// rate that is a hold of each sample over the step that ends at it (the convention of `flightid fly`).
+    #[arg(long, value_name = "HZ")]
+    pub replay_rate_hz: Option<f64>,
 }
 
 /// Reads a record; unreadable data are a usage error (exit 2).
@@ -61,7 +66,8 @@ pub fn read_record(path: &Path) -> anyhow::Result<FlightRecord> {
 /// Maps diagnose errors on the user's input to exit code 2.
 pub fn classify(e: DiagnoseError) -> anyhow::Error {
     match e {
-        DiagnoseError::Sim { .. } | DiagnoseError::Report(_) => e.into(),
+        DiagnoseError::Sim { .. } => e.into(),
+        DiagnoseError::Report(r) => r.into(),
         other => UsageError(other.to_string()).into(),
     }
 }
@@ -103,25 +109,32 @@ pub fn start_workers(source: &SimSource, rate_hz: f64, n: usize) -> anyhow::Resu
         .collect()
 }
 
+/// The rate the simulation integrates a replay of `rec` at (a whole multiple of the record's rate).
 fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
-    let n = rec.len();
-    if n < 2 {
-        return Err(UsageError("the record has fewer than two samples".into()).into());
-    }
-    Ok((n - 1) as f64 / (rec.time_s[n - 1] - rec.time_s[0]))
+    Ok(ReplayCase::new(rec).map_err(classify)?.sim_rate_hz())
 }
 
 /// Runs `flightid diagnose`.
 pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
+    for dir in [&args.report, &args.model_out].into_iter().flatten() {
+        crate::report::check_output_dir(dir)?;
+    }
     let train = read_record(&args.data)?;
     let valid = args.validate.as_deref().map(read_record).transpose()?;
     let source = match &args.linear {
         Some(p) => SimSource::Linear(p),
         None => SimSource::Aircraft(&args.aircraft),
     };
+    let rate = match args.replay_rate_hz {
+        Some(r) if r.is_finite() && r > 0.0 => r,
+        Some(r) => {
+            return Err(UsageError(format!("--replay-rate-hz {r}: must be positive")).into())
+        }
+        None => rate_of(&train)?,
+    };
     let progress =
         super::common::spinner("diagnose: replay, fit each candidate extension, validate");
-    let mut workers = start_workers(&source, rate_of(&train)?, args.workers)?;
+    let mut workers = start_workers(&source, rate, args.workers)?;
     let d = diagnose(
         &mut workers,
         &train,
@@ -131,7 +144,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     .map_err(classify);
     progress.finish_and_clear();
     let d = d?;
-    summary(&d);
+    summary(&d, workers.len());
     if let Some(target) = &args.json {
         emit_json(target, &d)?;
     }
@@ -155,22 +168,15 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         );
     }
     if let Some(dir) = &args.report {
-        let index = report::write_report(
-            &mut workers,
-            &d,
-            &args.aircraft,
-            &train,
-            valid.as_ref(),
-            dir,
-        )
-        .map_err(classify)?;
+        let index = report::write_report(&d, &args.aircraft, &train, valid.as_ref(), dir)
+            .map_err(classify)?;
         eprintln!("report written to {}", index.display());
     }
     Ok(())
 }
 
 /// Terminal summary: named causes with value ± standard error, and the validation gain.
-fn summary(d: &Diagnosis) {
+fn summary(d: &Diagnosis, workers: usize) {
     if d.named_cause.is_empty() {
         println!(
             "no significant model error found (no extension passes the BIC, significance and validation tests)"
@@ -217,5 +223,10 @@ fn summary(d: &Diagnosis) {
             println!("skipped {} on {}: {}", s.effect, s.target, s.reason);
         }
     }
-    println!("{} simulations in {:.1} s", d.simulations, d.wall_s);
+    println!(
+        "{} simulations in {:.1} s ({:.0} % of the workers' time inside the simulation)",
+        d.simulations,
+        d.wall_s,
+        100.0 * d.simulation_s / d.wall_s.max(1e-9) / workers.max(1) as f64
+    );
 }

@@ -31,22 +31,22 @@ pub struct ManeuverArgs {
     #[arg(long, value_enum, default_value = "doublet")]
     pub maneuver: ManeuverKind,
     /// Peak surface deflection relative to trim, deg.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = crate::limits::AMPLITUDE_DEG.parser())]
     pub amplitude_deg: f64,
     /// Pulse width of doublet / 3-2-1-1 (the unit T), s.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::limits::PULSE_S.parser())]
     pub pulse_s: f64,
     /// Time the maneuver starts after the trim state, s.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::limits::START_S.parser())]
     pub start_s: f64,
     /// Record length, s.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = crate::limits::DURATION_S.parser())]
     pub duration_s: f64,
     /// Lowest frequency of multisine and chirp, Hz.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, value_parser = crate::limits::FREQUENCY_HZ.parser())]
     pub f_min_hz: f64,
     /// Highest frequency of multisine and chirp, Hz.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = crate::limits::FREQUENCY_HZ.parser())]
     pub f_max_hz: f64,
     /// Logarithmic chirp instead of linear.
     #[arg(long)]
@@ -109,6 +109,32 @@ impl ManeuverArgs {
             .into());
         }
         let m = self.maneuver()?;
+        crate::limits::check_samples(
+            "the record (--duration-s × --rate-hz)",
+            self.duration_s,
+            rate_hz,
+        )?;
+        if matches!(
+            self.maneuver,
+            ManeuverKind::Doublet | ManeuverKind::ThreeTwoOneOne
+        ) && self.pulse_s * rate_hz < 2.0
+        {
+            return Err(UsageError(format!(
+                "--pulse-s {} is shorter than two samples at {rate_hz} Hz: the record would carry no excitation",
+                self.pulse_s
+            ))
+            .into());
+        }
+        if matches!(self.maneuver, ManeuverKind::Multisine | ManeuverKind::Chirp)
+            && self.f_max_hz > rate_hz / 2.0
+        {
+            return Err(UsageError(format!(
+                "--f-max-hz {} is above the Nyquist frequency {} Hz of --rate-hz {rate_hz}",
+                self.f_max_hz,
+                rate_hz / 2.0
+            ))
+            .into());
+        }
         let dt_s = 1.0 / rate_hz;
         let n_steps = (self.duration_s * rate_hz).round() as usize;
         let mut unit = signal::generate(&m, dt_s, self.duration_s, self.start_s);

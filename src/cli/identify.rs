@@ -49,7 +49,7 @@ pub struct IdentifyCmd {
     #[arg(long, value_name = "SECONDS")]
     pub window_s: Option<f64>,
     /// Resample every record onto a uniform grid at this rate first (linear interpolation).
-    #[arg(long = "resample-hz", value_name = "HZ")]
+    #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
     /// Write the result as JSON (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]

@@ -27,7 +27,7 @@ pub struct IngestArgs {
     #[arg(long)]
     pub sysid: Option<u8>,
     /// Output sample rate, Hz (default: the ATTITUDE rate). Linear interpolation.
-    #[arg(long = "resample-hz")]
+    #[arg(long = "resample-hz", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
     /// Print the summary as JSON on stdout.
     #[arg(long)]

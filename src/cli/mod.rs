@@ -110,6 +110,11 @@ pub fn report_error(e: &anyhow::Error) -> i32 {
         c.downcast_ref::<UsageError>().is_some()
             || c.downcast_ref::<crate::data::DataError>().is_some()
             || c.downcast_ref::<crate::aircraft::AircraftError>().is_some()
+            || c.downcast_ref::<crate::limits::LimitError>().is_some()
+            || matches!(
+                c.downcast_ref::<crate::report::ReportError>(),
+                Some(crate::report::ReportError::Refused { .. })
+            )
     }) {
         2
     } else {

@@ -34,7 +34,7 @@ pub struct PaperCmd {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Record length, s.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::limits::DURATION_S.parser())]
     pub duration_s: f64,
     /// Input shape.
     #[arg(long, value_enum, default_value = "doublet")]
@@ -57,6 +57,9 @@ pub(crate) fn text_table(t: &Table) -> String {
 
 /// Runs `flightid paper`.
 pub fn run(args: &PaperCmd) -> anyhow::Result<()> {
+    if let Some(dir) = &args.report {
+        crate::report::check_output_dir(dir)?;
+    }
     let mut opts = PaperOptions::new(args.noise);
     opts.seed = args.seed;
     opts.duration_s = args.duration_s;
@@ -98,7 +101,7 @@ pub fn run(args: &PaperCmd) -> anyhow::Result<()> {
     }
     let json = run.to_json();
     if let Some(dir) = &args.report {
-        let index = report::write_report(dir, &run.report(), &json)?;
+        let index = report::write_report_dir(dir, &run.report(), &json)?;
         if !quiet {
             println!("\nreport: {}", index.display());
         }

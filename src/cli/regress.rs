@@ -58,6 +58,7 @@ pub fn run(args: &RegressCmd) -> anyhow::Result<()> {
         &RunOptions {
             jobs: jobs.max(1),
             progress: true,
+            ..Default::default()
         },
     )
     .map_err(classify);

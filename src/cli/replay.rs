@@ -53,7 +53,7 @@ pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
         (None, Some(p)) => SimSource::Linear(p),
         (None, None) => SimSource::Aircraft(&args.aircraft),
     };
-    let mut workers = start_workers(&source, case.rate_hz, 1)?;
+    let mut workers = start_workers(&source, case.sim_rate_hz(), 1)?;
     let names = workers[0].sim.coefficient_names();
     let exts = match (&model, &args.extension) {
         (Some(m), _) => m.effects(&names).map_err(classify)?,

@@ -20,7 +20,7 @@ pub struct SegmentsArgs {
     #[arg(long)]
     pub json: bool,
     /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
-    #[arg(long = "resample-hz", value_name = "HZ")]
+    #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
 }
 

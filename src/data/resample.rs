@@ -22,6 +22,12 @@ pub fn resample_uniform(rec: &FlightRecord, rate_hz: f64) -> Result<FlightRecord
     let t = &rec.time_s;
     let t0 = t[0];
     let t_end = t[t.len() - 1];
+    crate::limits::check_samples(
+        &format!("resampling {:.1} s at {rate_hz} Hz", t_end - t0),
+        t_end - t0,
+        rate_hz,
+    )
+    .map_err(|e| DataError::InvalidArgument(e.to_string()))?;
     let dt_s = 1.0 / rate_hz;
     // Tolerate round-off at the last grid point (1e-9 of a step).
     let n = ((t_end - t0) / dt_s + 1e-9).floor() as usize + 1;

@@ -3,7 +3,7 @@
 //! An extension acts at one of three places of the replay: on the model before trimming (aerodynamic
 //! coefficient scales), on the surface inputs before simulating (signal path), or on the simulated
 //! outputs (sensors). The search in [`super::search`] only sees the [`Extension`] trait, so a new effect
-//! is a new type here and one line in [`catalogue`].
+//! is a new type here and one row in [`REGISTRY`].
 
 use std::collections::BTreeMap;
 
@@ -36,6 +36,9 @@ pub struct ParamSpec {
     pub max: f64,
     /// Finite-difference step for sensitivities (parameter units).
     pub fd_step: f64,
+    /// Smallest departure from `null` worth naming (parameter units): an effect is named only when it is at
+    /// least this large and the record determines it to a third of this (Cramér–Rao bound).
+    pub resolution: f64,
 }
 
 /// A model extension: an effect on a target with parameters fitted by output error.
@@ -99,6 +102,7 @@ impl Extension for AeroNonlinearity {
             min: -100.0,
             max: 100.0,
             fd_step: 0.2,
+            resolution: 1.0,
         }]
     }
     fn required_columns(&self) -> Vec<String> {
@@ -106,6 +110,20 @@ impl Extension for AeroNonlinearity {
     }
     fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError> {
         sim.set_added_term(&self.0, p[0])
+    }
+}
+
+/// Smallest sensor bias worth naming, by the column's unit: 0.3° for an angle, 0.17°/s for a rate,
+/// 0.05 m/s² for an acceleration.
+fn bias_resolution(column: &str) -> f64 {
+    if column.ends_with("_rad_s") {
+        0.003
+    } else if column.ends_with("_rad") {
+        0.005
+    } else if column.ends_with("_m_s2") {
+        0.05
+    } else {
+        1e-3
     }
 }
 
@@ -133,6 +151,7 @@ impl Extension for InputDelay {
             min: 0.0,
             max: 1.0,
             fd_step: 0.005,
+            resolution: 0.02,
         }]
     }
     fn required_columns(&self) -> Vec<String> {
@@ -177,6 +196,7 @@ impl Extension for ActuatorLag {
             min: 0.0,
             max: 2.0,
             fd_step: 0.005,
+            resolution: 0.03,
         }]
     }
     fn required_columns(&self) -> Vec<String> {
@@ -186,13 +206,17 @@ impl Extension for ActuatorLag {
         if surface != self.0 || p[0] <= 0.0 {
             return;
         }
-        // τ ẋ = δ − x, discretised exactly for the input the simulation applies: sample k is held over the
-        // step that ends at it (zero-order hold; Franklin, Powell & Workman, Digital Control of Dynamic
-        // Systems, §6.3.1): x_k = a x_{k−1} + (1 − a) δ_k, a = e^{−Δt/τ}.
+        // τ ẋ = δ − x, discretised exactly for the input the replay applies, straight lines between the
+        // samples (the triangle-hold equivalent; Franklin, Powell & Workman, Digital Control of Dynamic
+        // Systems, §6.3.2): x_k = a x_{k−1} + (1 − a) δ_{k−1} + b (δ_k − δ_{k−1}),
+        // a = e^{−Δt/τ}, b = 1 − (τ/Δt)(1 − a).
         let a = (-dt_s / p[0]).exp();
-        let mut x = 0.0;
+        let b = 1.0 - p[0] / dt_s * (1.0 - a);
+        let (mut x, mut prev) = (0.0, 0.0);
         for v in dev.iter_mut() {
-            x = a * x + (1.0 - a) * *v;
+            let u = *v;
+            x = a * x + (1.0 - a) * prev + b * (u - prev);
+            prev = u;
             *v = x;
         }
     }
@@ -214,6 +238,7 @@ impl Extension for ControlEffectiveness {
             min: 0.1,
             max: 3.0,
             fd_step: 0.01,
+            resolution: 0.1,
         }]
     }
     fn required_columns(&self) -> Vec<String> {
@@ -242,6 +267,7 @@ impl Extension for SensorBias {
             min: -1e6,
             max: 1e6,
             fd_step: 1e-3,
+            resolution: bias_resolution(&self.0),
         }]
     }
     fn required_columns(&self) -> Vec<String> {
@@ -270,6 +296,7 @@ impl Extension for SensorScale {
             min: 0.2,
             max: 5.0,
             fd_step: 0.01,
+            resolution: 0.03,
         }]
     }
     fn required_columns(&self) -> Vec<String> {
@@ -298,6 +325,7 @@ impl Extension for AeroDerivative {
             min: 0.2,
             max: 4.0,
             fd_step: 0.02,
+            resolution: 0.15,
         }]
     }
     fn required_columns(&self) -> Vec<String> {
@@ -350,89 +378,157 @@ pub const SENSOR_COLUMNS: [&str; 10] = [
     "az_m_s2",
 ];
 
+/// Which targets an effect applies to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Targets {
+    /// The surfaces of the schema (elevator, aileron, rudder, throttle).
+    Surfaces,
+    /// The columns that may carry a sensor error ([`SENSOR_COLUMNS`]).
+    SensorColumns,
+    /// The derivatives of [`DERIVATIVE_KNOBS`] whose coefficient the simulation can scale.
+    Derivatives,
+    /// The added terms the simulation offers.
+    AddedTerms,
+}
+
+/// One row of the catalogue: an effect name, its targets and how to build it for one target
+/// (the target name and, for derivatives, the simulation's coefficient name).
+pub struct EffectKind {
+    /// Effect name of the vocabulary.
+    pub effect: &'static str,
+    /// Targets it applies to.
+    pub targets: Targets,
+    /// Builds the extension for a target.
+    pub build: fn(&str, &str) -> Box<dyn Extension>,
+}
+
+/// The catalogue: a new effect is one type implementing [`Extension`] and one row here.
+pub const REGISTRY: [EffectKind; 7] = [
+    EffectKind {
+        effect: "input_delay",
+        targets: Targets::Surfaces,
+        build: |t, _| Box::new(InputDelay(t.into())),
+    },
+    EffectKind {
+        effect: "actuator_lag",
+        targets: Targets::Surfaces,
+        build: |t, _| Box::new(ActuatorLag(t.into())),
+    },
+    EffectKind {
+        effect: "control_effectiveness",
+        targets: Targets::Surfaces,
+        build: |t, _| Box::new(ControlEffectiveness(t.into())),
+    },
+    EffectKind {
+        effect: "sensor_bias",
+        targets: Targets::SensorColumns,
+        build: |t, _| Box::new(SensorBias(t.into())),
+    },
+    EffectKind {
+        effect: "sensor_scale",
+        targets: Targets::SensorColumns,
+        build: |t, _| Box::new(SensorScale(t.into())),
+    },
+    EffectKind {
+        effect: "aero_derivative",
+        targets: Targets::Derivatives,
+        build: |t, knob| {
+            Box::new(AeroDerivative {
+                name: t.into(),
+                knob: knob.into(),
+            })
+        },
+    },
+    EffectKind {
+        effect: "aero_nonlinearity",
+        targets: Targets::AddedTerms,
+        build: |t, _| Box::new(AeroNonlinearity(t.into())),
+    },
+];
+
+/// The surfaces of the schema.
+pub const SURFACES: [&str; 4] = ["elevator", "aileron", "rudder", "throttle"];
+
+/// The simulation's coefficient name of a derivative (the name itself when it is not in the table).
+fn knob_of(target: &str) -> String {
+    DERIVATIVE_KNOBS
+        .iter()
+        .find(|(n, _)| *n == target)
+        .map(|(_, k)| k.to_string())
+        .unwrap_or_else(|| target.to_string())
+}
+
 /// Builds one extension from its effect and target names (the `--extension` file and the catalogue use it).
 pub fn make(
     effect: &str,
     target: &str,
     coefficient_names: &[String],
 ) -> Result<Box<dyn Extension>, DiagnoseError> {
-    let surface = || -> Result<String, DiagnoseError> {
-        match target {
-            "elevator" | "aileron" | "rudder" | "throttle" => Ok(target.to_string()),
-            _ => Err(DiagnoseError::UnknownExtension(format!(
-                "{effect} needs a surface target (elevator, aileron, rudder, throttle), got '{target}'"
-            ))),
-        }
+    let Some(kind) = REGISTRY.iter().find(|k| k.effect == effect) else {
+        let known: Vec<&str> = REGISTRY.iter().map(|k| k.effect).collect();
+        return Err(DiagnoseError::UnknownExtension(format!(
+            "unknown effect '{effect}' (known: {})",
+            known.join(", ")
+        )));
     };
-    Ok(match effect {
-        "input_delay" => Box::new(InputDelay(surface()?)),
-        "actuator_lag" => Box::new(ActuatorLag(surface()?)),
-        "control_effectiveness" => Box::new(ControlEffectiveness(surface()?)),
-        "sensor_bias" => Box::new(SensorBias(target.to_string())),
-        "sensor_scale" => Box::new(SensorScale(target.to_string())),
-        "aero_derivative" => {
-            let knob = DERIVATIVE_KNOBS
-                .iter()
-                .find(|(n, _)| *n == target)
-                .map(|(_, k)| k.to_string())
-                .unwrap_or_else(|| target.to_string());
-            if !coefficient_names.contains(&knob) {
-                return Err(DiagnoseError::UnknownExtension(format!(
-                    "the simulation has no aerodynamic coefficient for '{target}'"
-                )));
-            }
-            Box::new(AeroDerivative {
-                name: target.to_string(),
-                knob,
-            })
+    match kind.targets {
+        Targets::Surfaces if !SURFACES.contains(&target) => {
+            Err(DiagnoseError::UnknownExtension(format!(
+                "{effect} needs a surface target (elevator, aileron, rudder, throttle), got '{target}'"
+            )))
         }
-        "aero_nonlinearity" => Box::new(AeroNonlinearity(target.to_string())),
-        other => {
-            return Err(DiagnoseError::UnknownExtension(format!(
-            "unknown effect '{other}' (known: input_delay, actuator_lag, control_effectiveness, \
-                 sensor_bias, sensor_scale, aero_derivative, aero_nonlinearity)"
-        )))
+        Targets::Derivatives if !coefficient_names.contains(&knob_of(target)) => {
+            Err(DiagnoseError::UnknownExtension(format!(
+                "the simulation has no aerodynamic coefficient for '{target}'"
+            )))
         }
-    })
+        _ => Ok((kind.build)(target, &knob_of(target))),
+    }
 }
 
 /// A catalogue entry left out: (effect, target, reason).
 pub type SkippedEntry = (String, String, String);
 
-/// The full catalogue for a record and a simulation: signal path per surface, sensors per column,
-/// derivative scales the simulation offers. Returns the usable extensions and the skipped ones with the reason.
+/// The full catalogue for a record and a simulation: every row of [`REGISTRY`] on each of its targets.
+/// Returns the usable extensions and the skipped ones with the reason.
 pub fn catalogue(
     record: &FlightRecord,
     coefficient_names: &[String],
     added_terms: &[String],
 ) -> (Vec<Box<dyn Extension>>, Vec<SkippedEntry>) {
     let mut all: Vec<Box<dyn Extension>> = Vec::new();
-    for s in ["elevator", "aileron", "rudder", "throttle"] {
-        all.push(Box::new(InputDelay(s.into())));
-        all.push(Box::new(ActuatorLag(s.into())));
-        all.push(Box::new(ControlEffectiveness(s.into())));
-    }
-    for c in SENSOR_COLUMNS {
-        all.push(Box::new(SensorBias(c.into())));
-        all.push(Box::new(SensorScale(c.into())));
-    }
     let mut skipped = Vec::new();
-    for (name, knob) in DERIVATIVE_KNOBS {
-        if coefficient_names.iter().any(|k| k == knob) {
-            all.push(Box::new(AeroDerivative {
-                name: name.into(),
-                knob: knob.into(),
-            }));
-        } else {
-            skipped.push((
-                "aero_derivative".to_string(),
-                name.to_string(),
-                format!("the simulation has no coefficient knob '{knob}'"),
-            ));
-        }
-    }
-    for t in added_terms {
-        all.push(Box::new(AeroNonlinearity(t.clone())));
+    for kind in &REGISTRY {
+        let targets: Vec<(String, String)> = match kind.targets {
+            Targets::Surfaces => SURFACES
+                .iter()
+                .map(|s| (s.to_string(), String::new()))
+                .collect(),
+            Targets::SensorColumns => SENSOR_COLUMNS
+                .iter()
+                .map(|c| (c.to_string(), String::new()))
+                .collect(),
+            Targets::Derivatives => DERIVATIVE_KNOBS
+                .iter()
+                .filter(|(name, knob)| {
+                    let has = coefficient_names.iter().any(|k| k == knob);
+                    if !has {
+                        skipped.push((
+                            kind.effect.to_string(),
+                            name.to_string(),
+                            format!("the simulation has no coefficient knob '{knob}'"),
+                        ));
+                    }
+                    has
+                })
+                .map(|(n, k)| (n.to_string(), k.to_string()))
+                .collect(),
+            Targets::AddedTerms => added_terms
+                .iter()
+                .map(|t| (t.clone(), String::new()))
+                .collect(),
+        };
+        all.extend(targets.iter().map(|(t, k)| (kind.build)(t, k)));
     }
     let mut usable = Vec::new();
     for e in all {

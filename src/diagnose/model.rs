@@ -57,7 +57,6 @@ pub fn write_model(
             signal.push(f.clone());
         }
     }
-    sim.export_model(dir).map_err(|e| file_err(dir, e))?;
     let extension = ExtensionFile {
         aircraft: file.aircraft.clone(),
         effects: signal,
@@ -65,8 +64,12 @@ pub fn write_model(
         notes: file.notes.clone(),
     };
     let text = serde_json::to_string_pretty(&extension).map_err(|e| file_err(dir, e))?;
-    crate::report::write_atomic(&dir.join(EXTENSION_FILE), text.as_bytes())
-        .map_err(|e| file_err(dir, e))?;
+    // the whole directory is replaced at once, and only when it is new or an earlier flightid output
+    crate::report::replace_output_dir(dir, |tmp| -> Result<(), DiagnoseError> {
+        sim.export_model(tmp).map_err(|e| file_err(dir, e))?;
+        crate::report::write_atomic(&tmp.join(EXTENSION_FILE), text.as_bytes())
+            .map_err(|e| file_err(dir, e))
+    })?;
     Ok(ExtendedModel {
         dir: dir.to_path_buf(),
         extension,

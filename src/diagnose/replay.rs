@@ -28,6 +28,10 @@ pub trait ReplaySim: Simulator + Send {
             "this simulation has no added aerodynamic term '{name}'"
         )))
     }
+    /// The rate the simulation integrates at, Hz (None: it runs at whatever rate the plan asks for).
+    fn rate_hz(&self) -> Option<f64> {
+        None
+    }
     /// Writes the model with the current coefficient factors and added terms in it to `dir`.
     fn export_model(&mut self, dir: &std::path::Path) -> Result<std::path::PathBuf, SimError> {
         Err(SimError::Usage(format!(
@@ -38,6 +42,9 @@ pub trait ReplaySim: Simulator + Send {
 }
 
 impl ReplaySim for JsbsimSim {
+    fn rate_hz(&self) -> Option<f64> {
+        Some(JsbsimSim::rate_hz(self))
+    }
     fn coefficient_names(&self) -> Vec<String> {
         self.coefficient_knobs.clone()
     }
@@ -79,6 +86,9 @@ pub const OUTPUTS: [&str; 12] = [
     "ay_m_s2",
     "az_m_s2",
 ];
+
+/// Lowest integration rate of a replay, Hz: a record logged slower is replayed at a whole multiple of its rate.
+pub const MIN_SIM_RATE_HZ: f64 = 100.0;
 
 /// A measured record prepared for replay: uniform grid, trim point, input deviations, compared outputs.
 #[derive(Debug, Clone)]
@@ -217,6 +227,12 @@ impl ReplayCase {
         })
     }
 
+    /// The rate a simulation replaying this record should integrate at: the smallest whole multiple of the
+    /// record's rate that is at least [`MIN_SIM_RATE_HZ`] (the record's samples are interpolated in between).
+    pub fn sim_rate_hz(&self) -> f64 {
+        self.rate_hz * (MIN_SIM_RATE_HZ / self.rate_hz - 1e-9).ceil().max(1.0)
+    }
+
     /// Time step, s.
     pub fn dt_s(&self) -> f64 {
         1.0 / self.rate_hz
@@ -290,8 +306,24 @@ pub fn replay(
             e.apply_model(p, sim)?;
         }
     }
+    // The simulation integrates at its own rate, a whole multiple m of the record's (declared convention: the
+    // surfaces move linearly between the record's samples; the value set for a step is what the model reads
+    // during that step, so the step ending at sample k reads the measured sample k).
+    let m = match sim.rate_hz() {
+        Some(r) => {
+            let m = (r / case.rate_hz).round().max(1.0);
+            if (m * case.rate_hz - r).abs() > 1e-6 * r {
+                return Err(SimError::Usage(format!(
+                    "the simulation runs at {r} Hz, not a whole multiple of the record's {} Hz",
+                    case.rate_hz
+                )));
+            }
+            m as usize
+        }
+        None => 1,
+    };
     let trim = sim.trim(&case.point)?;
-    let n_steps = case.len() - 1;
+    let n_steps = (case.len() - 1) * m;
     let dt = case.dt_s();
     let mut inputs = Vec::new();
     for (surface, dev) in &case.inputs {
@@ -301,19 +333,32 @@ pub fn replay(
                 e.apply_input(p, surface, &mut d, dt);
             }
         }
-        // The value set for step k is what the model reads during that step; the record's sample k+1
-        // shows it (sample 0 is the trim state), so step k takes the measured sample k+1.
+        let fine: Vec<f64> = (0..n_steps)
+            .map(|s| {
+                let (k, j) = (s / m, s % m + 1);
+                let f = j as f64 / m as f64;
+                (1.0 - f) * d[k] + f * d[(k + 1).min(d.len() - 1)]
+            })
+            .collect();
         inputs.push(SurfaceInput {
             surface: surface.clone(),
-            deflection_rad: d[1..].to_vec(),
+            deflection_rad: fine,
         });
     }
     let plan = FlightPlan {
-        rate_hz: case.rate_hz,
+        rate_hz: case.rate_hz * m as f64,
         n_steps,
         inputs,
     };
     let mut rec = sim.fly(&plan)?;
+    if m > 1 {
+        let keep: Vec<usize> = (0..case.len()).map(|k| k * m).collect();
+        for (_, col) in rec.columns.iter_mut() {
+            if col.len() > n_steps {
+                *col = keep.iter().map(|&i| col[i]).collect();
+            }
+        }
+    }
     rec.time_s = case.record.time_s.clone();
     for (e, p) in extensions {
         if e.stage() == Stage::Output {

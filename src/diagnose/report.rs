@@ -6,10 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use super::replay::ReplayCase;
-use super::search::Worker;
-use super::{analyse_replay, DiagnoseError, Diagnosis};
+use super::{DiagnoseError, Diagnosis};
 use crate::data::FlightRecord;
-use crate::report::{write_report as write_files, LinePlot, Report, Section, Series, Table};
+use crate::report::{write_report_dir as write_files, LinePlot, Report, Section, Series, Table};
 
 fn f(v: f64) -> String {
     if v.is_finite() {
@@ -274,42 +273,30 @@ fn overlay_section(
     s
 }
 
-/// Writes the report directory for a diagnosis. Re-simulates the validation record (or the training one)
-/// with and without the named effects on the first worker.
+/// Writes the report directory for a diagnosis, with the traces it carries (validation record if there was one,
+/// else the training record).
 pub fn write_report(
-    workers: &mut [Worker],
     d: &Diagnosis,
     aircraft: &str,
     train: &FlightRecord,
     valid: Option<&FlightRecord>,
     dir: &Path,
 ) -> Result<PathBuf, DiagnoseError> {
-    let worker = workers
-        .first_mut()
-        .ok_or_else(|| DiagnoseError::BadData("no simulation worker".into()))?;
-    let (label, record) = match valid {
-        Some(v) => ("validation", v),
-        None => ("training", train),
+    let t = &d.traces;
+    let (label, record, before, after) = match (valid, &t.valid_before, &t.valid_after) {
+        (Some(v), Some(b), Some(a)) => ("validation", v, b, a),
+        _ => ("training", train, &t.train_before, &t.train_after),
     };
     let case = ReplayCase::new(record)?;
-    let built = d
-        .extension_file(aircraft)
-        .build(&worker.sim.coefficient_names())?;
-    let refs: Vec<_> = built
-        .iter()
-        .map(|(e, p)| (e.as_ref(), p.as_slice()))
-        .collect();
-    let (before, _, _) = analyse_replay(worker, &case, &[])?;
-    let (after, _, _) = analyse_replay(worker, &case, &refs)?;
     let report = Report {
         title: format!("flightid diagnose — {aircraft}"),
         sections: vec![
             summary_section(d, aircraft),
             evidence_section(d),
             candidates_section(d),
-            overlay_section(label, &case, &before, &after),
+            overlay_section(label, &case, before, after),
         ],
     };
     let json = serde_json::to_value(d).unwrap_or_default();
-    write_files(dir, &report, &json).map_err(|e| DiagnoseError::Report(e.to_string()))
+    Ok(write_files(dir, &report, &json)?)
 }

@@ -22,6 +22,8 @@ pub struct Worker {
     /// The simulator (one JSBSim process, or a linear model).
     pub sim: Box<dyn ReplaySim>,
     cache: Option<(CacheKey, FlightRecord)>,
+    /// Time spent in this worker's simulations, s.
+    pub sim_s: f64,
 }
 
 type CacheKey = (usize, Vec<(String, Vec<u64>)>);
@@ -29,7 +31,11 @@ type CacheKey = (usize, Vec<(String, Vec<u64>)>);
 impl Worker {
     /// Wraps a simulator.
     pub fn new(sim: Box<dyn ReplaySim>) -> Self {
-        Worker { sim, cache: None }
+        Worker {
+            sim,
+            cache: None,
+            sim_s: 0.0,
+        }
     }
 }
 
@@ -90,7 +96,10 @@ pub fn residuals(
             .filter(|a| a.ext.stage() != Stage::Output)
             .map(|a| (a.ext, a.params.as_slice()))
             .collect();
-        let (rec, _) = replay(worker.sim.as_mut(), w.case, &sim_exts)?;
+        let t0 = std::time::Instant::now();
+        let out = replay(worker.sim.as_mut(), w.case, &sim_exts);
+        worker.sim_s += t0.elapsed().as_secs_f64();
+        let (rec, _) = out?;
         worker.cache = Some((key, rec));
     }
     let mut rec = match &worker.cache {
@@ -331,6 +340,34 @@ pub fn fit(
         sensitivities: cols,
         evaluations,
     })
+}
+
+/// The residual sensitivity ∂r/∂θ of `candidate`'s first parameter at its null value on top of the `base`
+/// effects, by a forward difference from `r0`, the residual of `base` (one simulation; none for a sensor effect
+/// when the worker's last simulation was of `base`).
+pub fn null_sensitivity(
+    worker: &mut Worker,
+    w: &Weighted,
+    base: &[Active],
+    candidate: &dyn Extension,
+    r0: &[f64],
+) -> Result<Vec<f64>, SimError> {
+    let spec = candidate.params()[0];
+    let h = if spec.null + spec.fd_step <= spec.max {
+        spec.fd_step
+    } else {
+        -spec.fd_step
+    };
+    let mut active = base.to_vec();
+    let mut params: Vec<f64> = candidate.params().iter().map(|p| p.null).collect();
+    params[0] += h;
+    active.push(Active {
+        ext: candidate,
+        params,
+        free: true,
+    });
+    let rh = residuals(worker, w, &active)?;
+    Ok(rh.iter().zip(r0).map(|(a, b)| (a - b) / h).collect())
 }
 
 /// Runs `f` over `items` on the workers in parallel (one thread per worker), results in item order.

@@ -92,23 +92,6 @@ pub(crate) fn inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
     Some(inv)
 }
 
-/// Product of two row-major n×n matrices.
-pub(crate) fn matmul(a: &[f64], b: &[f64], n: usize) -> Vec<f64> {
-    let mut c = vec![0.0; n * n];
-    for i in 0..n {
-        for k in 0..n {
-            let aik = a[i * n + k];
-            if aik == 0.0 {
-                continue;
-            }
-            for j in 0..n {
-                c[i * n + j] += aik * b[k * n + j];
-            }
-        }
-    }
-    c
-}
-
 /// The n×n identity, row-major.
 pub(crate) fn identity(n: usize) -> Vec<f64> {
     let mut m = vec![0.0; n * n];

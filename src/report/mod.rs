@@ -8,12 +8,18 @@ use serde::Serialize;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+pub mod outdir;
+pub use outdir::{check_output_dir, replace_output_dir};
+
 /// Report-writing failures.
 #[derive(Debug, thiserror::Error)]
 pub enum ReportError {
     /// Drawing failed.
     #[error("plot '{title}': {detail}")]
     Plot { title: String, detail: String },
+    /// The output directory may not be replaced (it holds something flightid did not write): bad input.
+    #[error("refusing to write {}: it {reason}", crate::text::escape_control(&path.display().to_string()))]
+    Refused { path: PathBuf, reason: String },
     /// File system.
     #[error("cannot write {path}: {source}")]
     Io {
@@ -412,53 +418,16 @@ pub fn write_report(
     Ok(index)
 }
 
-/// Writes a whole report directory atomically: [`write_report`] fills a sibling temporary directory, which then
-/// takes the place of `dir` by rename, so a reader sees the old report or the new one, never a mix or a partial
-/// one. An existing `dir` is replaced only when it is empty or is itself a report (holds `report.json`).
-/// Returns the path of `index.html`.
+/// Writes a whole report directory atomically through [`replace_output_dir`]: [`write_report`] fills a sibling
+/// temporary directory, which then takes the place of `dir`, so a reader sees the old report or the new one,
+/// never a mix or a partial one. An existing `dir` is replaced only when it is empty or holds nothing but an
+/// earlier flightid output (see [`outdir`]). Returns the path of `index.html`.
 pub fn write_report_dir(
     dir: &Path,
     report: &Report,
     json: &serde_json::Value,
 ) -> Result<PathBuf, ReportError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| ReportError::Io { path, source }
-    };
-    if dir.exists() {
-        let mut entries = std::fs::read_dir(dir).map_err(io(dir))?;
-        if entries.next().is_some() && !dir.join("report.json").exists() {
-            return Err(ReportError::Io {
-                path: dir.to_path_buf(),
-                source: std::io::Error::new(
-                    std::io::ErrorKind::AlreadyExists,
-                    "exists and is not a flightid report; choose a new or empty directory",
-                ),
-            });
-        }
-    }
-    let parent = dir
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent).map_err(io(parent))?;
-    let name = dir
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_else(|| "report".into());
-    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
-    let old = parent.join(format!(".{name}.old-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp); // a leftover of an earlier process with the same id
-    let _ = std::fs::remove_dir_all(&old);
-    if let Err(e) = write_report(&tmp, report, json) {
-        let _ = std::fs::remove_dir_all(&tmp);
-        return Err(e);
-    }
-    if dir.exists() {
-        std::fs::rename(dir, &old).map_err(io(dir))?;
-    }
-    std::fs::rename(&tmp, dir).map_err(io(dir))?;
-    let _ = std::fs::remove_dir_all(&old);
+    replace_output_dir(dir, |tmp| write_report(tmp, report, json))?;
     Ok(dir.join("index.html"))
 }
 

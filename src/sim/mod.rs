@@ -2,6 +2,7 @@
 //!
 //! Units: SI and radians inside flightid; feet and knots only at this edge (JSBSim's own units).
 
+pub mod aero_truth;
 pub mod bridge;
 pub mod env;
 pub mod jsbsim;

@@ -4,13 +4,25 @@
 
 use serde::Serialize;
 
-use super::fit::DerivativeEstimate;
-use super::identifiability::Verdict;
-use super::model::AeroModel;
-use super::params::{Derivative as D, Derivatives};
-use super::regression::EquationErrorResult;
-use super::spec::Structure;
+use crate::aero::fit::DerivativeEstimate;
+use crate::aero::identifiability::Verdict;
+use crate::aero::model::AeroModel;
+use crate::aero::params::{Derivative as D, Derivatives};
+use crate::aero::regression::EquationErrorResult;
 use crate::report::Table;
+use crate::study::spec::Structure;
+
+/// One named cause of an estimate's error and how much of it it accounts for.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TermShare {
+    /// The term: a coefficient function (`Clr`), an assumption (`paper: no C_Lq, C_Lα̇ in the lift equation`),
+    /// `TF identification`, `propulsion`, `noise`, ….
+    pub term: String,
+    /// Its part of the error, in the derivative's units (the error it removes when released, TF route).
+    pub contribution: f64,
+    /// contribution / (estimate − truth).
+    pub share: f64,
+}
 
 /// Name of the pitch-damping combination the data determine (C_mq + C_mα̇).
 pub const CMQ_SUM: &str = "Cm_q+Cm_alphadot";
@@ -36,8 +48,8 @@ pub struct ScoreRow {
     pub verdict: String,
     /// Why an estimate misses, when a model-structure term is known to be responsible.
     pub note: String,
-    /// The error taken apart term by term (`aero::attribution`), largest share first; empty when not done.
-    pub attribution: Vec<super::attribution::TermShare>,
+    /// The error taken apart term by term (`study::attribution`), largest share first; empty when not done.
+    pub attribution: Vec<TermShare>,
 }
 
 impl ScoreRow {

@@ -6,21 +6,23 @@
 //! record for equation error, so that C_lδa and C_lδr are not collinear). Sensor noise, when asked for, is added
 //! to every measured channel after the flight, white and Gaussian, seeded.
 
-use super::fit::{IdentifiedTf, IdentifiedTfs};
-use super::model::TfOutput;
-use super::regression::{equation_error, EquationErrorOptions, EquationErrorResult, FlightRecord};
-use super::spec::{truth_geometry, truth_mass_body};
-use super::AeroError;
+use crate::aero::fit::{IdentifiedTf, IdentifiedTfs};
+use crate::aero::model::TfOutput;
+use crate::aero::regression::{
+    equation_error, EquationErrorOptions, EquationErrorResult, FlightRecord,
+};
+use crate::aero::AeroError;
 use crate::data;
 use crate::ident::{self, IdentOptions, IdentResult, Method};
 use crate::signal::{self, Maneuver};
 use crate::sim::jsbsim::AeroTruth;
 use crate::sim::{FlightPlan, Simulator, SurfaceInput, TrimPoint};
+use crate::study::spec::{truth_geometry, truth_mass_body};
 use faer::Mat;
 
 /// Whether equation error on these JSBSim flights models the half-sample lag of the differentiated rates
 /// behind the regressors ([`EquationErrorOptions::response_lags_half_sample`]); the attribution
-/// (`aero::study`) must use the same setting.
+/// (`study`) must use the same setting.
 pub const JSBSIM_RESPONSE_LAG: bool = true;
 
 /// White sensor noise, one standard deviation per channel kind.

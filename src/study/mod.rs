@@ -1,31 +1,46 @@
-//! The whole derivative study behind `flightid derivatives`: truth from the JSBSim trim, the model check against
-//! JSBSim's linearization, estimates by the transfer-function route and by equation error, and their scores.
+//! The JSBSim derivative study behind `flightid derivatives --aircraft`: truth from the JSBSim trim, the model
+//! check against JSBSim's linearization, estimates by the transfer-function route and by equation error, and
+//! their scores. The pure parametric model and its estimators live in [`crate::aero`]; this module couples
+//! them to a JSBSim aircraft.
+//!
+//! - [`spec`]: the truth derivatives from a JSBSim trim and the study's structure (paper/full model).
+//! - [`trials`]: the doublets flown and the transfer functions and equation-error records made from them.
+//! - [`score`]: estimates against the truth (the paper's Tables 1 and 3).
+//! - [`attribution`]: why an estimate misses the truth, term by term (TF route by releasing assumptions,
+//!   equation error by projecting each JSBSim coefficient function's remainder on the regressors).
+
+pub mod attribution;
+pub mod score;
+pub mod spec;
+pub mod trials;
 
 use serde::Serialize;
 use serde_json::{json, Value};
 
-use super::attribution::{
-    self, attribute_equation_error, attribute_tf_fit, CoefficientProbe, EquationAttribution,
-};
-use super::fit::{estimate_derivatives, FitOptions, IdentifiedTf, IdentifiedTfs};
-use super::model::TfOutput;
-use super::params::Derivative as D;
-use super::regression::{EquationErrorOptions, EquationErrorResult};
-use super::score::{score_equation_error, score_tf_fit, table1, table3, ScoreRow, Scorecard};
-use super::spec::{
-    apply_overrides, identified_tfs_from_json, model_from_truth, truth_derivatives, Structure,
-};
-use super::trials::{
-    equation_error_flights, equation_error_with, fly_doublets, identify_paper_tfs, Flights,
-    TrialOptions, JSBSIM_RESPONSE_LAG,
-};
-use super::AeroError;
+use crate::aero::fit::{estimate_derivatives, FitOptions, IdentifiedTf, IdentifiedTfs};
+use crate::aero::model::TfOutput;
+use crate::aero::params::Derivative as D;
+use crate::aero::regression::{EquationErrorOptions, EquationErrorResult};
+use crate::aero::AeroError;
 use crate::data;
 use crate::report::{Report, Section, Table};
 use crate::sim::jsbsim::AeroTruth;
 use crate::sim::linear::{paper_transfer_functions, submodel_modes};
 use crate::sim::Linearization;
 use crate::sim::{JsbsimSim, Simulator, TrimPoint};
+use crate::study::attribution::{
+    attribute_equation_error, attribute_tf_fit, CoefficientProbe, EquationAttribution,
+};
+use crate::study::score::{
+    score_equation_error, score_tf_fit, table1, table3, ScoreRow, Scorecard,
+};
+use crate::study::spec::{
+    apply_overrides, identified_tfs_from_json, model_from_truth, truth_derivatives, Structure,
+};
+use crate::study::trials::{
+    equation_error_flights, equation_error_with, fly_doublets, identify_paper_tfs, Flights,
+    TrialOptions, JSBSIM_RESPONSE_LAG,
+};
 
 /// Where the estimates come from.
 #[derive(Debug, Clone)]
@@ -322,7 +337,7 @@ pub fn run(
             .into_iter()
             .filter(|d| {
                 axes.iter()
-                    .any(|a| d.is_longitudinal() == (*a == super::Axis::Longitudinal))
+                    .any(|a| d.is_longitudinal() == (*a == crate::aero::Axis::Longitudinal))
             })
             .collect();
         let mut prior = model.clone();
@@ -406,8 +421,7 @@ pub fn run(
 /// α̇ c̄/(2V) as a regressor, checked numerically: both estimates against the truth and the correlation of the two estimates,
 /// ρ = D_qα̇/√(D_qq D_α̇α̇) with D = (XᵀX)⁻¹ (Morelli & Klein eq. 5.12).
 fn alphadot_separation_note(flights: &Flights, truth: &AeroTruth) -> Result<String, AeroError> {
-    let r =
-        super::trials::equation_error_with(&flights.elevator, truth, true, JSBSIM_RESPONSE_LAG)?;
+    let r = trials::equation_error_with(&flights.elevator, truth, true, JSBSIM_RESPONSE_LAG)?;
     let Some(cm) = r.equations.iter().find(|e| e.coefficient == "Cm") else {
         return Ok("C_m equation with α̇ could not be formed on the elevator flight".into());
     };
@@ -504,7 +518,7 @@ fn attribute_flights(
 ) -> Result<Vec<EquationAttribution>, AeroError> {
     let truth_body = truth_derivatives(truth);
     let options = EquationErrorOptions {
-        response_lags_half_sample: super::trials::JSBSIM_RESPONSE_LAG,
+        response_lags_half_sample: trials::JSBSIM_RESPONSE_LAG,
         ..EquationErrorOptions::default()
     };
     let mut out = Vec::new();

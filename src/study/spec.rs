@@ -7,12 +7,12 @@ use std::str::FromStr;
 use faer::Mat;
 use serde_json::Value;
 
-use super::fit::{IdentifiedTf, IdentifiedTfs};
-use super::model::{AeroModel, TfOutput};
-use super::params::{
+use crate::aero::fit::{IdentifiedTf, IdentifiedTfs};
+use crate::aero::model::{AeroModel, TfOutput};
+use crate::aero::params::{
     Assumptions, Derivative, Derivatives, FlightCondition, Geometry, MassProperties,
 };
-use super::AeroError;
+use crate::aero::AeroError;
 use crate::sim::jsbsim::AeroTruth;
 
 /// Which model structure the transfer-function route fits.

@@ -17,29 +17,17 @@ use std::collections::BTreeMap;
 use faer::Mat;
 use serde::Serialize;
 
-use super::fit::{estimate_derivatives, FitOptions, IdentifiedTfs};
-use super::params::{Assumptions, Derivative, Derivatives, ThrustModel};
-use super::regression::{
+use crate::aero::fit::{estimate_derivatives, FitOptions, IdentifiedTfs};
+use crate::aero::params::{Assumptions, Derivative, Derivatives, ThrustModel};
+use crate::aero::regression::{
     half_sample_lag, regressor_filter, EquationErrorOptions, RegressionResult,
 };
-use super::score::{Scorecard, CMQ_SUM};
-use super::spec::full_assumptions;
-use super::AeroError;
+use crate::aero::AeroError;
 use crate::data;
-use crate::sim::jsbsim::{coefficient_property, cross, wind_to_body};
+use crate::sim::aero_truth::{coefficient_property, cross, wind_to_body};
 use crate::sim::JsbsimSim;
-
-/// One named cause of an estimate's error and how much of it it accounts for.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct TermShare {
-    /// The term: a coefficient function (`Clr`), an assumption (`paper: no C_Lq, C_Lα̇ in the lift equation`),
-    /// `TF identification`, `propulsion`, `noise`, ….
-    pub term: String,
-    /// Its part of the error, in the derivative's units (the error it removes when released, TF route).
-    pub contribution: f64,
-    /// contribution / (estimate − truth).
-    pub share: f64,
-}
+use crate::study::score::{Scorecard, TermShare, CMQ_SUM};
+use crate::study::spec::full_assumptions;
 
 /// Error of one estimate (or combination) taken apart.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -148,17 +136,18 @@ fn errors(values: &[f64], free: &[Derivative], truth: &Derivatives) -> Vec<(Stri
 /// fully released model still misses against the linearization. (Sequential release: a term's share can depend
 /// on the order when assumptions interact; the one-at-a-time effect is within a few % for these.)
 pub fn attribute_tf_fit(
-    prior: &super::AeroModel,
+    prior: &crate::aero::AeroModel,
     tfs: &IdentifiedTfs,
     linearization: Option<&IdentifiedTfs>,
     free: &[Derivative],
     truth: &Derivatives,
 ) -> Result<Vec<RowAttribution>, AeroError> {
-    let fit =
-        |model: &super::AeroModel, t: &IdentifiedTfs| -> Result<Vec<(String, f64)>, AeroError> {
-            let est = estimate_derivatives(model, t, free, FitOptions::default())?;
-            Ok(errors(&est.values, free, truth))
-        };
+    let fit = |model: &crate::aero::AeroModel,
+               t: &IdentifiedTfs|
+     -> Result<Vec<(String, f64)>, AeroError> {
+        let est = estimate_derivatives(model, t, free, FitOptions::default())?;
+        Ok(errors(&est.values, free, truth))
+    };
     let base = fit(prior, tfs)?;
     // (words, errors after this step); the contribution of a step is previous − this.
     let mut steps: Vec<(String, Vec<(String, f64)>)> = Vec::new();
@@ -790,7 +779,7 @@ mod tests {
     use crate::aero::model::tests::c172x_model;
     use crate::aero::model::TfOutput;
     use crate::aero::regression::RegressionTerm;
-    use crate::aero::spec::full_assumptions;
+    use crate::study::spec::full_assumptions;
 
     /// Normal-equation solve (a different path from the SVD in `ls_solve`), for checking.
     fn normal_solve(cols: &[Vec<f64>], y: &[f64]) -> Vec<f64> {

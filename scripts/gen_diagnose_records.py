@@ -1,0 +1,394 @@
+#!/usr/bin/env python3
+"""Independent generator of diagnose test records: JSBSim's c172x through JSBSim's own Python API.
+
+It shares nothing with flightid's bridge or `fly`: its own private aircraft copy, its own actuator, its own
+sample timing. Each case is a pair of records (training and validation) of the same aircraft with the same
+hidden effects, flown at a random trim point and heading, with sensor noise and optionally light turbulence:
+
+  * simulation at 100-200 Hz, logged at 20-50 Hz (the logged value is the instantaneous value at the log time);
+  * 30-90 s per record, the maneuvers in sequence: elevator 3-2-1-1, aileron doublet, rudder doublet, elevator
+    doublet, with quiet flight in between so that the slow modes (phugoid, spiral) drift;
+  * the surface deflection moves through a first-order actuator with a rate limit (not a sample-and-hold);
+  * 0-3 hidden effects drawn from the whole diagnose catalogue (the truth is written beside each CSV).
+
+Hidden effects and how they are made:
+  input_delay / actuator_lag / control_effectiveness: the aero model reads k * lag(delay(delta)) of the logged
+      deflection delta (the private copy's aero functions read a declared property the script sets each step);
+  sensor_bias / sensor_scale: the logged column is k * true + b;
+  aero_derivative: the coefficient function is multiplied by a declared factor property;
+  aero_nonlinearity: an added term (Cm_alpha2: dCm = k alpha^2, CL_alpha2: dCL = k alpha^2, alpha in rad).
+
+Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--turbulence] [--clean-share 0.25] [--first K]
+Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema).
+"""
+
+import argparse
+import json
+import math
+import os
+import shutil
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+_STDOUT = os.dup(1)
+os.dup2(2, 1)  # JSBSim's C++ console output goes to stderr
+import jsbsim  # noqa: E402
+
+FT = 0.3048
+KT = 0.514444
+
+SURFACES = {
+    # surface: (aircraft position property the aero model reads, its magnitude property or None, command)
+    "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
+    "aileron": ("fcs/effective-aileron-pos", None, "fcs/aileron-cmd-norm"),
+    "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
+}
+# DESIGN vocabulary name -> c172x coefficient function
+DERIVATIVES = {
+    "CL_alpha": "CLwbh", "CD_0": "CDo", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "Cmde",
+    "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "Clda", "Cn_beta": "Cnb",
+    "Cn_r": "Cnr", "Cn_dr": "Cndr", "Cm_alphadot": "Cmadot", "Cn_p": "Cnp", "Cl_dr": "Cldr",
+    "Cn_da": "Cnda", "Cm_0": "Cmo",
+}
+ADDED = {
+    "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
+    "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
+}
+LOGGED = [
+    # column, property, factor
+    ("phi_rad", "attitude/phi-rad", 1.0), ("theta_rad", "attitude/theta-rad", 1.0),
+    ("psi_rad", "attitude/psi-rad", 1.0),
+    ("p_rad_s", "velocities/p-rad_sec", 1.0), ("q_rad_s", "velocities/q-rad_sec", 1.0),
+    ("r_rad_s", "velocities/r-rad_sec", 1.0),
+    ("alpha_rad", "aero/alpha-rad", 1.0), ("beta_rad", "aero/beta-rad", 1.0),
+    ("airspeed_m_s", "velocities/vt-fps", FT), ("altitude_m", "position/h-sl-meters", 1.0),
+    ("ax_m_s2", "accelerations/a-pilot-x-ft_sec2", FT), ("ay_m_s2", "accelerations/a-pilot-y-ft_sec2", FT),
+    ("az_m_s2", "accelerations/a-pilot-z-ft_sec2", FT),
+]
+# Noise standard deviations at "level 1" (scaled by a random level per case): 0.05 deg attitude, 0.1 deg/s rates
+NOISE = {
+    "phi_rad": 0.0009, "theta_rad": 0.0009, "psi_rad": 0.0017, "p_rad_s": 0.0017, "q_rad_s": 0.0017,
+    "r_rad_s": 0.0017, "alpha_rad": 0.0012, "beta_rad": 0.0012, "airspeed_m_s": 0.1, "altitude_m": 0.3,
+    "ax_m_s2": 0.03, "ay_m_s2": 0.03, "az_m_s2": 0.03,
+}
+
+
+def private_aircraft(root):
+    """root/aircraft/c172x with declared effect properties; engine/ and systems/ linked to the package's."""
+    pkg = jsbsim.get_default_root_dir()
+    for sub in ("engine", "systems"):
+        os.symlink(os.path.join(pkg, sub), os.path.join(root, sub))
+    src = os.path.join(pkg, "aircraft", "c172x")
+    dst = os.path.join(root, "aircraft", "c172x")
+    os.makedirs(dst)
+    for f in os.listdir(src):
+        if f != "c172x.xml":
+            s = os.path.join(src, f)
+            (shutil.copytree if os.path.isdir(s) else shutil.copy)(s, os.path.join(dst, f))
+    tree = ET.parse(os.path.join(src, "c172x.xml"))
+    top = tree.getroot()
+    for tag in ("output", "input"):
+        for e in top.findall(tag):
+            top.remove(e)
+    aero = top.find("aerodynamics")
+    head = []
+
+    def declare(name, value):
+        p = ET.Element("property", {"value": repr(float(value))})
+        p.text = name
+        head.append(p)
+
+    for s, (pos, mag, _cmd) in SURFACES.items():
+        declare(f"gen/eff/{s}", 1.0)
+        declare(f"gen/override/{s}", 0.0)
+        declare(f"gen/drive/{s}-rad", 0.0)
+        head.append(ET.fromstring(
+            f'<function name="gen/aero/{s}-rad"><product><property>gen/eff/{s}</property><sum>'
+            f'<product><property>{pos}</property><difference><value>1</value>'
+            f'<property>gen/override/{s}</property></difference></product>'
+            f'<product><property>gen/override/{s}</property><property>gen/drive/{s}-rad</property></product>'
+            f'</sum></product></function>'))
+        if mag:
+            head.append(ET.fromstring(
+                f'<function name="gen/aero/{s}-mag"><abs><property>gen/aero/{s}-rad</property></abs></function>'))
+    for name in DERIVATIVES.values():
+        declare(f"gen/factor/{name}", 1.0)
+    for name in ADDED:
+        declare(f"gen/added/{name}", 0.0)
+    for i, e in enumerate(head):
+        aero.insert(i, e)
+    replace = {}
+    for s, (pos, mag, _cmd) in SURFACES.items():
+        replace[pos] = f"gen/aero/{s}-rad"
+        if mag:
+            replace[mag] = f"gen/aero/{s}-mag"
+    for axis in aero.iter("axis"):
+        for el in axis.iter():
+            if el.tag in ("property", "independentVar") and el.text and el.text.strip() in replace:
+                el.text = replace[el.text.strip()]
+        for fn in axis.findall("function"):
+            coef = fn.get("name", "").split("/")[-1]
+            if coef in DERIVATIVES.values():
+                body = [c for c in fn if c.tag != "description"]
+                for c in body:
+                    fn.remove(c)
+                prod = ET.SubElement(fn, "product")
+                prod.extend(body)
+                ET.SubElement(prod, "property").text = f"gen/factor/{coef}"
+    axes = {a.get("name"): a for a in aero.iter("axis")}
+    for name, (axis, factors) in ADDED.items():
+        props = "".join(f"<property>{p}</property>" for p in factors)
+        axes[axis].append(ET.fromstring(
+            f'<function name="gen/term/{name}"><product>{props}<property>aero/alpha-rad</property>'
+            f'<property>aero/alpha-rad</property><property>gen/added/{name}</property></product></function>'))
+    tree.write(os.path.join(dst, "c172x.xml"))
+
+
+class Aircraft:
+    def __init__(self, root, sim_hz):
+        self.fdm = jsbsim.FGFDMExec(root)
+        self.fdm.set_dt(1.0 / sim_hz)
+        self.fdm.set_output_path(root)
+        self.fdm.load_model("c172x")
+        self.fdm.disable_output()
+        self.sim_hz = sim_hz
+
+    def trim(self, cond, effects):
+        fdm = self.fdm
+        fdm["ic/lat-geod-deg"] = cond["latitude_deg"]
+        fdm["ic/long-gc-deg"] = cond["longitude_deg"]
+        fdm["ic/h-sl-ft"] = cond["altitude_ft"]
+        fdm["ic/vt-kts"] = cond["speed_kts"]
+        fdm["ic/psi-true-deg"] = cond["heading_deg"]
+        fdm["ic/gamma-deg"] = 0.0
+        for s in SURFACES:
+            fdm[f"gen/override/{s}"] = 0.0
+            fdm[f"gen/eff/{s}"] = 1.0
+        for name in DERIVATIVES.values():
+            fdm[f"gen/factor/{name}"] = 1.0
+        for name in ADDED:
+            fdm[f"gen/added/{name}"] = 0.0
+        for e in effects:
+            if e["effect"] == "control_effectiveness":
+                fdm[f"gen/eff/{e['target']}"] = e["value"]
+            elif e["effect"] == "aero_derivative":
+                fdm[f"gen/factor/{DERIVATIVES[e['target']]}"] = e["value"]
+            elif e["effect"] == "aero_nonlinearity":
+                fdm[f"gen/added/{e['target']}"] = e["value"]
+        fdm["atmosphere/turb-type"] = 0
+        fdm.run_ic()
+        fdm["propulsion/set-running"] = -1
+        fdm["fcs/mixture-cmd-norm"] = 1.0
+        fdm["simulation/do_simple_trim"] = 1
+        return {s: fdm[SURFACES[s][0]] for s in SURFACES}
+
+
+def maneuvers(rng, duration_s, validation):
+    """Command deviations (rad of surface) as functions of time: the four maneuvers in sequence."""
+    slots = [0.06, 0.30, 0.50, 0.72] if not validation else [0.05, 0.27, 0.52, 0.75]
+    t0 = [max(1.0, f * duration_s + rng.uniform(-1.0, 1.0)) for f in slots]
+    a = {
+        "e3211": rng.uniform(0.025, 0.045) * rng.choice([-1, 1]),
+        "ad": rng.uniform(0.04, 0.08) * rng.choice([-1, 1]),
+        "rd": rng.uniform(0.05, 0.09) * rng.choice([-1, 1]),
+        "ed": rng.uniform(0.025, 0.045) * rng.choice([-1, 1]),
+    }
+    pulse_e = rng.uniform(0.35, 0.6)
+    pulse_a = rng.uniform(0.6, 1.2)
+    pulse_r = rng.uniform(0.7, 1.3)
+    pulse_ed = rng.uniform(0.6, 1.0)
+
+    def sequence(t, start, pulses, amp):
+        u, s = 0.0, start
+        for width, sign in pulses:
+            if s <= t < s + width:
+                u = sign * amp
+            s += width
+        return u
+
+    def cmd(t):
+        return {
+            "elevator": sequence(t, t0[0], [(3 * pulse_e, 1), (2 * pulse_e, -1), (pulse_e, 1), (pulse_e, -1)],
+                                 a["e3211"])
+            + sequence(t, t0[3], [(pulse_ed, 1), (pulse_ed, -1)], a["ed"]),
+            "aileron": sequence(t, t0[1], [(pulse_a, 1), (pulse_a, -1)], a["ad"]),
+            "rudder": sequence(t, t0[2], [(pulse_r, 1), (pulse_r, -1)], a["rd"]),
+        }
+    return cmd
+
+
+def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation):
+    fdm = ac.fdm
+    trim = ac.trim(cond, effects)
+    fdm["gen/override/elevator"] = 0.0
+    dt = 1.0 / ac.sim_hz
+    per_log = int(round(ac.sim_hz / log_hz))
+    n_steps = int(round(duration_s * ac.sim_hz))
+    delay = {e["target"]: e["value"] for e in effects if e["effect"] == "input_delay"}
+    lag = {e["target"]: e["value"] for e in effects if e["effect"] == "actuator_lag"}
+    hist = {s: [trim[s]] for s in SURFACES}  # true deflection at every sim step
+    lagged = dict(trim)
+    pos = dict(trim)
+    for s in SURFACES:
+        fdm[f"gen/drive/{s}-rad"] = trim[s]
+        fdm[f"gen/override/{s}"] = 1.0
+    if turbulence:
+        fdm["atmosphere/turb-type"] = 3
+        fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_ft_sec"] = rng.uniform(10.0, 20.0)
+        fdm["atmosphere/turbulence/milspec/severity"] = 1
+    cmd = maneuvers(rng, duration_s, validation)
+    tau_act, rate_max = 0.04, 1.2  # the aircraft's own actuator: first order with a rate limit
+    rows = []
+
+    def log(t):
+        row = {"time_s": t}
+        for s in SURFACES:
+            row[f"{s}_rad"] = pos[s]
+        row["throttle"] = fdm["fcs/throttle-cmd-norm[0]"]
+        for col, prop, f in LOGGED:
+            row[col] = fdm[prop] * f
+        rows.append(row)
+
+    log(0.0)
+    for k in range(1, n_steps + 1):
+        t = k * dt
+        c = cmd(t)
+        for s in SURFACES:
+            target = trim[s] + c[s]
+            step = (target - pos[s]) * (1.0 - math.exp(-dt / tau_act))
+            pos[s] += max(-rate_max * dt, min(rate_max * dt, step))
+            hist[s].append(pos[s])
+            d = pos[s]
+            if s in delay:  # continuous-time delay at the sim rate, linear interpolation
+                back = delay[s] / dt
+                i = len(hist[s]) - 1 - back
+                i0 = max(0, int(math.floor(i)))
+                fr = i - math.floor(i) if i >= 0 else 0.0
+                d = hist[s][i0] if i0 + 1 >= len(hist[s]) else (1 - fr) * hist[s][i0] + fr * hist[s][i0 + 1]
+            if s in lag:
+                lagged[s] += (d - lagged[s]) * (1.0 - math.exp(-dt / lag[s]))
+                d = lagged[s]
+            fdm[f"gen/drive/{s}-rad"] = d
+        fdm.run()
+        if k % per_log == 0:
+            log(t)
+    return rows
+
+
+def sensors(rows, effects, noise_level, rng):
+    cols = list(rows[0].keys())
+    data = {c: np.array([r[c] for r in rows]) for c in cols}
+    for e in effects:
+        if e["effect"] == "sensor_scale":
+            data[e["target"]] = data[e["target"]] * e["value"]
+        elif e["effect"] == "sensor_bias":
+            data[e["target"]] = data[e["target"]] + e["value"]
+    for c, sd in NOISE.items():
+        data[c] = data[c] + rng.normal(0.0, sd * noise_level, len(rows))
+    data["psi_rad"] = np.mod(data["psi_rad"] + math.pi, 2 * math.pi) - math.pi
+    return cols, data
+
+
+def write_csv(path, cols, data, meta):
+    with open(path, "w") as f:
+        for k, v in meta.items():
+            f.write(f"# {k}: {v}\n")
+        f.write(",".join(cols) + "\n")
+        for i in range(len(data["time_s"])):
+            f.write(",".join(f"{data[c][i]:.9g}" for c in cols) + "\n")
+
+
+# The catalogue the effects are drawn from: (effect, target, magnitude range, both signs, null)
+DEG = math.pi / 180
+CATALOGUE = (
+    [("input_delay", s, (0.05, 0.15), False, 0.0) for s in SURFACES]
+    + [("actuator_lag", s, (0.08, 0.25), False, 0.0) for s in SURFACES]
+    + [("control_effectiveness", s, (0.25, 0.5), True, 1.0) for s in SURFACES]
+    + [("sensor_bias", c, r, True, 0.0) for c, r in [
+        ("phi_rad", (1.0 * DEG, 2.0 * DEG)), ("theta_rad", (1.0 * DEG, 2.0 * DEG)),
+        ("p_rad_s", (0.5 * DEG, 1.0 * DEG)), ("q_rad_s", (0.5 * DEG, 1.0 * DEG)), ("r_rad_s", (0.5 * DEG, 1.0 * DEG)),
+        ("alpha_rad", (1.0 * DEG, 2.0 * DEG)), ("beta_rad", (1.0 * DEG, 2.0 * DEG)),
+        ("ax_m_s2", (0.2, 0.4)), ("ay_m_s2", (0.2, 0.4)), ("az_m_s2", (0.2, 0.4))]]
+    + [("sensor_scale", c, (0.1, 0.2), True, 1.0) for c in
+       ["p_rad_s", "q_rad_s", "r_rad_s", "alpha_rad", "beta_rad", "phi_rad", "theta_rad"]]
+    + [("aero_derivative", d, (0.3, 0.6), True, 1.0) for d in
+       ["CL_alpha", "Cm_alpha", "Cm_q", "Cm_de", "Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr", "CY_beta"]]
+    + [("aero_nonlinearity", "Cm_alpha2", (4.0, 8.0), True, 0.0),
+       ("aero_nonlinearity", "CL_alpha2", (15.0, 30.0), True, 0.0)]
+)
+
+
+def draw_effects(rng, n):
+    effects, used = [], set()
+    while len(effects) < n:
+        eff, target, (lo, hi), both, null = CATALOGUE[rng.integers(len(CATALOGUE))]
+        key = (eff if eff not in ("input_delay", "actuator_lag", "control_effectiveness") else "signal", target)
+        if key in used or (eff, target) in used:
+            continue
+        used.add(key)
+        used.add((eff, target))
+        m = rng.uniform(lo, hi)
+        sign = rng.choice([-1.0, 1.0]) if both else 1.0
+        value = null + sign * m
+        effects.append({"effect": eff, "target": target, "value": float(value)})
+    return effects
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--cases", type=int, default=40)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--turbulence", action="store_true")
+    ap.add_argument("--clean-share", type=float, default=0.25)
+    ap.add_argument("--multi-share", type=float, default=0.25)
+    ap.add_argument("--first", type=int, default=0, help="first case index (for splitting work)")
+    ap.add_argument("--effects", default=None,
+                    help="JSON list of effects for every case instead of random draws ('[]' = clean)")
+    ap.add_argument("--duration", type=float, default=None, help="record length, s (default random 30-90)")
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    root = tempfile.mkdtemp(prefix="gen-diag-")
+    private_aircraft(root)
+    rates = [(100, 20), (100, 25), (100, 50), (120, 40), (200, 50), (200, 40), (120, 20)]
+    try:
+        aircraft = {}
+        for i in range(args.first, args.first + args.cases):
+            rng = np.random.default_rng([args.seed, i])
+            sim_hz, log_hz = rates[rng.integers(len(rates))]
+            if sim_hz not in aircraft:
+                aircraft[sim_hz] = Aircraft(root, sim_hz)
+            ac = aircraft[sim_hz]
+            u = rng.uniform()
+            if args.effects is not None:
+                effects = json.loads(args.effects)
+            else:
+                n = 0 if u < args.clean_share else (1 if u < 1 - args.multi_share else int(rng.integers(2, 4)))
+                effects = draw_effects(rng, n)
+            cond = {
+                "altitude_ft": float(rng.uniform(2000, 8000)), "speed_kts": float(rng.uniform(85, 115)),
+                "heading_deg": float(rng.uniform(0, 360)), "latitude_deg": float(rng.uniform(-60, 60)),
+                "longitude_deg": float(rng.uniform(-180, 180)),
+            }
+            duration = args.duration or float(rng.uniform(30, 90))
+            noise_level = float(rng.uniform(0.5, 1.0))
+            truth = {"effects": effects, "condition": cond, "sim_rate_hz": sim_hz, "log_rate_hz": log_hz,
+                     "duration_s": duration, "noise_level": noise_level, "turbulence": args.turbulence,
+                     "seed": args.seed, "case": i}
+            for part, validation in (("train", False), ("valid", True)):
+                rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation)
+                cols, data = sensors(rows, effects, noise_level, rng)
+                write_csv(os.path.join(args.out, f"case_{i:03d}_{part}.csv"), cols, data,
+                          {"generator": "gen_diagnose_records.py (JSBSim c172x, own API)", "case": i})
+            with open(os.path.join(args.out, f"case_{i:03d}_truth.json"), "w") as f:
+                json.dump(truth, f, indent=1)
+            os.write(_STDOUT, f"case {i}: {json.dumps(effects)}\n".encode())
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,132 @@
+//! Stage 1, prepare: the records on a uniform grid with their trim points, the channels the simulation can be
+//! compared on, the noise weights, and the catalogue entries the record can identify.
+
+use super::extension::{self, Extension, Stage};
+use super::replay::{self, ReplayCase};
+use super::search::Worker;
+use super::{residual, sim_err, DiagnoseError, Skipped};
+use crate::data::FlightRecord;
+
+/// Everything the later stages need about the records and the catalogue.
+pub struct Prepared {
+    /// The training record prepared for replay.
+    pub case: ReplayCase,
+    /// Noise standard deviation per compared channel of the training record (order of `case.outputs`).
+    pub sigma: Vec<f64>,
+    /// The validation record and its noise standard deviations.
+    pub valid: Option<(ReplayCase, Vec<f64>)>,
+    /// Catalogue entries that are evaluated.
+    pub catalogue: Vec<Box<dyn Extension>>,
+    /// Catalogue entries left out, with the reason.
+    pub skipped: Vec<Skipped>,
+    /// Conditions that limit what the verdict can be trusted for.
+    pub warnings: Vec<String>,
+}
+
+impl Prepared {
+    /// The evaluated catalogue entries as references.
+    pub fn entries(&self) -> Vec<&dyn Extension> {
+        self.catalogue.iter().map(|b| b.as_ref()).collect()
+    }
+}
+
+/// Noise standard deviation per output channel, floored at 10⁻³ of the channel's spread (noise-free data).
+pub fn weights(case: &ReplayCase) -> Vec<f64> {
+    case.outputs
+        .iter()
+        .map(|c| {
+            let y = case.measured(c);
+            let m = y.iter().sum::<f64>() / y.len() as f64;
+            let sd = (y.iter().map(|v| (v - m).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
+            residual::noise_std(y).max(1e-3 * sd).max(1e-9)
+        })
+        .collect()
+}
+
+/// Prepares the training and validation records and the catalogue for the simulation of `worker`.
+pub fn prepare(
+    worker: &mut Worker,
+    train: &FlightRecord,
+    valid: Option<&FlightRecord>,
+) -> Result<Prepared, DiagnoseError> {
+    let mut case = ReplayCase::new(train)?;
+    let mut vcase = valid.map(ReplayCase::new).transpose()?;
+    if let Some(v) = &vcase {
+        if (v.rate_hz - case.rate_hz).abs() > 1e-6 * case.rate_hz {
+            return Err(DiagnoseError::BadData(format!(
+                "validation record rate {:.3} Hz differs from the training record rate {:.3} Hz",
+                v.rate_hz, case.rate_hz
+            )));
+        }
+    }
+    // A surface without a column is held at its trim in the replay: if it moved in flight, its effect is
+    // unmodelled and any cause named on the axes it drives is suspect.
+    let mut warnings: Vec<String> = replay::INPUTS
+        .iter()
+        .filter(|(_, c)| train.column(c).is_none())
+        .map(|(s, c)| {
+            format!(
+                "no {c} column: the replay holds the {s} at its trim value; if it moved in flight, \
+                 causes named on the axes it drives are not trustworthy"
+            )
+        })
+        .collect();
+    // Compare only the channels the simulation produces (a linear model may lack accelerations).
+    let (probe, _) = replay::replay(worker.sim.as_mut(), &case, &[]).map_err(sim_err("replay"))?;
+    let missing: Vec<String> = case
+        .outputs
+        .iter()
+        .filter(|c| probe.column(c).is_none())
+        .cloned()
+        .collect();
+    if !missing.is_empty() {
+        warnings.push(format!(
+            "the simulation does not produce {}: not compared",
+            missing.join(", ")
+        ));
+        for c in [Some(&mut case), vcase.as_mut()].into_iter().flatten() {
+            c.outputs.retain(|o| !missing.contains(o));
+        }
+    }
+    let coeffs = worker.sim.coefficient_names();
+    let added = worker.sim.added_term_names();
+    let (all, skipped_raw) = extension::catalogue(&case.record, &coeffs, &added);
+    let mut skipped: Vec<Skipped> = skipped_raw
+        .into_iter()
+        .map(|(effect, target, reason)| Skipped {
+            effect,
+            target,
+            reason,
+        })
+        .collect();
+    // Inputs that do not move cannot reveal signal-path effects.
+    let still: Vec<String> = case
+        .inputs
+        .iter()
+        .filter(|(_, d)| d.iter().all(|v| v.abs() < 1e-6))
+        .map(|(s, _)| s.clone())
+        .collect();
+    let mut catalogue = Vec::new();
+    for e in all {
+        if e.stage() == Stage::Input && still.iter().any(|s| s == e.target()) {
+            skipped.push(Skipped {
+                effect: e.effect().into(),
+                target: e.target().into(),
+                reason: "the input does not move in the record".into(),
+            });
+        } else {
+            catalogue.push(e);
+        }
+    }
+    Ok(Prepared {
+        sigma: weights(&case),
+        valid: vcase.map(|v| {
+            let s = weights(&v);
+            (v, s)
+        }),
+        case,
+        catalogue,
+        skipped,
+        warnings,
+    })
+}

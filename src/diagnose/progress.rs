@@ -1,0 +1,65 @@
+//! Progress of the search on the terminal (candidate round, fits and simulations done); quiet when stderr is
+//! not a terminal. It also counts the simulations for the diagnosis.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Simulation counter and (on a terminal) a progress line.
+pub struct Progress {
+    bar: indicatif::ProgressBar,
+    simulations: AtomicUsize,
+    round: AtomicUsize,
+}
+
+impl Progress {
+    /// A progress line on stderr when `show` and stderr is a terminal; otherwise only the counter.
+    pub fn new(show: bool) -> Self {
+        let bar = if show && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+            let b = indicatif::ProgressBar::new(0);
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "diagnose: round {prefix} {bar:30} {pos}/{len} fits  {msg}  {elapsed}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            b
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        Progress {
+            bar,
+            simulations: AtomicUsize::new(0),
+            round: AtomicUsize::new(0),
+        }
+    }
+
+    /// A new selection round with `fits` candidate fits planned.
+    pub fn round(&self, round: usize, fits: usize) {
+        self.round.store(round, Ordering::Relaxed);
+        self.bar.set_prefix((round + 1).to_string());
+        self.bar.set_length(fits as u64);
+        self.bar.set_position(0);
+    }
+
+    /// One fit done with `simulations` simulations (0: only simulations, no fit, when `simulations` is counted
+    /// by [`Progress::simulated`]).
+    pub fn fitted(&self, simulations: usize) {
+        self.simulated(simulations);
+        self.bar.inc(1);
+    }
+
+    /// Simulations run outside a fit.
+    pub fn simulated(&self, simulations: usize) {
+        let n = self.simulations.fetch_add(simulations, Ordering::Relaxed) + simulations;
+        self.bar.set_message(format!("{n} simulations"));
+    }
+
+    /// Simulations counted so far.
+    pub fn simulations(&self) -> usize {
+        self.simulations.load(Ordering::Relaxed)
+    }
+
+    /// Removes the progress line.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}

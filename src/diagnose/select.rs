@@ -1,0 +1,365 @@
+//! Stage 3, select: forward selection over the catalogue.
+//!
+//! - Identifiability, before any fit: the Fisher information of each entry's parameter on this record,
+//!   I = Σ_k s_k² with s = ∂r/∂θ the noise-normalised residual sensitivity at "no effect". An entry whose
+//!   Cramér–Rao bound 1/√I exceeds a third of its resolution (the smallest effect worth naming) cannot be named
+//!   from this record (an input that does not move, an output that is not measured) and is skipped.
+//! - Screening, each round: the score (Lagrange-multiplier) test of every remaining entry, the cost reduction
+//!   of one Gauss–Newton step from "no effect", ΔJ = (sᵀr)² / (sᵀs) (Rao 1948; the stepwise idea of Klein &
+//!   Morelli, Aircraft System Identification, §5.4), with the sensitivities of the unextended model.
+//! - The best few are fitted by output error jointly with the effects already selected and judged: an interior
+//!   optimum, at least the resolution away from "no effect" and determined to a third of it, BIC with the
+//!   effective sample count, distance from "no effect" in standard errors, a share of the cost explained.
+//! - The validation record never picks: the gain of the accepted effects on it is only reported.
+//! - Significant candidates that fit as well and whose sensitivities are nearly parallel to the chosen one's
+//!   form its ambiguity group.
+
+use super::baseline::Baseline;
+use super::extension::Extension;
+use super::prepare::Prepared;
+use super::progress::Progress;
+use super::search::{
+    self, effective_n, fit, lag_window, null_sensitivity, par_map, residuals, Active, FitOutcome,
+    Weighted, Worker,
+};
+use super::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause, Skipped};
+
+/// The outcome of the selection.
+pub struct Selection<'e> {
+    /// The accepted effects with their fitted values.
+    pub selected: Vec<Active<'e>>,
+    /// The named causes (in order of selection).
+    pub named: Vec<NamedCause>,
+    /// Every evaluated candidate.
+    pub candidates: Vec<Candidate>,
+    /// Catalogue entries the record cannot identify.
+    pub unidentifiable: Vec<Skipped>,
+}
+
+/// The selected effects (free or held) plus one candidate, free, starting at `start` (its first parameter,
+/// clamped into its range; the others at their null values).
+fn with_candidate<'e>(
+    selected: &[Active<'e>],
+    e: &'e dyn Extension,
+    start: f64,
+    free_selected: bool,
+) -> Vec<Active<'e>> {
+    let mut a: Vec<Active<'e>> = selected
+        .iter()
+        .map(|s| Active {
+            free: free_selected,
+            ..s.clone()
+        })
+        .collect();
+    let mut params: Vec<f64> = e.params().iter().map(|p| p.null).collect();
+    let spec = e.params()[0];
+    if start.is_finite() {
+        params[0] = start.clamp(spec.min, spec.max);
+    }
+    a.push(Active {
+        ext: e,
+        params,
+        free: true,
+    });
+    a
+}
+
+/// Costs a round's criterion is measured against.
+struct RoundContext {
+    round: usize,
+    base_cost: f64,
+    floor: f64,
+}
+
+impl RoundContext {
+    /// ΔBIC = n_eff ln(max(J₁, f·n) / max(J₀, f·n)) + k ln n_eff (Schwarz 1978; one more parameter per
+    /// candidate, the selected effects being counted in the base model).
+    fn bic(&self, e: &dyn Extension, o: &FitOutcome) -> f64 {
+        let k = e.params().len() as f64;
+        o.n_eff * (o.cost_after.max(self.floor) / self.base_cost.max(self.floor)).ln()
+            + k * o.n_eff.ln()
+    }
+
+    fn candidate(&self, e: &dyn Extension, o: &FitOutcome, full_fit: bool) -> Candidate {
+        let k = o.values.len() - 1;
+        Candidate {
+            effect: e.effect().into(),
+            target: e.target().into(),
+            value: o.values[k],
+            std_error: o.std_errors[k],
+            cost_before: self.base_cost,
+            cost_after: o.cost_after,
+            criterion: "BIC".into(),
+            criterion_delta: self.bic(e, o),
+            z: (o.values[k] - e.params()[0].null).abs() / o.std_errors[k].max(1e-300),
+            n_eff: o.n_eff,
+            validation_gain: None,
+            rejected_because: None,
+            round: self.round,
+            full_fit,
+        }
+    }
+}
+
+/// Why a fully fitted candidate is not significant (None: it is).
+fn rejection(
+    c: &Candidate,
+    e: &dyn Extension,
+    o: &FitOutcome,
+    base_cost: f64,
+    opts: &DiagnoseOptions,
+) -> Option<String> {
+    let rel = 1.0 - o.cost_after / base_cost;
+    let spec = e.params()[0];
+    let at_bound = (c.value - spec.min).abs() <= 1e-9 * spec.min.abs().max(1.0)
+        || (c.value - spec.max).abs() <= 1e-9 * spec.max.abs().max(1.0);
+    let crb = o.crb_std_errors.last().copied().unwrap_or(f64::INFINITY);
+    if at_bound {
+        // No interior optimum: the effect explains something else (a missing input, another effect).
+        Some(format!(
+            "value at the bound of its range [{}, {}]",
+            spec.min, spec.max
+        ))
+    } else if (c.value - spec.null).abs() < spec.resolution {
+        Some(format!(
+            "smaller than the resolution {} of the effect",
+            spec.resolution
+        ))
+    } else if 3.0 * crb > spec.resolution {
+        Some(format!(
+            "not determined by the record (Cramér–Rao σ {crb:.3e} > a third of the resolution {})",
+            spec.resolution
+        ))
+    } else if c.criterion_delta >= opts.bic_threshold {
+        Some(format!(
+            "ΔBIC {:.1} ≥ {}",
+            c.criterion_delta, opts.bic_threshold
+        ))
+    } else if c.z <= opts.min_z {
+        Some(format!("|z| {:.1} ≤ {}", c.z, opts.min_z))
+    } else if rel <= opts.min_relative_reduction {
+        Some(format!("explains {:.1} % of the cost", 100.0 * rel))
+    } else {
+        None
+    }
+}
+
+/// The score test of one entry: the one-step Gauss–Newton estimate from "no effect" and its cost
+/// reduction (sᵀr)²/(sᵀs), with the Cramér–Rao bound √(J/n)/√(sᵀs).
+fn score_test(e: &dyn Extension, s: &[f64], r: &[f64], cost: f64, n_eff: f64) -> FitOutcome {
+    let ss: f64 = s.iter().map(|v| v * v).sum();
+    let sr: f64 = s.iter().zip(r).map(|(a, b)| a * b).sum();
+    let null = e.params()[0].null;
+    let (step, drop) = if ss > 0.0 {
+        (-sr / ss, sr * sr / ss)
+    } else {
+        (0.0, 0.0)
+    };
+    let se = (cost / r.len().max(1) as f64).sqrt() / ss.sqrt();
+    FitOutcome {
+        cost_before: cost,
+        cost_after: cost - drop,
+        values: vec![null + step],
+        std_errors: vec![se],
+        crb_std_errors: vec![se],
+        n_eff,
+        sensitivities: Vec::new(),
+        evaluations: 0,
+    }
+}
+
+/// The catalogue entries the record can identify, their sensitivities at the unextended model, and the
+/// others with the reason (Cramér–Rao bound 1/√(sᵀs) above a third of the entry's resolution).
+#[allow(clippy::type_complexity)]
+fn identifiable<'e>(
+    workers: &mut [Worker],
+    w: &Weighted,
+    p: &'e Prepared,
+    progress: &Progress,
+) -> Result<(Vec<&'e dyn Extension>, Vec<Vec<f64>>, Vec<Skipped>), DiagnoseError> {
+    let entries = p.entries();
+    let r0 = residuals(&mut workers[0], w, &[]).map_err(sim_err("replay"))?;
+    progress.round(0, entries.len());
+    let sens = par_map(workers, &entries, |wk, e| {
+        let out = null_sensitivity(wk, w, &[], *e, &r0);
+        progress.fitted(1);
+        out
+    });
+    let (mut keep, mut keep_sens, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
+    for (e, s) in entries.into_iter().zip(sens) {
+        let s = s.map_err(sim_err("replay"))?;
+        let info: f64 = s.iter().map(|v| v * v).sum();
+        let crb = 1.0 / info.sqrt();
+        let res = e.params()[0].resolution;
+        if 3.0 * crb > res {
+            skipped.push(Skipped {
+                effect: e.effect().into(),
+                target: e.target().into(),
+                reason: format!(
+                    "the record cannot identify it: Cramér–Rao σ {crb:.3e} from the Fisher information \
+                     exceeds a third of the resolution {res}"
+                ),
+            });
+        } else {
+            keep.push(e);
+            keep_sens.push(s);
+        }
+    }
+    Ok((keep, keep_sens, skipped))
+}
+
+type FullFit<'e> = Result<(FitOutcome, Vec<Active<'e>>), crate::sim::SimError>;
+
+/// Forward selection over the prepared catalogue.
+pub fn select<'e>(
+    workers: &mut [Worker],
+    p: &'e Prepared,
+    base: &Baseline,
+    opts: &DiagnoseOptions,
+    progress: &Progress,
+) -> Result<Selection<'e>, DiagnoseError> {
+    let w = Weighted {
+        case: &p.case,
+        sigma: p.sigma.clone(),
+    };
+    let vw = p.valid.as_ref().map(|(v, s)| Weighted {
+        case: v,
+        sigma: s.clone(),
+    });
+    let (catalogue, sens, unidentifiable) = identifiable(workers, &w, p, progress)?;
+    let n_eff_lags = lag_window(&p.case);
+    let mut selected: Vec<Active> = Vec::new();
+    let mut named: Vec<NamedCause> = Vec::new();
+    let mut candidates = Vec::new();
+    let mut base_cost = base.cost;
+    let mut valid_cost = base.valid_cost;
+    for round in 0..opts.max_effects {
+        let pool: Vec<usize> = (0..catalogue.len())
+            .filter(|&i| {
+                !selected.iter().any(|s| {
+                    s.ext.effect() == catalogue[i].effect()
+                        && s.ext.target() == catalogue[i].target()
+                })
+            })
+            .collect();
+        progress.round(round, opts.full_fit_top);
+        // Screening: the score test of every remaining entry at the current model's residual.
+        let r = residuals(&mut workers[0], &w, &selected).map_err(sim_err("replay"))?;
+        progress.simulated(1);
+        let n_eff_now = effective_n(&r, p.case.len(), n_eff_lags);
+        let cost_now: f64 = r.iter().map(|v| v * v).sum();
+        let quick: Vec<FitOutcome> = pool
+            .iter()
+            .map(|&i| score_test(catalogue[i], &sens[i], &r, cost_now, n_eff_now))
+            .collect();
+        let mut order: Vec<usize> = (0..pool.len()).collect();
+        order.sort_by(|&a, &b| quick[a].cost_after.total_cmp(&quick[b].cost_after));
+        let top: Vec<usize> = order.iter().take(opts.full_fit_top).copied().collect();
+        let ctx = RoundContext {
+            round,
+            base_cost,
+            floor: opts.residual_floor * w.n() as f64,
+        };
+        for (j, o) in quick.iter().enumerate() {
+            if !top.contains(&j) {
+                candidates.push(ctx.candidate(catalogue[pool[j]], o, false));
+            }
+        }
+        let top_exts: Vec<&dyn Extension> = top.iter().map(|&j| catalogue[pool[j]]).collect();
+        // Full pass: the top candidates jointly with the selected effects, from the score test's estimate.
+        let starts: Vec<(&dyn Extension, f64)> = top
+            .iter()
+            .map(|&j| (catalogue[pool[j]], quick[j].values[0]))
+            .collect();
+        let full: Vec<FullFit> = par_map(workers, &starts, |wk, (e, start)| {
+            let mut a = with_candidate(&selected, *e, *start, true);
+            let out = fit(wk, &w, &mut a, 10, true);
+            progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
+            out.map(|o| (o, a))
+        });
+        // Significance of each fully fitted candidate.
+        let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
+        for (t, r) in full.iter().enumerate() {
+            let Ok((o, _)) = r else { continue };
+            let mut c = ctx.candidate(top_exts[t], o, true);
+            c.rejected_because = rejection(&c, top_exts[t], o, base_cost, opts);
+            if c.rejected_because.is_none() {
+                sig.push((t, o.cost_after, candidates.len()));
+            }
+            candidates.push(c);
+        }
+        sig.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let Some(&(best, best_cost, best_ci)) = sig.first() else {
+            break;
+        };
+        let Ok((best_fit, best_active)) = &full[best] else {
+            break;
+        };
+        let others: Vec<(usize, f64)> = sig.iter().map(|&(t, c, _)| (t, c)).collect();
+        let ambiguous_with = ambiguity(best, best_fit, best_cost, &others, &full, &top_exts, opts);
+        // Accept: the joint fit updates the values of the effects already selected.
+        selected = best_active.clone();
+        for s in selected.iter_mut() {
+            s.free = false;
+        }
+        named = selected
+            .iter()
+            .enumerate()
+            .map(|(i, s)| NamedCause {
+                effect: s.ext.effect().into(),
+                target: s.ext.target().into(),
+                value: s.params[0],
+                std_error: best_fit.std_errors.get(i).copied().unwrap_or(f64::NAN),
+                ambiguous_with: named
+                    .get(i)
+                    .map(|c: &NamedCause| c.ambiguous_with.clone())
+                    .unwrap_or_else(|| ambiguous_with.clone()),
+            })
+            .collect();
+        base_cost = best_cost;
+        // The validation record only reports the gain of the accepted effects.
+        if let (Some(vw), Some(before)) = (&vw, valid_cost) {
+            let r =
+                residuals(&mut workers[0], vw, &selected).map_err(sim_err("validation replay"))?;
+            progress.simulated(1);
+            let after: f64 = r.iter().map(|v| v * v).sum();
+            candidates[best_ci].validation_gain = Some(1.0 - after / before);
+            valid_cost = Some(after);
+        }
+    }
+    Ok(Selection {
+        selected,
+        named,
+        candidates,
+        unidentifiable,
+    })
+}
+
+/// The significant candidates the data cannot tell apart from the chosen one: nearly the same cost
+/// (n_eff ln(J/J_best) < 10) and strongly correlated output sensitivities.
+fn ambiguity(
+    best: usize,
+    best_fit: &FitOutcome,
+    best_cost: f64,
+    sig: &[(usize, f64)],
+    full: &[FullFit],
+    exts: &[&dyn Extension],
+    opts: &DiagnoseOptions,
+) -> Vec<String> {
+    let kb = best_fit.values.len() - 1;
+    let mut out = Vec::new();
+    for &(t, c) in sig {
+        if t == best {
+            continue;
+        }
+        let Ok((o, _)) = &full[t] else { continue };
+        let rho = search::correlation(
+            &best_fit.sensitivities[kb],
+            &o.sensitivities[o.values.len() - 1],
+        );
+        if best_fit.n_eff * (c / best_cost).ln() < 10.0 && rho.abs() > opts.ambiguity_correlation {
+            out.push(format!("{}/{}", exts[t].effect(), exts[t].target()));
+        }
+    }
+    out
+}

@@ -1,0 +1,890 @@
+//! Maximum-likelihood output error: bounded Levenberg–Marquardt with the measurement-noise
+//! covariance estimated from the residuals between steps.
+//!
+//! Cost (Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., eq. 4.13; Morelli & Klein,
+//! *Aircraft System Identification*, 2nd ed., eq. 6.9), over all records jointly:
+//!
+//! `J(φ, R) = ½ Σ_k v_kᵀ R⁻¹ v_k + ½ N ln det R`,  `v_k = z_k − ŷ_k(φ)`.
+//!
+//! For fixed φ the minimising R is the residual covariance (Jategaonkar eq. 4.15), taken
+//! diagonal here (one variance per output, pooled over records — cross-correlated sensor noise
+//! is rare and a full R lets one output's unmodelled dynamics steer the others). For fixed R the
+//! cost is a weighted least-squares problem solved by Gauss–Newton with Marquardt's damping
+//! `(M + μ diag M) δ = g`, `M = Σ Sᵀ R⁻¹ S`, `g = Σ Sᵀ R⁻¹ v` (eq. 4.29–4.33; Marquardt 1963).
+//! The two alternate (the relaxation algorithm, §4.9): every accepted step is followed by a new
+//! R. Bounds are kept by projection, with the parameters at a bound whose gradient points out of
+//! the box left out of the step (an active set).
+//!
+//! Sensitivities `S = ∂ŷ/∂φ` come from the model when it has them, otherwise from forward
+//! differences during the iterations and central differences for the final covariance, the
+//! perturbed simulations run in parallel (rayon). A simulation that fails or diverges rejects the
+//! step (the damping grows); at the start values it is an error.
+//!
+//! Standard errors: Cramér–Rao bounds `M⁻¹` corrected for coloured residuals (Morelli & Klein
+//! 1994, see [`super::covariance`]); both are returned.
+
+use std::time::Instant;
+
+use faer::prelude::*;
+use faer::{Mat, Side};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::covariance::{lag_weighted_products, lag_weights, sandwich};
+use super::layout::{Layout, Nuisance, NuisanceKind, RecordTerms};
+use super::model::{Model, Parameter, SimError};
+use super::record::{InputHold, InputSignal, Record, Run};
+use super::EstimateError;
+use crate::ident::nrmse_fit as fit_percent;
+
+/// Which estimator [`fit`] runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Output error: the model simulated open loop from its initial state.
+    #[default]
+    Oe,
+    /// Filter error: a Kalman filter in the loop, process noise estimated.
+    Fem,
+}
+
+impl Method {
+    /// Lower-case name as on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Oe => "oe",
+            Method::Fem => "fem",
+        }
+    }
+}
+
+/// Options of [`fit`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// Output error or filter error.
+    pub method: Method,
+    /// Reconstruction of the inputs between samples.
+    pub hold: InputHold,
+    /// Iteration limit.
+    pub max_iterations: usize,
+    /// Converged when a step lowers the weighted residual sum by less than this fraction and the
+    /// noise variances move by less than 0.1 %.
+    pub tolerance: f64,
+    /// Largest integration step, s; `None`: half the record's median sample interval.
+    pub max_step_s: Option<f64>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            method: Method::Oe,
+            hold: InputHold::Linear,
+            max_iterations: 50,
+            tolerance: 1e-7,
+            max_step_s: None,
+        }
+    }
+}
+
+/// Why the iterations ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The cost and the noise covariance stopped changing.
+    Converged,
+    /// The iteration limit was reached first.
+    MaxIterations,
+    /// No damped step lowered the cost while the gradient was still significant.
+    NoDescent,
+}
+
+/// One estimated quantity (a model parameter or a nuisance term).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ParameterEstimate {
+    /// Parameter name, or the nuisance term's target (state, output or input).
+    pub name: String,
+    /// Nuisance kind (None for a model parameter).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<NuisanceKind>,
+    /// Record the nuisance term belongs to (None for model parameters and skews).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub record: Option<String>,
+    /// Estimate (the start value when fixed).
+    pub value: f64,
+    /// Cramér–Rao bound corrected for coloured residuals (0 when fixed).
+    pub std_error: f64,
+    /// Cramér–Rao bound assuming white residuals (0 when fixed).
+    pub std_error_white: f64,
+    /// |value| / std_error (0 when fixed or σ = 0).
+    pub t: f64,
+    /// Held at its start value.
+    pub fixed: bool,
+    /// Ended on one of its bounds.
+    pub at_bound: bool,
+}
+
+impl ParameterEstimate {
+    /// σ in percent of |value| (0 for a zero value).
+    pub fn std_error_percent(&self) -> f64 {
+        if self.value == 0.0 {
+            0.0
+        } else {
+            100.0 * self.std_error / self.value.abs()
+        }
+    }
+}
+
+/// Measured and predicted outputs of one record at the estimate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordFit {
+    /// Record name.
+    pub name: String,
+    /// Sample times, s.
+    pub time_s: Vec<f64>,
+    /// Measured outputs `[output][k]`.
+    pub measured: Vec<Vec<f64>>,
+    /// Model outputs (biases included) `[output][k]`.
+    pub predicted: Vec<Vec<f64>>,
+    /// Fit percent per output, 100 (1 − ‖z − ŷ‖ / ‖z − z̄‖).
+    pub fit_percent: Vec<f64>,
+}
+
+/// The result of [`fit`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    /// Method that produced it.
+    pub method: Method,
+    /// Output names (order of `residual_covariance` and the records' outputs).
+    pub outputs: Vec<String>,
+    /// Model parameters in signature order (fixed ones included).
+    pub parameters: Vec<ParameterEstimate>,
+    /// Nuisance terms, per record then skews.
+    pub nuisance: Vec<ParameterEstimate>,
+    /// Names of the free quantities, in the order of `covariance` and `correlation`: free model
+    /// parameters, then nuisance terms as `kind:target@record`.
+    pub free: Vec<String>,
+    /// Covariance of the free quantities (coloured-residual corrected).
+    pub covariance: Vec<Vec<f64>>,
+    /// Correlation matrix of the free quantities.
+    pub correlation: Vec<Vec<f64>>,
+    /// Estimated measurement-noise (OE) or innovation (FEM) covariance R.
+    pub residual_covariance: Vec<Vec<f64>>,
+    /// Fit per record.
+    pub records: Vec<RecordFit>,
+    /// Iterations taken.
+    pub iterations: usize,
+    /// True when the iterations converged.
+    pub converged: bool,
+    /// Why they stopped.
+    pub stop: StopReason,
+    /// Final cost `J = ½ Σ vᵀR⁻¹v + ½ N ln det R`.
+    pub cost: f64,
+    /// Cost after each iteration (the start first).
+    pub cost_history: Vec<f64>,
+    /// Wall time of the fit, s.
+    pub wall_s: f64,
+    /// Name of the covariance correction used.
+    pub covariance_method: &'static str,
+    /// Things the user should know (unidentifiable directions, parameters at bounds).
+    pub warnings: Vec<String>,
+}
+
+impl Estimate {
+    /// Fit percent of output `o` over all records together.
+    pub fn fit_percent(&self, o: usize) -> f64 {
+        let z: Vec<f64> = self
+            .records
+            .iter()
+            .flat_map(|r| r.measured[o].clone())
+            .collect();
+        let y: Vec<f64> = self
+            .records
+            .iter()
+            .flat_map(|r| r.predicted[o].clone())
+            .collect();
+        fit_percent(&z, &y)
+    }
+
+    /// The model parameter called `name`.
+    pub fn parameter(&self, name: &str) -> Option<&ParameterEstimate> {
+        self.parameters.iter().find(|p| p.name == name)
+    }
+}
+
+/// Name of the covariance correction used (in results and reports).
+pub const COVARIANCE_METHOD: &str =
+    "Cramér-Rao bound with the coloured-residual correction of Morelli & Klein (1994), Bartlett lag window";
+
+/// Fits `model` to `records` (jointly: one parameter vector, nuisance terms per record).
+///
+/// `parameters` lists every model parameter in signature order with its start value, bounds and
+/// whether it is fixed.
+pub fn fit(
+    model: &dyn Model,
+    parameters: &[Parameter],
+    records: &[Record],
+    nuisance: &Nuisance,
+    options: &Options,
+) -> Result<Estimate, EstimateError> {
+    let started = Instant::now();
+    let layout = Layout::new(model.signature(), parameters, records, nuisance)?;
+    let problem = Problem {
+        model,
+        layout,
+        records,
+        hold: options.hold,
+        max_step_s: records
+            .iter()
+            .map(|r| options.max_step_s.unwrap_or(0.5 * r.median_dt_s()))
+            .collect(),
+    };
+    match options.method {
+        Method::Oe => {}
+        Method::Fem => {
+            return Err(EstimateError::Invalid(
+                "the filter error method is not available yet".into(),
+            ))
+        }
+    }
+    let solution = problem.minimise(options)?;
+    Ok(problem.summarise(solution, options.method, started))
+}
+
+/// Outputs of every record, `[record][output][k]`.
+type Predictions = Vec<Vec<Vec<f64>>>;
+
+/// The fitted problem: model, records and the φ layout.
+struct Problem<'a> {
+    model: &'a dyn Model,
+    layout: Layout,
+    records: &'a [Record],
+    hold: InputHold,
+    max_step_s: Vec<f64>,
+}
+
+/// Where the iterations ended.
+struct Solution {
+    phi: Vec<f64>,
+    predictions: Predictions,
+    noise: Vec<f64>,
+    iterations: usize,
+    stop: StopReason,
+    cost_history: Vec<f64>,
+}
+
+impl Problem<'_> {
+    fn n_outputs(&self) -> usize {
+        self.model.signature().outputs.len()
+    }
+
+    /// Record `r` as the model simulates it with the nuisance terms `terms`.
+    fn run(&self, r: usize, terms: &RecordTerms) -> Run<'_> {
+        let rec = &self.records[r];
+        Run {
+            record: r,
+            time_s: &rec.time_s,
+            input: InputSignal::new(
+                &rec.time_s,
+                &rec.inputs,
+                terms.input_bias.clone(),
+                terms.input_skew_s.clone(),
+                self.hold,
+            ),
+            max_step_s: self.max_step_s[r],
+        }
+    }
+
+    /// Model outputs (output biases added) of record `r` for φ.
+    fn predict(&self, phi: &[f64], r: usize) -> Result<Vec<Vec<f64>>, SimError> {
+        let theta = self.layout.theta(phi);
+        let terms = self.layout.record_terms(phi, r);
+        let rec = &self.records[r];
+        let run = self.run(r, &terms);
+        let mut y = self.model.simulate(&theta, &terms.x0, &run)?;
+        let outputs = &self.model.signature().outputs;
+        if y.len() != outputs.len() || y.iter().any(|c| c.len() != rec.len()) {
+            return Err(SimError::Failed(format!(
+                "the model returned {} outputs of {} samples, expected {} of {}",
+                y.len(),
+                y.first().map_or(0, Vec::len),
+                outputs.len(),
+                rec.len()
+            )));
+        }
+        for (o, col) in y.iter_mut().enumerate() {
+            if let Some(k) = col.iter().position(|v| !v.is_finite()) {
+                return Err(SimError::Diverged {
+                    time_s: rec.time_s[k] - rec.time_s[0],
+                    what: format!("output {}", outputs[o]),
+                });
+            }
+            let b = terms.output_bias[o];
+            if b != 0.0 {
+                col.iter_mut().for_each(|v| *v += b);
+            }
+        }
+        Ok(y)
+    }
+
+    /// Outputs of every record (in parallel when the model allows it).
+    fn predict_all(&self, phi: &[f64]) -> Result<Predictions, (usize, SimError)> {
+        let one = |r: usize| self.predict(phi, r).map_err(|e| (r, e));
+        if self.model.parallel() && self.records.len() > 1 {
+            (0..self.records.len()).into_par_iter().map(one).collect()
+        } else {
+            (0..self.records.len()).map(one).collect()
+        }
+    }
+
+    /// Residuals `z − ŷ`, `[record][output][k]`.
+    fn residuals(&self, pred: &Predictions) -> Predictions {
+        self.records
+            .iter()
+            .zip(pred)
+            .map(|(rec, p)| {
+                rec.outputs
+                    .iter()
+                    .zip(p)
+                    .map(|(z, y)| z.iter().zip(y).map(|(a, b)| a - b).collect())
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The maximum-likelihood R for fixed φ: per-output residual variance pooled over records
+    /// (Jategaonkar eq. 4.15, diagonal), floored at 1e-16 of the output's own mean square so a
+    /// noise-free record does not divide by zero.
+    fn noise(&self, res: &Predictions) -> Vec<f64> {
+        (0..self.n_outputs())
+            .map(|o| {
+                let (mut s, mut z2, mut n) = (0.0, 0.0, 0usize);
+                for (rec, rr) in self.records.iter().zip(res) {
+                    s += rr[o].iter().map(|v| v * v).sum::<f64>();
+                    z2 += rec.outputs[o].iter().map(|v| v * v).sum::<f64>();
+                    n += rr[o].len();
+                }
+                let n = n.max(1) as f64;
+                (s / n).max(1e-16 * z2 / n).max(1e-300)
+            })
+            .collect()
+    }
+
+    /// `Σ vᵀ R⁻¹ v` for diagonal R.
+    fn weighted_sse(res: &Predictions, noise: &[f64]) -> f64 {
+        res.iter()
+            .map(|rr| {
+                rr.iter()
+                    .zip(noise)
+                    .map(|(v, r)| v.iter().map(|x| x * x).sum::<f64>() / r)
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// The likelihood cost `J = ½ Σ vᵀR⁻¹v + ½ N ln det R`.
+    fn cost(&self, res: &Predictions, noise: &[f64]) -> f64 {
+        let n: usize = self.records.iter().map(Record::len).sum();
+        0.5 * Self::weighted_sse(res, noise)
+            + 0.5 * n as f64 * noise.iter().map(|r| r.ln()).sum::<f64>()
+    }
+
+    /// Row of sample k of output o of record r in the stacked residual vector.
+    fn offsets(&self) -> Vec<usize> {
+        let ny = self.n_outputs();
+        let mut off = vec![0];
+        for rec in self.records {
+            off.push(off.last().unwrap() + ny * rec.len());
+        }
+        off
+    }
+
+    /// Sensitivity column of φ entry `j`, stacked over records and outputs (unweighted), by
+    /// forward or central differences (or exactly, for an output bias).
+    fn column(
+        &self,
+        phi: &[f64],
+        base: &Predictions,
+        j: usize,
+        central: bool,
+    ) -> Result<Vec<f64>, SimError> {
+        let off = self.offsets();
+        let mut col = vec![0.0; *off.last().unwrap()];
+        if let Some(slot) = self.layout.slot(j) {
+            if slot.kind == NuisanceKind::OutputBias {
+                let r = slot.record.unwrap_or(0);
+                let n = self.records[r].len();
+                let start = off[r] + slot.index * n;
+                col[start..start + n].iter_mut().for_each(|v| *v = 1.0);
+                return Ok(col);
+            }
+        }
+        let rel = if central { 1e-5 } else { 1e-6 };
+        let mut h = rel * phi[j].abs().max(self.layout.scale[j]);
+        if phi[j] + h > self.layout.upper[j] {
+            h = -h;
+        }
+        let records: Vec<usize> = match self.layout.only_record(j) {
+            Some(r) => vec![r],
+            None => (0..self.records.len()).collect(),
+        };
+        let mut plus = phi.to_vec();
+        plus[j] += h;
+        let minus_ok = central && phi[j] - h.abs() >= self.layout.lower[j] && h > 0.0;
+        let mut minus = phi.to_vec();
+        minus[j] -= h;
+        for r in records {
+            let yp = self.predict(&plus, r)?;
+            let ym = if minus_ok {
+                Some(self.predict(&minus, r)?)
+            } else {
+                None
+            };
+            let n = self.records[r].len();
+            for o in 0..yp.len() {
+                let start = off[r] + o * n;
+                for k in 0..n {
+                    col[start + k] = match &ym {
+                        Some(ym) => (yp[o][k] - ym[o][k]) / (2.0 * h),
+                        None => (yp[o][k] - base[r][o][k]) / h,
+                    };
+                }
+            }
+        }
+        Ok(col)
+    }
+
+    /// All sensitivity columns (analytic ones from the model where it has them).
+    fn jacobian(
+        &self,
+        phi: &[f64],
+        base: &Predictions,
+        central: bool,
+    ) -> Result<Vec<Vec<f64>>, SimError> {
+        let p = self.layout.len();
+        let nf = self.layout.free.len();
+        let mut analytic: Vec<Option<Vec<f64>>> = vec![None; p];
+        if nf > 0 {
+            let theta = self.layout.theta(phi);
+            let off = self.offsets();
+            let mut cols = vec![vec![0.0; *off.last().unwrap()]; nf];
+            let mut have = true;
+            for (r, rec) in self.records.iter().enumerate() {
+                let terms = self.layout.record_terms(phi, r);
+                let run = self.run(r, &terms);
+                match self
+                    .model
+                    .sensitivities(&theta, &terms.x0, &run, &self.layout.free)
+                {
+                    None => {
+                        have = false;
+                        break;
+                    }
+                    Some(s) => {
+                        let s = s?;
+                        for (j, sj) in s.iter().enumerate().take(nf) {
+                            for (o, so) in sj.iter().enumerate() {
+                                let start = off[r] + o * rec.len();
+                                cols[j][start..start + rec.len()].copy_from_slice(so);
+                            }
+                        }
+                    }
+                }
+            }
+            if have {
+                for (j, c) in cols.into_iter().enumerate() {
+                    analytic[j] = Some(c);
+                }
+            }
+        }
+        let one = |j: usize| match analytic[j].clone() {
+            Some(c) => Ok(c),
+            None => self.column(phi, base, j, central),
+        };
+        if self.model.parallel() {
+            (0..p).into_par_iter().map(one).collect()
+        } else {
+            (0..p).map(one).collect()
+        }
+    }
+
+    /// The stacked sensitivities weighted by `R^{-1/2}` as a matrix, and the weighted residuals.
+    fn weighted(
+        &self,
+        cols: &[Vec<f64>],
+        res: &Predictions,
+        noise: &[f64],
+    ) -> (Mat<f64>, Vec<f64>) {
+        let off = self.offsets();
+        let rows = *off.last().unwrap();
+        let mut w = vec![0.0; rows];
+        let mut e = vec![0.0; rows];
+        for (r, rec) in self.records.iter().enumerate() {
+            let n = rec.len();
+            for (o, r_o) in noise.iter().enumerate() {
+                let s = 1.0 / r_o.sqrt();
+                for k in 0..n {
+                    w[off[r] + o * n + k] = s;
+                    e[off[r] + o * n + k] = s * res[r][o][k];
+                }
+            }
+        }
+        let x = Mat::from_fn(rows, cols.len(), |i, j| w[i] * cols[j][i]);
+        (x, e)
+    }
+
+    /// Bounded Levenberg–Marquardt with R relaxation (module doc).
+    fn minimise(&self, options: &Options) -> Result<Solution, EstimateError> {
+        let layout = &self.layout;
+        let p = layout.len();
+        let mut phi = layout.start.clone();
+        layout.clamp(&mut phi);
+        let mut pred =
+            self.predict_all(&phi)
+                .map_err(|(r, source)| EstimateError::StartDiverges {
+                    record: self.records[r].name.clone(),
+                    source,
+                })?;
+        let mut res = self.residuals(&pred);
+        let mut noise = self.noise(&res);
+        let mut history = vec![self.cost(&res, &noise)];
+        let mut mu = 1e-3;
+        let mut stop = StopReason::MaxIterations;
+        let mut iterations = 0;
+        while iterations < options.max_iterations {
+            iterations += 1;
+            let cols = match self.jacobian(&phi, &pred, false) {
+                Ok(c) => c,
+                Err(_) => {
+                    stop = StopReason::NoDescent;
+                    break;
+                }
+            };
+            let (x, e) = self.weighted(&cols, &res, &noise);
+            let h: Mat<f64> = x.transpose() * &x;
+            let g: Vec<f64> = (0..p)
+                .map(|j| (0..e.len()).map(|i| x[(i, j)] * e[i]).sum())
+                .collect();
+            // active set: at a bound with the gradient pointing out of the box
+            let active: Vec<usize> = (0..p)
+                .filter(|&j| {
+                    let at_lo = phi[j] <= layout.lower[j] && g[j] < 0.0;
+                    let at_hi = phi[j] >= layout.upper[j] && g[j] > 0.0;
+                    !(at_lo || at_hi)
+                })
+                .collect();
+            let q = Self::weighted_sse(&res, &noise);
+            let mut accepted = None;
+            let mut first_decrement = None;
+            for _ in 0..16 {
+                let Some(step) = damped_step(&h, &g, &active, mu) else {
+                    mu *= 10.0;
+                    continue;
+                };
+                let decrement: f64 = step.iter().zip(&g).map(|(a, b)| a * b).sum();
+                first_decrement.get_or_insert(decrement);
+                let mut trial: Vec<f64> = phi.iter().zip(&step).map(|(a, b)| a + b).collect();
+                layout.clamp(&mut trial);
+                if let Ok(tp) = self.predict_all(&trial) {
+                    let tr = self.residuals(&tp);
+                    let tq = Self::weighted_sse(&tr, &noise);
+                    if tq.is_finite() && tq < q {
+                        accepted = Some((trial, tp, tr, tq));
+                        break;
+                    }
+                }
+                mu *= 10.0;
+            }
+            let Some((trial, tp, tr, tq)) = accepted else {
+                let small = first_decrement.is_none_or(|d| d <= 10.0 * options.tolerance * q);
+                stop = if small {
+                    StopReason::Converged
+                } else {
+                    StopReason::NoDescent
+                };
+                break;
+            };
+            mu = (mu / 10.0).max(1e-9);
+            let gain = (q - tq) / q;
+            phi = trial;
+            pred = tp;
+            res = tr;
+            let new_noise = self.noise(&res);
+            let noise_change = new_noise
+                .iter()
+                .zip(&noise)
+                .map(|(a, b)| (a / b - 1.0).abs())
+                .fold(0.0, f64::max);
+            noise = new_noise;
+            history.push(self.cost(&res, &noise));
+            if gain < options.tolerance && noise_change < 1e-3 {
+                stop = StopReason::Converged;
+                break;
+            }
+        }
+        Ok(Solution {
+            phi,
+            predictions: pred,
+            noise,
+            iterations,
+            stop,
+            cost_history: history,
+        })
+    }
+
+    /// Covariance, correlation, per-record fits and the named results.
+    fn summarise(&self, sol: Solution, method: Method, started: Instant) -> Estimate {
+        let layout = &self.layout;
+        let p = layout.len();
+        let sig = self.model.signature();
+        let res = self.residuals(&sol.predictions);
+        let mut warnings = Vec::new();
+        let names: Vec<String> = (0..p).map(|j| self.free_name(j)).collect();
+        let (cov_white, cov) = match self.jacobian(&sol.phi, &sol.predictions, true) {
+            Ok(cols) => self.covariances(&cols, &res, &sol.noise, &names, &mut warnings),
+            Err(e) => {
+                warnings.push(format!(
+                    "no standard errors: a perturbed simulation failed ({e})"
+                ));
+                (vec![0.0; p * p], vec![0.0; p * p])
+            }
+        };
+        let sd = |c: &[f64], j: usize| c[j * p + j].max(0.0).sqrt();
+        let estimate = |j: usize, name: String, kind, record| {
+            let value = sol.phi[j];
+            let std_error = sd(&cov, j);
+            let at_bound = value <= layout.lower[j] || value >= layout.upper[j];
+            ParameterEstimate {
+                name,
+                kind,
+                record,
+                value,
+                std_error,
+                std_error_white: sd(&cov_white, j),
+                t: if std_error > 0.0 {
+                    value.abs() / std_error
+                } else {
+                    0.0
+                },
+                fixed: false,
+                at_bound,
+            }
+        };
+        let theta = layout.theta(&sol.phi);
+        let parameters: Vec<ParameterEstimate> = sig
+            .parameters
+            .iter()
+            .enumerate()
+            .map(|(i, name)| match layout.free.iter().position(|&f| f == i) {
+                Some(j) => estimate(j, name.clone(), None, None),
+                None => ParameterEstimate {
+                    name: name.clone(),
+                    kind: None,
+                    record: None,
+                    value: theta[i],
+                    std_error: 0.0,
+                    std_error_white: 0.0,
+                    t: 0.0,
+                    fixed: true,
+                    at_bound: false,
+                },
+            })
+            .collect();
+        let nf = layout.free.len();
+        let nuisance: Vec<ParameterEstimate> = layout
+            .slots
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                estimate(
+                    nf + k,
+                    s.target.clone(),
+                    Some(s.kind),
+                    s.record.map(|r| self.records[r].name.clone()),
+                )
+            })
+            .collect();
+        for pe in parameters.iter().chain(&nuisance).filter(|p| p.at_bound) {
+            warnings.push(format!("{} ended on a bound ({})", pe.name, pe.value));
+        }
+        let correlation: Vec<Vec<f64>> = (0..p)
+            .map(|a| {
+                (0..p)
+                    .map(|b| {
+                        let d = sd(&cov, a) * sd(&cov, b);
+                        if d > 0.0 {
+                            (cov[a * p + b] / d).clamp(-1.0, 1.0)
+                        } else if a == b {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let ny = sig.outputs.len();
+        let residual_covariance = (0..ny)
+            .map(|a| {
+                (0..ny)
+                    .map(|b| if a == b { sol.noise[a] } else { 0.0 })
+                    .collect()
+            })
+            .collect();
+        let records = self
+            .records
+            .iter()
+            .zip(&sol.predictions)
+            .map(|(rec, pred)| RecordFit {
+                name: rec.name.clone(),
+                time_s: rec.time_s.clone(),
+                measured: rec.outputs.clone(),
+                predicted: pred.clone(),
+                fit_percent: rec
+                    .outputs
+                    .iter()
+                    .zip(pred)
+                    .map(|(z, y)| fit_percent(z, y))
+                    .collect(),
+            })
+            .collect();
+        Estimate {
+            method,
+            outputs: sig.outputs.clone(),
+            parameters,
+            nuisance,
+            free: names,
+            covariance: (0..p).map(|a| cov[a * p..(a + 1) * p].to_vec()).collect(),
+            correlation,
+            residual_covariance,
+            records,
+            iterations: sol.iterations,
+            converged: sol.stop == StopReason::Converged,
+            stop: sol.stop,
+            cost: self.cost(&res, &sol.noise),
+            cost_history: sol.cost_history,
+            wall_s: started.elapsed().as_secs_f64(),
+            covariance_method: COVARIANCE_METHOD,
+            warnings,
+        }
+    }
+
+    /// Name of φ entry `j`: the parameter, or `kind:target@record` for a nuisance term.
+    fn free_name(&self, j: usize) -> String {
+        match self.layout.slot(j) {
+            None => self.model.signature().parameters[self.layout.free[j]].clone(),
+            Some(s) => {
+                let kind = match s.kind {
+                    NuisanceKind::InitialState => "x0",
+                    NuisanceKind::OutputBias => "bias",
+                    NuisanceKind::InputBias => "input_bias",
+                    NuisanceKind::InputSkew => "skew",
+                };
+                match s.record {
+                    Some(r) => format!("{kind}:{}@{}", s.target, self.records[r].name),
+                    None => format!("{kind}:{}", s.target),
+                }
+            }
+        }
+    }
+
+    /// White and coloured-residual covariances (row-major p × p) from the sensitivity columns.
+    fn covariances(
+        &self,
+        cols: &[Vec<f64>],
+        res: &Predictions,
+        noise: &[f64],
+        names: &[String],
+        warnings: &mut Vec<String>,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let p = cols.len();
+        let (x, _) = self.weighted(cols, res, noise);
+        let m: Mat<f64> = x.transpose() * &x;
+        let minv = pseudo_inverse(&m, names, warnings);
+        // W = Σ_records Σ_outputs w_o · Σ_ij x_i R_vv(i−j) x_jᵀ over that output's weighted rows
+        let off = self.offsets();
+        let mut w = vec![0.0; p * p];
+        for (r, rec) in self.records.iter().enumerate() {
+            let n = rec.len();
+            for (o, r_o) in noise.iter().enumerate() {
+                let start = off[r] + o * n;
+                let block: Vec<Vec<f64>> = (0..p)
+                    .map(|j| (0..n).map(|k| x[(start + k, j)]).collect())
+                    .collect();
+                let refs: Vec<&[f64]> = block.iter().map(Vec::as_slice).collect();
+                let wo = lag_weighted_products(&refs, &lag_weights(&res[r][o]));
+                for (acc, v) in w.iter_mut().zip(&wo) {
+                    *acc += v / r_o;
+                }
+            }
+        }
+        let coloured = sandwich(&minv, &w, p);
+        (minv, coloured)
+    }
+}
+
+/// Solves `(M + μ diag M) δ = g` over the `active` entries (the others stay 0).
+fn damped_step(h: &Mat<f64>, g: &[f64], active: &[usize], mu: f64) -> Option<Vec<f64>> {
+    let n = active.len();
+    let p = g.len();
+    if n == 0 {
+        return None;
+    }
+    let dmax = active.iter().map(|&j| h[(j, j)]).fold(0.0_f64, f64::max);
+    let a = Mat::from_fn(n, n, |i, k| {
+        let v = h[(active[i], active[k])];
+        if i == k {
+            v + mu * v.max(1e-12 * dmax).max(f64::MIN_POSITIVE)
+        } else {
+            v
+        }
+    });
+    let b = Mat::from_fn(n, 1, |i, _| g[active[i]]);
+    let x = a.partial_piv_lu().solve(&b);
+    let mut step = vec![0.0; p];
+    for (i, &j) in active.iter().enumerate() {
+        step[j] = x[(i, 0)];
+    }
+    step.iter().all(|v| v.is_finite()).then_some(step)
+}
+
+/// Inverse of the symmetric information matrix by eigendecomposition; eigenvalues below 1e-12 of
+/// the largest (an unidentifiable direction) are dropped and the parameters that dominate that
+/// direction named in a warning.
+fn pseudo_inverse(m: &Mat<f64>, names: &[String], warnings: &mut Vec<String>) -> Vec<f64> {
+    let p = m.nrows();
+    // scale to unit diagonal first so the threshold is independent of parameter units
+    let d: Vec<f64> = (0..p)
+        .map(|j| m[(j, j)].max(f64::MIN_POSITIVE).sqrt())
+        .collect();
+    let scaled = Mat::from_fn(p, p, |a, b| m[(a, b)] / (d[a] * d[b]));
+    let mut inv = vec![0.0; p * p];
+    let Ok(evd) = scaled.self_adjoint_eigen(Side::Lower) else {
+        warnings.push("the information matrix could not be decomposed: no standard errors".into());
+        return inv;
+    };
+    let (u, s) = (evd.U(), evd.S().column_vector());
+    let largest = (0..p).map(|i| s[i]).fold(0.0_f64, f64::max);
+    for i in 0..p {
+        if s[i] <= 1e-12 * largest {
+            let j = (0..p)
+                .max_by(|&a, &b| u[(a, i)].abs().total_cmp(&u[(b, i)].abs()))
+                .unwrap_or(0);
+            warnings.push(format!(
+                "the records do not determine {} (a combination led by it has no information)",
+                names[j]
+            ));
+            continue;
+        }
+        for a in 0..p {
+            for b in 0..p {
+                inv[a * p + b] += u[(a, i)] * u[(b, i)] / s[i];
+            }
+        }
+    }
+    for a in 0..p {
+        for b in 0..p {
+            inv[a * p + b] /= d[a] * d[b];
+        }
+    }
+    inv
+}

@@ -1,0 +1,136 @@
+//! Simulation of a [`StateModel`]: classical fourth-order Runge–Kutta at the model's own step.
+//!
+//! The integrator stops at every output sample and at every breakpoint of the input
+//! reconstruction (a sample time shifted by an input skew), so within one step the input is a
+//! single affine piece: a zero-order hold's steps and the kinks of linear interpolation are never
+//! smeared across a step, and the response is a smooth function of the skews (which their
+//! finite-difference sensitivities need). Between stops, steps are equal and at most
+//! `run.max_step_s` long.
+
+use super::model::{SimError, StateModel};
+use super::record::Run;
+
+/// Largest magnitude a state or output may reach before the simulation counts as diverged.
+const DIVERGED: f64 = 1e12;
+
+/// Outputs `[output][k]` of `model` at the run's sample times, starting from `x0` at the first.
+pub fn simulate_states(
+    model: &dyn StateModel,
+    theta: &[f64],
+    x0: &[f64],
+    run: &Run<'_>,
+) -> Result<Vec<Vec<f64>>, SimError> {
+    let sig = model.signature();
+    let (nx, nu, ny) = (sig.states.len(), sig.inputs.len(), sig.outputs.len());
+    let time = run.time_s;
+    let n = time.len();
+    let mut y_out = vec![vec![0.0; n]; ny];
+    let mut x = x0.to_vec();
+    let mut u = vec![0.0; nu];
+    let mut y = vec![0.0; ny];
+    let mut a = vec![0.0; nu];
+    let mut b = vec![0.0; nu];
+    let mut stage = Stages::new(nx);
+    for k in 0..n {
+        if k > 0 {
+            let (start, end) = (time[k - 1], time[k]);
+            let tiny = 1e-9 * (end - start);
+            let mut t0 = start;
+            while t0 < end - tiny {
+                let t1 = match run.input.next_breakpoint(t0 + tiny) {
+                    Some(bp) if bp < end - tiny => bp,
+                    _ => end,
+                };
+                let mid = 0.5 * (t0 + t1);
+                run.input.piece(mid, &mut a, &mut b);
+                let steps = ((t1 - t0) / run.max_step_s).ceil().max(1.0) as usize;
+                let h = (t1 - t0) / steps as f64;
+                for s in 0..steps {
+                    let t = t0 + s as f64 * h - mid;
+                    stage.rk4(model, theta, &mut x, t, h, &a, &b, &mut u);
+                }
+                t0 = t1;
+            }
+            if let Some(i) = x.iter().position(|v| !v.is_finite() || v.abs() > DIVERGED) {
+                return Err(SimError::Diverged {
+                    time_s: end - time[0],
+                    what: format!("state {}", sig.states[i]),
+                });
+            }
+        }
+        run.input.at(time[k], &mut u);
+        model.outputs(theta, &x, &u, &mut y);
+        for (o, v) in y.iter().enumerate() {
+            if !v.is_finite() || v.abs() > DIVERGED {
+                return Err(SimError::Diverged {
+                    time_s: time[k] - time[0],
+                    what: format!("output {}", sig.outputs[o]),
+                });
+            }
+            y_out[o][k] = *v;
+        }
+    }
+    Ok(y_out)
+}
+
+/// Work space of one RK4 step.
+struct Stages {
+    k1: Vec<f64>,
+    k2: Vec<f64>,
+    k3: Vec<f64>,
+    k4: Vec<f64>,
+    tmp: Vec<f64>,
+}
+
+impl Stages {
+    fn new(nx: usize) -> Stages {
+        Stages {
+            k1: vec![0.0; nx],
+            k2: vec![0.0; nx],
+            k3: vec![0.0; nx],
+            k4: vec![0.0; nx],
+            tmp: vec![0.0; nx],
+        }
+    }
+
+    /// One classical RK4 step of length `h` from `t` with the input `u(τ) = a + b τ` (times
+    /// relative to the piece's reference).
+    #[allow(clippy::too_many_arguments)]
+    fn rk4(
+        &mut self,
+        model: &dyn StateModel,
+        theta: &[f64],
+        x: &mut [f64],
+        t: f64,
+        h: f64,
+        a: &[f64],
+        b: &[f64],
+        u: &mut [f64],
+    ) {
+        let input = |u: &mut [f64], tau: f64| {
+            for i in 0..u.len() {
+                u[i] = a[i] + b[i] * tau;
+            }
+        };
+        input(u, t);
+        model.derivatives(theta, x, u, &mut self.k1);
+        input(u, t + 0.5 * h);
+        axpy(&mut self.tmp, x, 0.5 * h, &self.k1);
+        model.derivatives(theta, &self.tmp, u, &mut self.k2);
+        axpy(&mut self.tmp, x, 0.5 * h, &self.k2);
+        model.derivatives(theta, &self.tmp, u, &mut self.k3);
+        input(u, t + h);
+        axpy(&mut self.tmp, x, h, &self.k3);
+        model.derivatives(theta, &self.tmp, u, &mut self.k4);
+        for (i, xi) in x.iter_mut().enumerate() {
+            *xi += h / 6.0 * (self.k1[i] + 2.0 * (self.k2[i] + self.k3[i]) + self.k4[i]);
+        }
+    }
+}
+
+/// `out = x + a k`.
+fn axpy(out: &mut [f64], x: &[f64], a: f64, k: &[f64]) {
+    for ((o, xi), ki) in out.iter_mut().zip(x).zip(k) {
+        *o = xi + a * ki;
+    }
+}

@@ -1,0 +1,216 @@
+//! Scenarios for the estimation core on models whose truth is known.
+
+use rand::{rngs::StdRng, Rng, SeedableRng};
+use rand_distr::StandardNormal;
+
+use super::*;
+
+/// Short-period model: states α, q; input δe; outputs α, q.
+/// `α̇ = Z_α α + q + Z_δe δe`, `q̇ = M_α α + M_q q + M_δe δe`.
+fn short_period() -> LinearModel {
+    let sig = Signature {
+        parameters: ["Z_alpha", "Z_de", "M_alpha", "M_q", "M_de"]
+            .map(String::from)
+            .to_vec(),
+        states: vec!["alpha_rad".into(), "q_rad_s".into()],
+        inputs: vec!["elevator_rad".into()],
+        outputs: vec!["alpha_rad".into(), "q_rad_s".into()],
+    };
+    let p = Entry::param;
+    let k = Entry::constant;
+    LinearModel::new(
+        sig,
+        vec![vec![p(0), k(1.0)], vec![p(2), p(3)]],
+        vec![vec![p(1)], vec![p(4)]],
+        vec![vec![k(1.0), k(0.0)], vec![k(0.0), k(1.0)]],
+        vec![vec![k(0.0)], vec![k(0.0)]],
+    )
+    .unwrap()
+}
+
+const TRUTH: [f64; 5] = [-1.2, -0.15, -8.0, -2.5, -12.0];
+
+/// A 3-2-1-1 elevator input of 2° at `dt_s`, then 8 s of free response.
+fn record(
+    name: &str,
+    dt_s: f64,
+    x0: [f64; 2],
+    noise: [f64; 2],
+    bias: [f64; 2],
+    seed: u64,
+) -> Record {
+    let n = (12.0 / dt_s) as usize;
+    let time_s: Vec<f64> = (0..n).map(|k| k as f64 * dt_s).collect();
+    let amp = 2f64.to_radians();
+    let de: Vec<f64> = time_s
+        .iter()
+        .map(|&t| match t {
+            t if (1.0..1.9).contains(&t) => amp,
+            t if (1.9..2.5).contains(&t) => -amp,
+            t if (2.5..2.8).contains(&t) => amp,
+            t if (2.8..3.1).contains(&t) => -amp,
+            _ => 0.0,
+        })
+        .collect();
+    let model = short_period();
+    let inputs = vec![de];
+    let run = Run {
+        record: 0,
+        time_s: &time_s,
+        input: InputSignal::measured(&time_s, &inputs, InputHold::Linear),
+        max_step_s: dt_s / 4.0,
+    };
+    let y = simulate_states(&model, &TRUTH, &x0, &run).unwrap();
+    let mut rng = StdRng::seed_from_u64(seed);
+    let outputs = y
+        .iter()
+        .enumerate()
+        .map(|(o, col)| {
+            col.iter()
+                .map(|v| v + bias[o] + noise[o] * rng.sample::<f64, _>(StandardNormal))
+                .collect()
+        })
+        .collect();
+    Record {
+        name: name.into(),
+        time_s,
+        inputs,
+        outputs,
+        initial_state: vec![0.0, 0.0],
+    }
+}
+
+fn start() -> Vec<Parameter> {
+    let names = ["Z_alpha", "Z_de", "M_alpha", "M_q", "M_de"];
+    let start = [-0.8, -0.05, -5.0, -1.5, -8.0];
+    names
+        .iter()
+        .zip(start)
+        .map(|(n, v)| Parameter::free(*n, v))
+        .collect()
+}
+
+#[test]
+fn noise_free_short_period_is_recovered_to_round_off() {
+    // exact data (linear interpolation both in the generator's RK4 and the fit's exact
+    // discretisation): the estimate is the truth up to the generator's RK4 error at dt/4
+    let rec = record("a", 0.02, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], 1);
+    let est = fit(
+        &short_period(),
+        &start(),
+        &[rec],
+        &Nuisance::default(),
+        &Options::default(),
+    )
+    .unwrap();
+    assert!(est.converged, "{:?} after {}", est.stop, est.iterations);
+    for (p, truth) in est.parameters.iter().zip(TRUTH) {
+        assert!(
+            (p.value - truth).abs() < 1e-5 * truth.abs(),
+            "{}: {} vs {truth}",
+            p.name,
+            p.value
+        );
+    }
+}
+
+#[test]
+fn two_noisy_records_with_biases_and_unknown_initial_states() {
+    // one parameter set, per-record initial states and output biases
+    let a = record("a", 0.02, [0.02, -0.05], [0.002, 0.005], [0.01, -0.003], 11);
+    let b = record("b", 0.02, [-0.03, 0.04], [0.002, 0.005], [-0.02, 0.004], 12);
+    let nuisance = Nuisance {
+        initial_state: vec![0, 1],
+        output_bias: vec![0, 1],
+        ..Nuisance::default()
+    };
+    let est = fit(
+        &short_period(),
+        &start(),
+        &[a, b],
+        &nuisance,
+        &Options::default(),
+    )
+    .unwrap();
+    assert!(est.converged, "{:?}", est.stop);
+    for (p, truth) in est.parameters.iter().zip(TRUTH) {
+        assert!(
+            (p.value - truth).abs() < 4.0 * p.std_error,
+            "{}: {} ± {} vs {truth}",
+            p.name,
+            p.value,
+            p.std_error
+        );
+        assert!(
+            p.std_error > 0.0 && p.std_error < 0.2 * truth.abs(),
+            "{p:?}"
+        );
+    }
+    let bias = |rec: &str, target: &str| {
+        est.nuisance
+            .iter()
+            .find(|n| {
+                n.kind == Some(NuisanceKind::OutputBias)
+                    && n.record.as_deref() == Some(rec)
+                    && n.name == target
+            })
+            .unwrap()
+            .value
+    };
+    assert!((bias("a", "alpha_rad") - 0.01).abs() < 0.002);
+    assert!((bias("b", "alpha_rad") + 0.02).abs() < 0.002);
+    // R estimates the noise variance: 0.002², 0.005² within 10 %
+    assert!((est.residual_covariance[0][0].sqrt() / 0.002 - 1.0).abs() < 0.1);
+    assert!((est.residual_covariance[1][1].sqrt() / 0.005 - 1.0).abs() < 0.1);
+}
+
+#[test]
+fn a_skewed_input_is_found() {
+    // the record's elevator is logged 0.03 s late relative to the response: u_meas(t) = u(t − 0.03)
+    // → the model must see u_meas(t + 0.03), a skew of −0.03 s
+    let mut rec = record("a", 0.02, [0.0, 0.0], [0.001, 0.002], [0.0, 0.0], 5);
+    let t = rec.time_s.clone();
+    let orig = rec.inputs.clone();
+    let shifted = InputSignal::new(&t, &orig, vec![0.0], vec![0.03], InputHold::Linear);
+    let mut u = [0.0];
+    rec.inputs[0] = t
+        .iter()
+        .map(|&tk| {
+            shifted.at(tk, &mut u);
+            u[0]
+        })
+        .collect();
+    let nuisance = Nuisance {
+        input_skew: vec![0],
+        ..Nuisance::default()
+    };
+    let est = fit(
+        &short_period(),
+        &start(),
+        &[rec],
+        &nuisance,
+        &Options::default(),
+    )
+    .unwrap();
+    let skew = &est.nuisance[0];
+    assert!(
+        (skew.value + 0.03).abs() < 3.0 * skew.std_error.max(1e-3),
+        "{skew:?}"
+    );
+}
+
+#[test]
+fn a_diverging_start_is_a_clear_error() {
+    let rec = record("a", 0.02, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], 1);
+    let mut p = start();
+    p[2].value = 400.0; // M_alpha: violently unstable, e^(20 t) over 12 s
+    let err = fit(
+        &short_period(),
+        &p,
+        &[rec],
+        &Nuisance::default(),
+        &Options::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(err, EstimateError::StartDiverges { .. }), "{err}");
+}
