@@ -171,7 +171,9 @@ pub fn classify(e: compare::CompareError) -> anyhow::Error {
 
 /// Runs `flightid compare`.
 pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
-    crate::report::check_output_dir(&args.report)?;
+    if let Some(dir) = &args.report {
+        crate::report::check_output_dir(dir)?;
+    }
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;
     let methods: Vec<Method> = args
