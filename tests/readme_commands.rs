@@ -1,5 +1,5 @@
 //! Every command of the README runs as written. The `sh` blocks are run in order from a temporary directory that
-//! holds copies of the repository files the commands name (`campaigns/`, `aircraft/`, `scripts/`,
+//! holds copies of the repository files the commands name (`campaigns/`, `aircraft/`, `models/`, `scripts/`,
 //! `tests/fixtures/`), with `cargo run --release --` replaced by the already-built binary (no rebuild). Each
 //! command must exit 0, and every file or directory it was asked to write (`--out`, `--report`, `--json FILE`,
 //! `--model-out`) must exist afterwards. Commands in `text` blocks (the test suite itself) are listed as not run;
@@ -79,7 +79,7 @@ fn every_readme_command_runs_as_written() {
     assert!(commands.len() >= 20, "README commands found: {commands:?}");
     let tmp = tempfile::tempdir().unwrap();
     let cwd = tmp.path();
-    for dir in ["campaigns", "aircraft", "scripts", "tests/fixtures"] {
+    for dir in ["campaigns", "aircraft", "models", "scripts", "tests/fixtures"] {
         copy_dir(&repo().join(dir), &cwd.join(dir));
     }
     let mut report = Vec::new();

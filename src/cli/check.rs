@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use super::common::ColumnsArg;
 use super::UsageError;
 use crate::data::{self, CheckOptions};
 
@@ -32,6 +33,8 @@ pub struct CheckArgs {
     /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
     #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
+    #[command(flatten)]
+    pub columns: ColumnsArg,
 }
 
 /// Runs `flightid check`.
@@ -39,7 +42,8 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     if let (Some(from_s), Some(to_s)) = (args.from_s, args.to_s) {
         crate::limits::check_order("--from-s", from_s, "--to-s", to_s)?;
     }
-    let mut rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
+    let mut rec = args.columns.read(&args.file)?;
+    crate::limits::check_rows(&args.file.display().to_string(), rec.len())?;
     if let Some(hz) = args.resample_hz {
         rec = data::resample_uniform(&rec, hz)
             .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;

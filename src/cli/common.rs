@@ -2,10 +2,11 @@
 
 use crate::aircraft::{self, AircraftConfig};
 use crate::cli::UsageError;
+use crate::data::{self, ColumnMap, FlightRecord};
 use crate::sim::{JsbsimSim, Simulator, TrimPoint, TrimState};
 use anyhow::Context;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Which aircraft and where to trim it.
 #[derive(clap::Args, Debug, Clone)]
@@ -95,4 +96,32 @@ pub fn spinner(message: &str) -> indicatif::ProgressBar {
     pb.set_message(message.to_string());
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
     pb
+}
+
+/// How a command reads flight-data CSVs: optionally through a column map.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ColumnsArg {
+    /// Column map (TOML) renaming a foreign CSV's columns onto the schema and converting their
+    /// units (`[columns] DELV = { to = "elevator_rad", unit = "deg" }`; see docs/data.md).
+    #[arg(long, value_name = "MAP.toml")]
+    pub columns: Option<PathBuf>,
+}
+
+impl ColumnsArg {
+    /// Reads a flight-data CSV through the map, printing the record's unit-sanity and sampling
+    /// warnings on stderr. A bad map or file is a usage error (exit 2).
+    pub fn read(&self, path: &Path) -> anyhow::Result<FlightRecord> {
+        let map = self
+            .columns
+            .as_deref()
+            .map(ColumnMap::load)
+            .transpose()
+            .map_err(|e| UsageError(e.to_string()))?;
+        let rec =
+            data::read_csv_mapped(path, map.as_ref()).map_err(|e| UsageError(e.to_string()))?;
+        for w in rec.warnings() {
+            eprintln!("warning: {}: {w}", path.display());
+        }
+        Ok(rec)
+    }
 }

@@ -4,10 +4,10 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 
-use super::common::{emit_json, write_atomic};
+use super::common::{emit_json, write_atomic, ColumnsArg};
 use super::UsageError;
 use crate::aircraft;
-use crate::data::{read_csv, FlightRecord};
+use crate::data::FlightRecord;
 use crate::diagnose::model::{write_model, ExtendedModel};
 use crate::diagnose::replay::{LinearReplay, ReplayCase};
 use crate::diagnose::search::Worker;
@@ -56,11 +56,8 @@ pub struct DiagnoseCmd {
     /// rate that is a hold of each sample over the step that ends at it (the convention of `flightid fly`).
     #[arg(long, value_name = "HZ")]
     pub replay_rate_hz: Option<f64>,
-}
-
-/// Reads a record; unreadable data are a usage error (exit 2).
-pub fn read_record(path: &Path) -> anyhow::Result<FlightRecord> {
-    read_csv(path).map_err(|e| UsageError(e.to_string()).into())
+    #[command(flatten)]
+    pub columns: ColumnsArg,
 }
 
 /// Maps diagnose errors on the user's input to exit code 2.
@@ -119,8 +116,13 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     for dir in [&args.report, &args.model_out].into_iter().flatten() {
         crate::report::check_output_dir(dir)?;
     }
-    let train = read_record(&args.data)?;
-    let valid = args.validate.as_deref().map(read_record).transpose()?;
+    let train = args.columns.read(&args.data)?;
+    crate::limits::check_rows(&args.data.display().to_string(), train.len())?;
+    let valid = args
+        .validate
+        .as_deref()
+        .map(|p| args.columns.read(p))
+        .transpose()?;
     let source = match &args.linear {
         Some(p) => SimSource::Linear(p),
         None => SimSource::Aircraft(&args.aircraft),
@@ -216,7 +218,7 @@ fn summary(d: &Diagnosis, workers: usize) {
         println!("no validation record (--validate): the gain on unseen data is not measured");
     }
     for w in &d.warnings {
-        println!("warning: {w}");
+        super::warn(w);
     }
     for s in &d.skipped {
         if s.effect != "aero_derivative" {

@@ -1,7 +1,7 @@
 //! `flightid identify`: identify a continuous transfer function from one input column to one output column of
 //! a flight-data CSV.
 
-use super::common::emit_json;
+use super::common::{emit_json, ColumnsArg};
 use super::paper::text_table;
 use crate::cli::UsageError;
 use crate::data::{self, FlightRecord};
@@ -54,16 +54,26 @@ pub struct IdentifyCmd {
     /// Write the result as JSON (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     pub json: Option<String>,
+    #[command(flatten)]
+    pub columns: ColumnsArg,
 }
 
-/// The column an `--input` names: `elevator` → `elevator_rad` when that column exists, else the name itself.
-fn input_column(rec: &FlightRecord, name: &str) -> String {
-    let with_unit = format!("{name}_rad");
-    if rec.column(name).is_none() && rec.column(&with_unit).is_some() {
-        with_unit
-    } else {
-        name.to_string()
-    }
+/// The input and output columns `--input` and `--output` name in `rec`: exact names, or names
+/// without their unit suffix (`elevator` → `elevator_rad`, `theta` → `theta_rad`); `label` names
+/// the record in errors.
+fn io_columns(
+    rec: &FlightRecord,
+    args: &IdentifyCmd,
+    label: &str,
+) -> anyhow::Result<(String, String)> {
+    let present = rec.column_names();
+    let resolve = |name: &str, why: &str| {
+        data::resolve_column(&present, name, why).map_err(|e| UsageError(format!("{label}: {e}")))
+    };
+    Ok((
+        resolve(&args.input, "as the identification input (--input)")?,
+        resolve(&args.output, "as the identification output (--output)")?,
+    ))
 }
 
 fn fmt_c(z: &num_complex::Complex64) -> String {
@@ -84,14 +94,10 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         return run_joint(args, method);
     }
     let data_path = &args.data[0];
-    let rec = read_record(data_path, args.resample_hz)?;
-    let in_col = input_column(&rec, &args.input);
-    let u = rec
-        .require(&in_col, "the identification input (--input)")
-        .map_err(|e| UsageError(format!("{}: {e}", data_path.display())))?;
-    let y = rec
-        .require(&args.output, "the identification output (--output)")
-        .map_err(|e| UsageError(format!("{}: {e}", data_path.display())))?;
+    let rec = read_record(data_path, args)?;
+    let (in_col, out_col) = io_columns(&rec, args, &data_path.display().to_string())?;
+    let u = rec.column(&in_col).unwrap_or_default();
+    let y = rec.column(&out_col).unwrap_or_default();
     let dt_s = rec.dt_s().ok_or_else(|| {
         UsageError(format!(
             "{}: {} samples, too few to identify anything",
@@ -145,7 +151,7 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
                 "{} ({} -> {}): {e}",
                 data_path.display(),
                 in_col,
-                args.output
+                out_col
             ))
             .into())
         }
@@ -154,17 +160,23 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
                 format!(
                     "identifying {} -> {} in {}",
                     in_col,
-                    args.output,
+                    out_col,
                     data_path.display()
                 )
             })
         }
     };
     for w in &r.warnings {
-        eprintln!("warning: {w}");
+        super::warn(w);
     }
     if args.json.as_deref() != Some("-") {
-        print_result(args, &data_path.display().to_string(), &in_col, &r);
+        print_result(
+            args,
+            &data_path.display().to_string(),
+            &in_col,
+            &out_col,
+            &r,
+        );
     }
     if let Some(target) = &args.json {
         emit_json(
@@ -172,7 +184,7 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
             &json!({
                 "data": data_path.display().to_string(),
                 "input": in_col,
-                "output": args.output,
+                "output": out_col,
                 "result": r,
             }),
         )?;
@@ -180,10 +192,16 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn print_result(args: &IdentifyCmd, source: &str, in_col: &str, r: &ident::IdentResult) {
+fn print_result(
+    args: &IdentifyCmd,
+    source: &str,
+    in_col: &str,
+    out_col: &str,
+    r: &ident::IdentResult,
+) {
     println!(
         "{} -> {} from {}: {} samples at {:.4} s, method {}, {} poles / {} zeros",
-        in_col, args.output, source, r.n_samples, r.dt_s, r.method, args.poles, args.zeros
+        in_col, out_col, source, r.n_samples, r.dt_s, r.method, args.poles, args.zeros
     );
     println!(
         "trim removed: input {:.6}, output {:.6}",
@@ -287,10 +305,10 @@ fn print_result(args: &IdentifyCmd, source: &str, in_col: &str, r: &ident::Ident
     );
 }
 
-/// Reads a flight-data CSV, resampled at `resample_hz` when given.
-fn read_record(path: &std::path::Path, resample_hz: Option<f64>) -> anyhow::Result<FlightRecord> {
-    let rec = data::read_csv(path).map_err(|e| UsageError(e.to_string()))?;
-    match resample_hz {
+/// Reads a flight-data CSV through the column map, resampled at `--resample-hz` when given.
+fn read_record(path: &std::path::Path, args: &IdentifyCmd) -> anyhow::Result<FlightRecord> {
+    let rec = args.columns.read(path)?;
+    match args.resample_hz {
         Some(hz) => Ok(data::resample_uniform(&rec, hz)
             .map_err(|e| UsageError(format!("{}: {e}", path.display())))?),
         None => Ok(rec),
@@ -302,7 +320,7 @@ fn joint_records(args: &IdentifyCmd) -> anyhow::Result<Vec<(String, FlightRecord
     let recs: Vec<FlightRecord> = args
         .data
         .iter()
-        .map(|p| read_record(p, args.resample_hz))
+        .map(|p| read_record(p, args))
         .collect::<anyhow::Result<_>>()?;
     if args.segment.is_empty() {
         if args.window_s.is_some() {
@@ -364,9 +382,9 @@ fn joint_records(args: &IdentifyCmd) -> anyhow::Result<Vec<(String, FlightRecord
 fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
     let named = joint_records(args)?;
     let mut records = Vec::with_capacity(named.len());
-    let mut in_col = String::new();
+    let (mut in_col, mut out_col) = (String::new(), String::new());
     for (label, rec) in &named {
-        in_col = input_column(rec, &args.input);
+        (in_col, out_col) = io_columns(rec, args, label)?;
         let column = |name: &str, why: &str| -> anyhow::Result<Vec<f64>> {
             Ok(rec
                 .require(name, why)
@@ -382,7 +400,7 @@ fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
         records.push(ident::JointRecord {
             label: label.clone(),
             u: column(&in_col, "the identification input (--input)")?,
-            y: column(&args.output, "the identification output (--output)")?,
+            y: column(&out_col, "the identification output (--output)")?,
             dt_s,
         });
     }
@@ -400,8 +418,7 @@ fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
         Err(e) => {
             return Err(anyhow::Error::new(e)).with_context(|| {
                 format!(
-                    "jointly identifying {in_col} -> {} from {} records",
-                    args.output,
+                    "jointly identifying {in_col} -> {out_col} from {} records",
                     records.len()
                 )
             })
@@ -409,7 +426,7 @@ fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
     };
     if args.json.as_deref() != Some("-") {
         let source = format!("{} record(s) jointly", records.len());
-        print_result(args, &source, &in_col, &joint.result);
+        print_result(args, &source, &in_col, &out_col, &joint.result);
         if opts.estimate_delay {
             println!("delay: whole samples only in a joint fit");
         }
@@ -449,7 +466,7 @@ fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
                 "data": args.data.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
                 "segments": args.segment,
                 "input": in_col,
-                "output": args.output,
+                "output": out_col,
                 "result": joint.result,
                 "records": joint.records,
             }),

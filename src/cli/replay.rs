@@ -4,7 +4,8 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use super::common::emit_json;
-use super::diagnose::{classify, read_record, start_workers, SimSource};
+use super::common::ColumnsArg;
+use super::diagnose::{classify, start_workers, SimSource};
 use super::UsageError;
 use crate::diagnose::analyse_replay;
 use crate::diagnose::extension::ExtensionFile;
@@ -36,11 +37,13 @@ pub struct ReplayCmd {
     /// Print the comparison as JSON (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     pub json: Option<String>,
+    #[command(flatten)]
+    pub columns: ColumnsArg,
 }
 
 /// Runs `flightid replay`.
 pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
-    let rec = read_record(&args.data)?;
+    let rec = args.columns.read(&args.data)?;
     let case = ReplayCase::new(&rec).map_err(classify)?;
     let model = args
         .model

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use super::common::ColumnsArg;
 use super::UsageError;
 use crate::data::{self, SegmentOptions};
 
@@ -22,11 +23,13 @@ pub struct SegmentsArgs {
     /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
     #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
     pub resample_hz: Option<f64>,
+    #[command(flatten)]
+    pub columns: ColumnsArg,
 }
 
 /// Runs `flightid segments`.
 pub fn run(args: &SegmentsArgs) -> anyhow::Result<()> {
-    let mut rec = data::read_csv(&args.file).map_err(|e| UsageError(e.to_string()))?;
+    let mut rec = args.columns.read(&args.file)?;
     if let Some(hz) = args.resample_hz {
         rec = data::resample_uniform(&rec, hz)
             .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
+use super::columns::ColumnMap;
 use super::error::{DataError, Warning};
 use super::record::FlightRecord;
 
@@ -21,6 +22,12 @@ use super::record::FlightRecord;
 /// is read (the kernel's copy out of the page cache overlaps the parsing); smaller ones are read
 /// whole and go through [`parse_csv_bytes`]. Both give the same record and the same errors.
 pub fn read_csv(path: &Path) -> Result<FlightRecord, DataError> {
+    read_csv_mapped(path, None)
+}
+
+/// Reads a flight-data CSV whose foreign columns and units `map` renames and converts to the
+/// schema's SI columns while reading (see [`ColumnMap`]); without a map this is [`read_csv`].
+pub fn read_csv_mapped(path: &Path, map: Option<&ColumnMap>) -> Result<FlightRecord, DataError> {
     let io_err = |action: &'static str| {
         move |source| DataError::Io {
             file: path.to_path_buf(),
@@ -35,9 +42,9 @@ pub fn read_csv(path: &Path) -> Result<FlightRecord, DataError> {
         let mut bytes = Vec::with_capacity(size as usize + 1);
         f.read_to_end(&mut bytes)
             .map_err(io_err("cannot read the CSV file"))?;
-        return parse_csv_bytes(&bytes, &file);
+        return parse_csv_bytes_mapped(&bytes, &file, map);
     }
-    read_csv_in_blocks(f, &file, STREAM_BLOCK_BYTES).map_err(|e| match e {
+    read_csv_in_blocks(f, &file, STREAM_BLOCK_BYTES, map).map_err(|e| match e {
         BlockReadError::Data(e) => e,
         BlockReadError::Io(source) => io_err("cannot read the CSV file")(source),
     })
@@ -54,6 +61,7 @@ fn read_csv_in_blocks(
     mut f: File,
     file: &str,
     block_bytes: usize,
+    map: Option<&ColumnMap>,
 ) -> Result<FlightRecord, BlockReadError> {
     // The preamble: read until the header line is complete (or the file ends).
     let mut head = Vec::with_capacity(1 << 16);
@@ -61,7 +69,7 @@ fn read_csv_in_blocks(
     while !eof && !header_complete(&head) {
         eof = read_block(&mut f, &mut head, 1 << 16).map_err(BlockReadError::Io)?;
     }
-    let pre = parse_preamble(&head, file).map_err(BlockReadError::Data)?;
+    let pre = parse_preamble(&head, file, map).map_err(BlockReadError::Data)?;
     let carry = head.split_off(pre.body_start);
     let (mut parsed, quoted_tail) =
         stream_chunks(&mut f, carry, eof, &pre, file, block_bytes).map_err(BlockReadError::Io)?;
@@ -175,7 +183,16 @@ pub fn read_csv_with_warnings(path: &Path) -> Result<(FlightRecord, Vec<Warning>
 
 /// Parses flight-data CSV bytes; `file` names the source in error messages.
 pub fn parse_csv_bytes(bytes: &[u8], file: &str) -> Result<FlightRecord, DataError> {
-    let pre = parse_preamble(bytes, file)?;
+    parse_csv_bytes_mapped(bytes, file, None)
+}
+
+/// [`parse_csv_bytes`] through a column map (see [`read_csv_mapped`]).
+pub fn parse_csv_bytes_mapped(
+    bytes: &[u8],
+    file: &str,
+    map: Option<&ColumnMap>,
+) -> Result<FlightRecord, DataError> {
+    let pre = parse_preamble(bytes, file, map)?;
     let body = &bytes[pre.body_start..];
     let (chunks, quoted) = split_chunks(body);
     let parsed: Vec<Result<Chunk, DataError>> = chunks
@@ -194,10 +211,16 @@ struct Preamble {
     header_line: usize,
     /// Byte offset of the first body line (after the BOM, metadata and header).
     body_start: usize,
+    /// Per column: the factor taking file values to SI (1 unless a column map converts it).
+    factors: Vec<f64>,
 }
 
 /// Parses the metadata (`#` lines and blank lines before the header) and the header.
-fn parse_preamble(bytes: &[u8], file: &str) -> Result<Preamble, DataError> {
+fn parse_preamble(
+    bytes: &[u8],
+    file: &str,
+    map: Option<&ColumnMap>,
+) -> Result<Preamble, DataError> {
     let bom = if bytes.starts_with(b"\xEF\xBB\xBF") {
         3
     } else {
@@ -223,6 +246,13 @@ fn parse_preamble(bytes: &[u8], file: &str) -> Result<Preamble, DataError> {
         pos = (end + 1).min(bytes.len());
     };
     let names = parse_header(&bytes[header_span.0..header_span.1], file, line)?;
+    let (names, factors) = match map {
+        Some(m) => m.apply_to_header(&names, file)?,
+        None => {
+            let n = names.len();
+            (names, vec![1.0; n])
+        }
+    };
     let time_index =
         names
             .iter()
@@ -238,6 +268,7 @@ fn parse_preamble(bytes: &[u8], file: &str) -> Result<Preamble, DataError> {
         time_index,
         header_line: line,
         body_start: (header_span.1 + 1).min(bytes.len()),
+        factors,
     })
 }
 
@@ -295,6 +326,11 @@ fn assemble(
     for part in parts {
         for (dst, src) in columns.iter_mut().zip(part.columns) {
             dst.extend_from_slice(&src);
+        }
+    }
+    for (values, &factor) in columns.iter_mut().zip(&pre.factors) {
+        if factor != 1.0 {
+            values.iter_mut().for_each(|v| *v *= factor);
         }
     }
     let time_s = std::mem::take(&mut columns[time_index]);
@@ -1045,7 +1081,7 @@ mod tests {
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("f.csv");
         fs::write(&path, text).expect("write");
-        let blocks = read_csv_in_blocks(File::open(&path).expect("open"), "f.csv", 97);
+        let blocks = read_csv_in_blocks(File::open(&path).expect("open"), "f.csv", 97, None);
         let blocks = match blocks {
             Ok(r) => format!("{:?} {:?} {:?}", r.time_s, r.columns, r.metadata),
             Err(BlockReadError::Data(e)) => e.to_string(),

@@ -113,10 +113,21 @@ pub enum DataError {
     /// A MAVLink telemetry log could not be turned into a flight record.
     #[error("{file}: {message}")]
     Tlog { file: String, message: String },
-    /// An airframe mapping file is missing or invalid.
-    #[error("airframe `{airframe}` ({file}): {message}")]
-    Airframe {
-        airframe: String,
+    /// A column map (`--columns`) is invalid: unknown unit or target column, a unit of the wrong kind.
+    #[error("column map {map}: {message}", map = map.display())]
+    ColumnMap { map: PathBuf, message: String },
+    /// A column map names columns the CSV does not have.
+    #[error("{file}: the column map {map} names {columns}, which the file does not have (its columns: {present})", map = map.display())]
+    MapColumnMissing {
+        file: String,
+        map: PathBuf,
+        columns: String,
+        present: String,
+    },
+    /// A servo mapping file (`--servo-map`) is missing or invalid.
+    #[error("servo mapping `{servo_map}` ({file}): {message}")]
+    ServoMap {
+        servo_map: String,
         file: PathBuf,
         message: String,
     },
@@ -129,6 +140,8 @@ pub enum WarningKind {
     LooksLikeDegrees,
     /// A `_rad_s` column holds values that look like deg/s.
     LooksLikeDegreesPerSecond,
+    /// An airspeed looks like knots or ft/s instead of m/s.
+    LooksLikeKnotsOrFeet,
     /// Accelerations look like g instead of m/s².
     LooksLikeG,
     /// `throttle` lies outside 0..1 (percent?).

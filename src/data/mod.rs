@@ -3,22 +3,25 @@
 //! The exchange format is the CSV schema of docs/data.md ([`SCHEMA_COLUMNS`]): SI units, radians,
 //! `time_s` strictly increasing, unknown columns kept. [`FlightRecord`] is its in-memory form.
 
+mod columns;
 mod csv_io;
 mod error;
 mod record;
 mod resample;
 
+pub use columns::{did_you_mean, resolve_column, unit_names, ColumnMap, ColumnMapping, Dimension};
 pub use csv_io::{
-    parse_csv_bytes, read_csv, read_csv_with_warnings, write_csv_atomic, write_csv_to,
+    parse_csv_bytes, parse_csv_bytes_mapped, read_csv, read_csv_mapped, read_csv_with_warnings,
+    write_csv_atomic, write_csv_to,
 };
 pub use error::{DataError, Warning, WarningKind, IN_MEMORY};
 pub use record::{sampling_warning, unit_warnings, FlightRecord, G0_M_S2, SCHEMA_COLUMNS};
 pub use resample::{resample_uniform, RESAMPLE_METHOD};
 
-pub mod airframe;
+pub mod servo_map;
 pub mod tlog;
 
-pub use airframe::Airframe;
+pub use servo_map::ServoMap;
 pub use tlog::{parse_tlog_bytes, read_tlog, TlogOptions, TlogReport};
 pub mod segments;
 pub use segments::{

@@ -22,6 +22,8 @@ pub const SCHEMA_COLUMNS: &[&str] = &[
     "ax_m_s2",
     "ay_m_s2",
     "az_m_s2",
+    "thrust_n",
+    "qbar_pa",
 ];
 
 /// Standard gravity, m/s² (ISO 80000-3).
@@ -217,48 +219,95 @@ fn max_abs(values: &[f64]) -> Option<(usize, f64)> {
 
 /// Unit-sanity heuristics, each with its evidence:
 /// - a `_rad` angle (except `psi_rad`, which may be unwrapped) beyond ±π rad (180°) is implausible in
-///   radians and typical of degrees; `psi_rad` is flagged only when it stays within 0..360 and exceeds 2π;
-/// - a `_rad_s` rate beyond 10 rad/s (573 °/s) is implausible for an aircraft and typical of deg/s;
+///   radians and typical of degrees; so is an angle of attack, sideslip, pitch angle or surface
+///   deflection whose 95th percentile of |value| exceeds 0.7 rad (40°), or a bank angle whose 95th
+///   percentile exceeds π/2; `psi_rad` is flagged only when it stays within 0..360 and exceeds 2π;
+/// - a `_rad_s` rate beyond 10 rad/s (573 °/s), or a pitch or yaw rate whose 99th percentile of
+///   |value| exceeds 2 rad/s (115 °/s), is implausible for an aircraft and typical of deg/s;
+/// - an angle and its rate that disagree by 180/π: dθ/dt against q cos φ − r sin φ, dφ/dt
+///   against p (Euler kinematics, Klein & Morelli eq. 3.34) fitted by least squares when they
+///   correlate (r > 0.8): a slope near 57.3 says the angle is in degrees, near 1/57.3 the rate;
+/// - a median airspeed above 300 m/s, or airspeed changing 1.94 (knots) or 3.28 (ft/s) times as
+///   fast as the specific force along the flight path says (dV/dt = ax cos α + az sin α − g sin γ,
+///   fitted over 1 s windows when they correlate);
 /// - a median specific-force magnitude of 0.5..2 means g (in m/s² it is ≈ 9.81 in 1-g flight);
 /// - `throttle` outside −0.05..1.05 is not a 0..1 fraction (percent?).
 pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
-    let mut out = Vec::new();
+    let mut out: Vec<Warning> = Vec::new();
+    let at = |i: usize| rec.time_s.get(i).copied().unwrap_or(f64::NAN);
     for (name, values) in &rec.columns {
         let Some((i, m)) = max_abs(values) else {
             continue;
         };
         if name.ends_with("_rad") {
-            let suspicious = if name == "psi_rad" {
+            let (suspicious, evidence) = if name == "psi_rad" {
                 let min = values.iter().copied().fold(f64::INFINITY, f64::min);
-                m > 2.0 * std::f64::consts::PI * 1.01 && min >= -360.0 && m <= 360.0
+                (
+                    m > 2.0 * std::f64::consts::PI * 1.01 && min >= -360.0 && m <= 360.0,
+                    None,
+                )
+            } else if m > std::f64::consts::PI {
+                (true, None)
             } else {
-                m > std::f64::consts::PI
+                let limit = if name == "phi_rad" {
+                    std::f64::consts::FRAC_PI_2
+                } else {
+                    0.7
+                };
+                let p95 = abs_percentile(values, 0.95);
+                (
+                    p95 > limit,
+                    Some(format!(
+                        "95 % of |value| lies below {p95:.4}, but as radians that is {:.0}°,                          implausible for this angle over so much of a record",
+                        p95.to_degrees()
+                    )),
+                )
             };
             if suspicious {
                 out.push(Warning {
                     kind: WarningKind::LooksLikeDegrees,
                     column: Some(name.clone()),
+                    message: evidence.unwrap_or_else(|| {
+                        format!(
+                            "values look like degrees: |value| reaches {m:.4} at sample {} (t = {} s), \
+                             which would be {:.0}° if it were radians",
+                            i + 1,
+                            at(i),
+                            m.to_degrees()
+                        )
+                    }),
+                });
+            }
+        } else if name.ends_with("_rad_s") {
+            let p99 = abs_percentile(values, 0.99);
+            let rate_limit = if name == "p_rad_s" { 10.0 } else { 2.0 };
+            if m > 10.0 || p99 > rate_limit {
+                out.push(Warning {
+                    kind: WarningKind::LooksLikeDegreesPerSecond,
+                    column: Some(name.clone()),
                     message: format!(
-                        "values look like degrees: |value| reaches {m:.4} at sample {} (t = {} s), \
-                         which would be {:.0}° if it were radians",
+                        "values look like deg/s: |value| reaches {m:.4} at sample {} (t = {} s), \
+                         which would be {:.0} °/s if it were rad/s",
                         i + 1,
-                        rec.time_s.get(i).copied().unwrap_or(f64::NAN),
+                        at(i),
                         m.to_degrees()
                     ),
                 });
             }
-        } else if name.ends_with("_rad_s") && m > 10.0 {
-            out.push(Warning {
-                kind: WarningKind::LooksLikeDegreesPerSecond,
-                column: Some(name.clone()),
-                message: format!(
-                    "values look like deg/s: |value| reaches {m:.4} at sample {} (t = {} s), \
-                     which would be {:.0} °/s if it were rad/s",
-                    i + 1,
-                    rec.time_s.get(i).copied().unwrap_or(f64::NAN),
-                    m.to_degrees()
-                ),
-            });
+        } else if name == "airspeed_m_s" {
+            let mut v = values.clone();
+            let med = median_in_place(&mut v);
+            if med > 300.0 {
+                out.push(Warning {
+                    kind: WarningKind::LooksLikeKnotsOrFeet,
+                    column: Some(name.clone()),
+                    message: format!(
+                        "median airspeed is {med:.1}, which as m/s would be Mach {:.1} at sea level: \
+                         knots or ft/s?",
+                        med / 340.3
+                    ),
+                });
+            }
         } else if name == "throttle" {
             let min = values.iter().copied().fold(f64::INFINITY, f64::min);
             let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -273,10 +322,157 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             }
         }
     }
-    if let Some(w) = accel_g_warning(rec) {
-        out.push(w);
+    let flagged = |out: &[Warning], c: &str| out.iter().any(|w| w.column.as_deref() == Some(c));
+    for w in [
+        angle_rate_warning(rec, "theta_rad", "q_rad_s"),
+        angle_rate_warning(rec, "phi_rad", "p_rad_s"),
+        speed_kinematics_warning(rec),
+        accel_g_warning(rec),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        let already = w
+            .column
+            .as_deref()
+            .is_some_and(|c| c.split('/').any(|c| flagged(&out, c)));
+        if !already {
+            out.push(w);
+        }
     }
     out
+}
+
+/// The `q`-quantile of |values| (nearest rank).
+fn abs_percentile(values: &[f64], q: f64) -> f64 {
+    let mut a: Vec<f64> = values.iter().map(|v| v.abs()).collect();
+    if a.is_empty() {
+        return 0.0;
+    }
+    let k = ((q * (a.len() - 1) as f64).round() as usize).min(a.len() - 1);
+    *a.select_nth_unstable_by(k, |x, y| x.total_cmp(y)).1
+}
+
+/// Central-difference derivative of `x` over `t` (one-sided at the ends).
+fn derivative(t: &[f64], x: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            (x[b] - x[a]) / (t[b] - t[a])
+        })
+        .collect()
+}
+
+/// Least-squares slope of `y` on `x` with an intercept, and their correlation.
+fn slope_and_correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxx += (a - mx) * (a - mx);
+        syy += (b - my) * (b - my);
+        sxy += (a - mx) * (b - my);
+    }
+    if sxx <= 0.0 || syy <= 0.0 {
+        return (0.0, 0.0);
+    }
+    (sxy / sxx, sxy / (sxx * syy).sqrt())
+}
+
+/// Flags an angle and its body rate that disagree by the degree factor (see [`unit_warnings`]).
+fn angle_rate_warning(rec: &FlightRecord, angle: &str, rate: &str) -> Option<Warning> {
+    let (x, w) = (rec.column(angle)?, rec.column(rate)?);
+    if rec.len() < 20 {
+        return None;
+    }
+    let dx = derivative(&rec.time_s, x);
+    // The Euler-angle rate the body rates give (small-angle terms dropped where columns lack).
+    let kin: Vec<f64> = match angle {
+        "theta_rad" => {
+            let phi = rec.column("phi_rad");
+            let r = rec.column("r_rad_s");
+            (0..rec.len())
+                .map(|i| match (phi, r) {
+                    (Some(phi), Some(r)) => w[i] * phi[i].cos() - r[i] * phi[i].sin(),
+                    _ => w[i],
+                })
+                .collect()
+        }
+        _ => w.to_vec(),
+    };
+    let (k, corr) = slope_and_correlation(&kin, &dx);
+    if corr < 0.8 {
+        return None;
+    }
+    let deg = 180.0 / std::f64::consts::PI;
+    let near = |k: f64, target: f64| (k / target - 1.0).abs() < 0.3;
+    let (column, what) = if near(k, deg) {
+        (angle, "the angle is in degrees")
+    } else if near(k, 1.0 / deg) {
+        (rate, "the rate is in deg/s")
+    } else {
+        return None;
+    };
+    Some(Warning {
+        kind: if column == angle {
+            WarningKind::LooksLikeDegrees
+        } else {
+            WarningKind::LooksLikeDegreesPerSecond
+        },
+        column: Some(column.to_string()),
+        message: format!(
+            "d{angle}/dt = {k:.4} × {rate} (correlation {corr:.2}); radians would give 1, so {what}"
+        ),
+    })
+}
+
+/// Flags an airspeed in knots or ft/s from the flight-path kinematics (see [`unit_warnings`]).
+fn speed_kinematics_warning(rec: &FlightRecord) -> Option<Warning> {
+    let v = rec.column("airspeed_m_s")?;
+    let (ax, az) = (rec.column("ax_m_s2")?, rec.column("az_m_s2")?);
+    let (theta, alpha) = (rec.column("theta_rad")?, rec.column("alpha_rad")?);
+    let phi = rec.column("phi_rad");
+    let dt = rec.dt_s()?;
+    let window = (1.0 / dt).round().max(1.0) as usize;
+    if rec.len() < 4 * window {
+        return None;
+    }
+    // Along-path specific force minus gravity (wings-level γ generalised with φ, β = 0).
+    let rhs: Vec<f64> = (0..rec.len())
+        .map(|i| {
+            let (ca, sa) = (alpha[i].cos(), alpha[i].sin());
+            let cphi = phi.map_or(1.0, |p| p[i].cos());
+            let sin_gamma = ca * theta[i].sin() - sa * cphi * theta[i].cos();
+            ax[i] * ca + az[i] * sa - G0_M_S2 * sin_gamma
+        })
+        .collect();
+    let (mut dv, mut integral) = (Vec::new(), Vec::new());
+    let mut i = 0;
+    while i + window < rec.len() {
+        dv.push(v[i + window] - v[i]);
+        let s: f64 = (i..i + window)
+            .map(|k| 0.5 * (rhs[k] + rhs[k + 1]) * (rec.time_s[k + 1] - rec.time_s[k]))
+            .sum();
+        integral.push(s);
+        i += window;
+    }
+    let (k, corr) = slope_and_correlation(&integral, &dv);
+    if corr < 0.8 {
+        return None;
+    }
+    let unit = [(1.0 / 0.514_444, "knots"), (1.0 / 0.3048, "ft/s")]
+        .into_iter()
+        .find(|(f, _)| (k / f - 1.0).abs() < 0.25)?
+        .1;
+    Some(Warning {
+        kind: WarningKind::LooksLikeKnotsOrFeet,
+        column: Some("airspeed_m_s".into()),
+        message: format!(
+            "airspeed changes {k:.2} times as fast as the specific force along the flight path \
+             says (correlation {corr:.2} over 1 s windows); m/s would give 1: it looks like {unit}"
+        ),
+    })
 }
 
 /// Flags accelerations recorded in g: the median specific-force magnitude is 0.5..2.

@@ -112,6 +112,7 @@ impl JsbsimSim {
         let mut req = json!({
             "cmd": "load", "aircraft": config.model, "dt_s": 1.0 / rate_hz, "surfaces": surfaces,
             "engine_running": config.engine_running, "gear_up": config.gear_up, "engines": config.engines,
+            "scratch_dir": bridge.scratch_dir().display().to_string(),
         });
         if let Some(dir) = model_dir {
             let abs = std::fs::canonicalize(dir).map_err(|e| {

@@ -1,0 +1,459 @@
+//! Column and unit mapping: a foreign CSV's column names and units onto the flight-data schema.
+//!
+//! A map file (`--columns MAP.toml` on every command that reads a CSV) names, for each foreign
+//! column, the schema column it becomes and the unit it is recorded in:
+//!
+//! ```toml
+//! [columns]
+//! TIME = { to = "time_s" }                          # no unit: already the schema's unit
+//! DELV = { to = "elevator_rad", unit = "deg", scale = -1.0 }   # scale: sign or gain after the unit
+//! VTAS = { to = "airspeed_m_s", unit = "kts" }
+//! ```
+//!
+//! Units: rad, deg, m, ft, m/s, ft/s, kts, g, m/s2, deg/s, rad/s, N, lbf, Pa, psf, s, ms, percent.
+//! A unit must measure what its target column measures (`deg` cannot go to `airspeed_m_s`).
+//! The reader renames and converts while reading, so every command sees SI columns.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use super::error::DataError;
+use super::record::{G0_M_S2, SCHEMA_COLUMNS};
+
+/// What a column measures; a unit converts only into columns of its own dimension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    /// Seconds.
+    Time,
+    /// Radians.
+    Angle,
+    /// Radians per second.
+    AngularRate,
+    /// Metres.
+    Length,
+    /// Metres per second.
+    Speed,
+    /// Metres per second squared (specific force).
+    Acceleration,
+    /// Newtons.
+    Force,
+    /// Pascals.
+    Pressure,
+    /// A fraction (throttle 0..1).
+    Fraction,
+}
+
+impl Dimension {
+    /// The dimension of a schema column, from its unit suffix.
+    pub fn of_column(column: &str) -> Option<Dimension> {
+        if !SCHEMA_COLUMNS.contains(&column) {
+            return None;
+        }
+        Some(match column {
+            "time_s" => Dimension::Time,
+            "throttle" => Dimension::Fraction,
+            "airspeed_m_s" => Dimension::Speed,
+            "altitude_m" => Dimension::Length,
+            "thrust_n" => Dimension::Force,
+            "qbar_pa" => Dimension::Pressure,
+            c if c.ends_with("_rad_s") => Dimension::AngularRate,
+            c if c.ends_with("_rad") => Dimension::Angle,
+            c if c.ends_with("_m_s2") => Dimension::Acceleration,
+            _ => return None,
+        })
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Dimension::Time => "a time",
+            Dimension::Angle => "an angle",
+            Dimension::AngularRate => "an angular rate",
+            Dimension::Length => "a length",
+            Dimension::Speed => "a speed",
+            Dimension::Acceleration => "an acceleration",
+            Dimension::Force => "a force",
+            Dimension::Pressure => "a pressure",
+            Dimension::Fraction => "a fraction",
+        }
+    }
+}
+
+/// The units a map may name: (spelling, dimension, factor to SI).
+const UNITS: &[(&str, Dimension, f64)] = &[
+    ("s", Dimension::Time, 1.0),
+    ("ms", Dimension::Time, 1e-3),
+    ("rad", Dimension::Angle, 1.0),
+    ("deg", Dimension::Angle, std::f64::consts::PI / 180.0),
+    ("rad/s", Dimension::AngularRate, 1.0),
+    (
+        "deg/s",
+        Dimension::AngularRate,
+        std::f64::consts::PI / 180.0,
+    ),
+    ("m", Dimension::Length, 1.0),
+    ("ft", Dimension::Length, 0.3048),
+    ("m/s", Dimension::Speed, 1.0),
+    ("ft/s", Dimension::Speed, 0.3048),
+    ("kts", Dimension::Speed, 1852.0 / 3600.0),
+    ("m/s2", Dimension::Acceleration, 1.0),
+    ("g", Dimension::Acceleration, G0_M_S2),
+    ("N", Dimension::Force, 1.0),
+    ("lbf", Dimension::Force, 4.448_221_615_260_5),
+    ("Pa", Dimension::Pressure, 1.0),
+    // 1 lbf/ft² = 4.4482216152605 N / 0.09290304 m².
+    ("psf", Dimension::Pressure, 47.880_258_980_335_84),
+    ("1", Dimension::Fraction, 1.0),
+    ("percent", Dimension::Fraction, 0.01),
+];
+
+/// The unit spellings a map accepts, for messages.
+pub fn unit_names() -> Vec<&'static str> {
+    UNITS.iter().map(|u| u.0).collect()
+}
+
+/// One mapped column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColumnMapping {
+    /// The column's name in the foreign file.
+    pub from: String,
+    /// The schema column it becomes.
+    pub to: String,
+    /// The unit as written in the map (the target's own unit when the map gives none).
+    pub unit: String,
+    /// Multiplier taking a file value to SI: unit factor × the map's `scale`.
+    pub factor: f64,
+}
+
+/// A column map (see the module documentation), checked against the schema on loading.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ColumnMap {
+    /// The map file, for messages.
+    pub file: PathBuf,
+    /// The mappings, by foreign column name.
+    pub columns: Vec<ColumnMapping>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MapFile {
+    columns: BTreeMap<String, MapEntry>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MapEntry {
+    to: String,
+    unit: Option<String>,
+    scale: Option<f64>,
+}
+
+impl ColumnMap {
+    /// Reads and checks a map file: every target a schema column, every unit known and of the
+    /// target's dimension, no target named twice.
+    pub fn load(path: &Path) -> Result<ColumnMap, DataError> {
+        let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
+            file: path.to_path_buf(),
+            action: "cannot read the column map",
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses map text; `path` names it in messages.
+    pub fn parse(text: &str, path: &Path) -> Result<ColumnMap, DataError> {
+        let bad = |message: String| DataError::ColumnMap {
+            map: path.to_path_buf(),
+            message,
+        };
+        let raw: MapFile = toml::from_str(text).map_err(|e| {
+            bad(format!(
+                "{} (expected `[columns]` with entries like `DELV = {{ to = \"elevator_rad\", unit = \"deg\" }}`)",
+                e.message()
+            ))
+        })?;
+        let mut columns = Vec::with_capacity(raw.columns.len());
+        let mut errors = Vec::new();
+        for (from, entry) in raw.columns {
+            let Some(dim) = Dimension::of_column(&entry.to) else {
+                let hint = did_you_mean(&entry.to, SCHEMA_COLUMNS.iter().copied())
+                    .map(|c| format!("; did you mean `{c}`?"))
+                    .unwrap_or_default();
+                errors.push(format!(
+                    "`{from}`: unknown target column `{}`{hint} (schema columns: {})",
+                    entry.to,
+                    SCHEMA_COLUMNS.join(", ")
+                ));
+                continue;
+            };
+            let (unit, unit_factor) = match &entry.unit {
+                None => (default_unit(dim).to_string(), 1.0),
+                Some(u) => match UNITS.iter().find(|x| x.0 == u.trim()) {
+                    Some(&(name, d, f)) if d == dim => (name.to_string(), f),
+                    Some(&(name, d, _)) => {
+                        errors.push(format!(
+                            "`{from}`: unit `{name}` measures {} but `{}` is {}",
+                            d.name(),
+                            entry.to,
+                            dim.name()
+                        ));
+                        continue;
+                    }
+                    None => {
+                        let hint = did_you_mean(u, UNITS.iter().map(|x| x.0))
+                            .map(|c| format!("; did you mean `{c}`?"))
+                            .unwrap_or_default();
+                        errors.push(format!(
+                            "`{from}`: unknown unit `{u}`{hint} (units: {})",
+                            unit_names().join(", ")
+                        ));
+                        continue;
+                    }
+                },
+            };
+            let scale = entry.scale.unwrap_or(1.0);
+            if !(scale.is_finite() && scale != 0.0) || (dim == Dimension::Time && scale < 0.0) {
+                errors.push(format!(
+                    "`{from}`: scale must be a finite non-zero number (positive for time), got {scale}"
+                ));
+                continue;
+            }
+            columns.push(ColumnMapping {
+                from,
+                to: entry.to,
+                unit,
+                factor: unit_factor * scale,
+            });
+        }
+        for (i, a) in columns.iter().enumerate() {
+            if let Some(b) = columns[..i].iter().find(|b| b.to == a.to) {
+                errors.push(format!(
+                    "`{}` and `{}` both map to `{}`",
+                    b.from, a.from, a.to
+                ));
+            }
+        }
+        if !errors.is_empty() {
+            return Err(bad(errors.join("; ")));
+        }
+        Ok(ColumnMap {
+            file: path.to_path_buf(),
+            columns,
+        })
+    }
+
+    /// Applies the map to a header: the renamed header and each column's factor to SI.
+    /// Fails naming every mapped column the header lacks, and a target the file already has
+    /// under its own name.
+    pub fn apply_to_header(
+        &self,
+        names: &[String],
+        file: &str,
+    ) -> Result<(Vec<String>, Vec<f64>), DataError> {
+        let missing: Vec<&str> = self
+            .columns
+            .iter()
+            .filter(|m| !names.contains(&m.from))
+            .map(|m| m.from.as_str())
+            .collect();
+        if !missing.is_empty() {
+            return Err(DataError::MapColumnMissing {
+                file: file.to_string(),
+                map: self.file.clone(),
+                columns: missing
+                    .iter()
+                    .map(|c| format!("`{c}`"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                present: names.join(", "),
+            });
+        }
+        let mut out = Vec::with_capacity(names.len());
+        let mut factors = Vec::with_capacity(names.len());
+        for name in names {
+            match self.columns.iter().find(|m| &m.from == name) {
+                Some(m) => {
+                    out.push(m.to.clone());
+                    factors.push(m.factor);
+                }
+                None => {
+                    if let Some(m) = self.columns.iter().find(|m| &m.to == name) {
+                        return Err(DataError::ColumnMap {
+                            map: self.file.clone(),
+                            message: format!(
+                                "{file} already has a column `{name}`, and the map also maps `{}` onto it; \
+                                 drop one of them",
+                                m.from
+                            ),
+                        });
+                    }
+                    out.push(name.clone());
+                    factors.push(1.0);
+                }
+            }
+        }
+        Ok((out, factors))
+    }
+}
+
+/// The SI unit of a dimension, as a map would spell it.
+fn default_unit(dim: Dimension) -> &'static str {
+    match dim {
+        Dimension::Time => "s",
+        Dimension::Angle => "rad",
+        Dimension::AngularRate => "rad/s",
+        Dimension::Length => "m",
+        Dimension::Speed => "m/s",
+        Dimension::Acceleration => "m/s2",
+        Dimension::Force => "N",
+        Dimension::Pressure => "Pa",
+        Dimension::Fraction => "1",
+    }
+}
+
+/// The closest candidate to `name` (case-insensitive edit distance at most a third of its
+/// length, at least 2), if any.
+pub fn did_you_mean<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    let lower = name.to_ascii_lowercase();
+    let limit = (lower.len() / 3).max(2);
+    candidates
+        .map(|c| {
+            let other = c.to_ascii_lowercase();
+            // A name that begins the other (`deg` in `degrees`) is as good as one edit away.
+            let prefix = other.len() >= 2
+                && lower.len() >= 2
+                && (lower.starts_with(&other) || other.starts_with(&lower));
+            let d = edit_distance(&lower, &other);
+            (if prefix { d.min(1) } else { d }, c)
+        })
+        .filter(|(d, _)| *d <= limit)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c)
+}
+
+/// Levenshtein distance (byte-wise; names are ASCII).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    let mut cur = vec![0; b.len() + 1];
+    for i in 1..=a.len() {
+        cur[0] = i;
+        for j in 1..=b.len() {
+            let sub = prev[j - 1] + usize::from(a[i - 1] != b[j - 1]);
+            cur[j] = sub.min(prev[j] + 1).min(cur[j - 1] + 1);
+        }
+        std::mem::swap(&mut prev, &mut cur);
+    }
+    prev[b.len()]
+}
+
+/// The record column a user's name refers to: the name itself; else the one column whose name is
+/// the given name plus a unit suffix (`theta` → `theta_rad`, `q` → `q_rad_s`); else an error with
+/// the closest name.
+pub fn resolve_column(present: &[&str], name: &str, why: &str) -> Result<String, DataError> {
+    if present.contains(&name) {
+        return Ok(name.to_string());
+    }
+    const SUFFIXES: &[&str] = &["_rad", "_rad_s", "_m_s", "_m", "_m_s2", "_n", "_pa", "_s"];
+    let with_unit: Vec<&str> = present
+        .iter()
+        .copied()
+        .filter(|c| {
+            c.strip_prefix(name)
+                .is_some_and(|rest| SUFFIXES.contains(&rest))
+        })
+        .collect();
+    if with_unit.len() == 1 {
+        return Ok(with_unit[0].to_string());
+    }
+    let hint = if with_unit.len() > 1 {
+        format!(" (ambiguous: {})", with_unit.join(", "))
+    } else {
+        did_you_mean(name, present.iter().copied())
+            .map(|c| format!("; did you mean `{c}`?"))
+            .unwrap_or_default()
+    };
+    Err(DataError::MissingColumn {
+        column: name.to_string(),
+        why: format!("{why}{hint}"),
+        present: present.join(", "),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<ColumnMap, DataError> {
+        ColumnMap::parse(text, Path::new("map.toml"))
+    }
+
+    #[test]
+    fn units_convert_to_si_with_the_maps_scale() {
+        let m = parse(
+            "[columns]\nDELV = { to = \"elevator_rad\", unit = \"deg\", scale = -1.0 }\n\
+             V = { to = \"airspeed_m_s\", unit = \"kts\" }\nQBAR = { to = \"qbar_pa\", unit = \"psf\" }\n\
+             T = { to = \"time_s\" }\nF = { to = \"thrust_n\", unit = \"lbf\" }\n",
+        )
+        .unwrap();
+        let f = |from: &str| m.columns.iter().find(|c| c.from == from).unwrap().factor;
+        assert!((f("DELV") + 0.017_453_292_519_943_295).abs() < 1e-15);
+        assert!((f("V") - 0.514_444_444).abs() < 1e-9);
+        assert!((f("QBAR") - 47.880_26).abs() < 1e-4);
+        assert!((f("F") - 4.448_222).abs() < 1e-6);
+        assert_eq!(f("T"), 1.0);
+    }
+
+    #[test]
+    fn bad_maps_name_the_entry_the_unit_and_the_target() {
+        let e = parse("[columns]\nA = { to = \"alpha_rad\", unit = \"degree\" }\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`A`") && e.contains("unknown unit `degree`") && e.contains("deg"),
+            "{e}"
+        );
+        let e = parse("[columns]\nA = { to = \"alpha\", unit = \"deg\" }\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("unknown target column `alpha`") && e.contains("alpha_rad"),
+            "{e}"
+        );
+        let e = parse("[columns]\nV = { to = \"airspeed_m_s\", unit = \"deg\" }\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("measures an angle") && e.contains("a speed"),
+            "{e}"
+        );
+        let e = parse("[columns]\nA = { to = \"alpha_rad\" }\nB = { to = \"alpha_rad\" }\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("both map to `alpha_rad`"), "{e}");
+    }
+
+    #[test]
+    fn header_mapping_reports_every_missing_column() {
+        let m = parse(
+            "[columns]\nA = { to = \"alpha_rad\", unit = \"deg\" }\nB = { to = \"beta_rad\", unit = \"deg\" }\n",
+        )
+        .unwrap();
+        let names = vec!["t".to_string(), "C".to_string()];
+        let e = m.apply_to_header(&names, "f.csv").unwrap_err().to_string();
+        assert!(
+            e.contains("`A`, `B`") && e.contains("f.csv") && e.contains("map.toml"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn names_without_unit_suffix_resolve_when_unambiguous() {
+        let cols = ["time_s", "theta_rad", "q_rad_s", "elevator_rad"];
+        assert_eq!(resolve_column(&cols, "theta", "x").unwrap(), "theta_rad");
+        assert_eq!(resolve_column(&cols, "q", "x").unwrap(), "q_rad_s");
+        let e = resolve_column(&cols, "thetta_rad", "x")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("did you mean `theta_rad`"), "{e}");
+    }
+}
