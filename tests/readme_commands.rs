@@ -79,7 +79,13 @@ fn every_readme_command_runs_as_written() {
     assert!(commands.len() >= 20, "README commands found: {commands:?}");
     let tmp = tempfile::tempdir().unwrap();
     let cwd = tmp.path();
-    for dir in ["campaigns", "aircraft", "models", "scripts", "tests/fixtures"] {
+    for dir in [
+        "campaigns",
+        "aircraft",
+        "models",
+        "scripts",
+        "tests/fixtures",
+    ] {
         copy_dir(&repo().join(dir), &cwd.join(dir));
     }
     let mut report = Vec::new();

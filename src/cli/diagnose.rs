@@ -222,7 +222,12 @@ fn summary(d: &Diagnosis, workers: usize) {
     }
     for s in &d.skipped {
         if s.effect != "aero_derivative" {
-            println!("skipped {} on {}: {}", s.effect, s.target, s.reason);
+            let text = format!("skipped {} on {}: {}", s.effect, s.target, s.reason);
+            for line in
+                crate::report::text::wrap(&text, crate::report::text::TERMINAL_WIDTH, "", "  ")
+            {
+                println!("{line}");
+            }
         }
     }
     println!(
