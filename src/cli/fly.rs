@@ -110,7 +110,7 @@ impl ManeuverArgs {
         }
         let m = self.maneuver()?;
         crate::limits::check_samples(
-            "the record (--duration-s × --rate-hz)",
+            "the simulation (--duration-s × the simulation rate, --sim-rate-hz or --rate-hz)",
             self.duration_s,
             rate_hz,
         )?;
