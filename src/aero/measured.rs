@@ -40,6 +40,9 @@ pub enum MeasuredError {
     /// The estimation itself failed.
     #[error(transparent)]
     Aero(#[from] AeroError),
+    /// The output-error or filter-error fit failed (or its problem is inconsistent).
+    #[error(transparent)]
+    Estimate(#[from] crate::estimate::EstimateError),
 }
 
 /// Which axis to estimate.
@@ -658,6 +661,9 @@ pub struct MeasuredReport {
     pub air_data: Vec<(String, AirData)>,
     /// Fit per output, % (output and filter error).
     pub fit_percent: BTreeMap<String, f64>,
+    /// Whether every fit converged (output and filter error; absent for equation error).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub converged: Option<bool>,
     /// What the reader should know (skipped equations, fixed terms, convergence).
     pub notes: Vec<String>,
 }
@@ -915,6 +921,7 @@ pub fn equation_error_report(
             .zip(ee.air.iter().cloned())
             .collect(),
         fit_percent: BTreeMap::new(),
+        converged: None,
         notes,
     })
 }

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use super::expr::{Expr, ExprError, Slot};
+use super::expr::{Expr, ExprError, Program, Slot};
 use super::integrate::simulate_states;
 use super::layout::Nuisance;
 use super::model::{Model, Parameter, Signature, SimError, StateModel};
@@ -32,9 +32,10 @@ pub struct UserModel {
     file: String,
     text: String,
     signature: Signature,
-    equations: Vec<Expr>,
-    /// Per output: its observation equation, or `None` when it is a state.
-    observations: Vec<Result<Expr, usize>>,
+    /// Per state: its right-hand side, compiled.
+    equations: Vec<Program>,
+    /// Per output: its observation equation compiled, or the index of the state it equals.
+    observations: Vec<Result<Program, usize>>,
     /// Every parameter (estimated ones first, then `[fixed]`), start values and bounds.
     pub parameters: Vec<Parameter>,
     /// Nuisance terms declared in `[nuisance]`.
@@ -243,7 +244,7 @@ impl UserModel {
                     format!("state '{s}' has no equation in [equations]"),
                 ));
             };
-            equations.push(compile("equations", s, v)?);
+            equations.push(compile("equations", s, v)?.compile());
         }
         let obs_section = section("observations")?;
         for (k, _) in &obs_section {
@@ -258,7 +259,7 @@ impl UserModel {
         let mut observations = Vec::new();
         for o in &outputs {
             match obs_section.iter().find(|(k, _)| k == o) {
-                Some((_, v)) => observations.push(Ok(compile("observations", o, v)?)),
+                Some((_, v)) => observations.push(Ok(compile("observations", o, v)?.compile())),
                 None => match states.iter().position(|s| s == o) {
                     Some(i) => observations.push(Err(i)),
                     None => {
