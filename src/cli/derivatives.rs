@@ -7,6 +7,7 @@ use crate::aero::AeroError;
 use crate::cli::UsageError;
 use crate::ident::Method;
 use crate::report;
+use crate::report::text::{wrap, TERMINAL_WIDTH};
 use crate::study::spec::{parse_derivatives, Structure};
 use crate::study::trials::{SensorNoise, TrialOptions};
 use crate::study::{self, Source, StudyOptions};
@@ -185,8 +186,11 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     };
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;
+    let progress = super::common::spinner("derivatives: trim, model check, flights, estimates");
     let mut sim = crate::sim::JsbsimSim::start(&cfg, args.trim.rate_hz)?;
-    let result = study::run(&mut sim, &point, &opts).map_err(classify)?;
+    let result = study::run(&mut sim, &point, &opts).map_err(classify);
+    progress.finish_and_clear();
+    let result = result?;
     let quiet = args.json.as_deref() == Some("-");
     if !quiet {
         println!(
@@ -197,10 +201,19 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
             println!("{}", text_table(&t));
         }
         if !result.identifiability.is_empty() {
-            println!("Identifiability (TF route):\n{}", result.identifiability);
+            println!("Identifiability (TF route):");
+            for line in result.identifiability.lines() {
+                let indent = &line[..line.len() - line.trim_start().len()];
+                let rest = format!("{indent}    ");
+                for l in wrap(line.trim_start(), TERMINAL_WIDTH, indent, &rest) {
+                    println!("{l}");
+                }
+            }
         }
         for n in &result.notes {
-            println!("- {n}");
+            for l in wrap(n, TERMINAL_WIDTH, "- ", "  ") {
+                println!("{l}");
+            }
         }
     }
     let json = result.to_json();
