@@ -6,7 +6,7 @@ use std::process::Command;
 
 use flightid::data::tlog::TlogOptions;
 use flightid::data::{
-    parse_tlog_bytes, read_tlog, write_csv_atomic, Airframe, DataError, FlightRecord,
+    parse_tlog_bytes, read_tlog, write_csv_atomic, DataError, FlightRecord, ServoMap,
 };
 use mavlink::dialects::ardupilotmega::{MavMessage, ATTITUDE_DATA, HEARTBEAT_DATA};
 use mavlink::{MavHeader, MavlinkVersion};
@@ -15,8 +15,8 @@ fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn c172x() -> Airframe {
-    Airframe::load(&repo_root().join("aircraft/airframes/c172x.toml")).unwrap()
+fn c172x() -> ServoMap {
+    ServoMap::load(&repo_root().join("aircraft/servo_maps/c172x.toml")).unwrap()
 }
 
 /// Appends one `.tlog` record: big-endian µs timestamp + frame encoded by the `mavlink` crate.
@@ -265,8 +265,8 @@ fn make_tlog(csv: &Path, tlog: &Path, extra: &[&str]) -> serde_json::Value {
         .arg(repo_root().join("scripts/make_tlog.py"))
         .arg(csv)
         .arg(tlog)
-        .arg("--airframe")
-        .arg(repo_root().join("aircraft/airframes/c172x.toml"))
+        .arg("--servo-map")
+        .arg(repo_root().join("aircraft/servo_maps/c172x.toml"))
         .args(extra)
         .output()
         .expect("run scripts/make_tlog.py");

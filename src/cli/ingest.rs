@@ -5,18 +5,22 @@ use std::path::PathBuf;
 use anyhow::Context;
 
 use super::UsageError;
-use crate::data::{self, Airframe, TlogOptions};
+use crate::data::{self, ServoMap, TlogOptions};
 
 /// Convert a MAVLink `.tlog` into a flight-data CSV (docs/data.md).
 #[derive(clap::Args, Debug, Clone)]
+#[command(
+    after_help = "Examples:\n  flightid ingest --tlog tests/fixtures/flight.tlog --airframe c172x --out flight.csv\n  flightid ingest --tlog flight.tlog --airframe my_servos.toml --resample-hz 50 --out flight.csv --json"
+)]
 pub struct IngestArgs {
     /// The telemetry log ([8-byte µs timestamp][MAVLink frame] records).
     #[arg(long)]
     pub tlog: PathBuf,
-    /// Airframe servo mapping: a name under aircraft/airframes/ or a path to a .toml file.
-    /// Without it, surface columns are left out.
-    #[arg(long)]
-    pub airframe: Option<String>,
+    /// MAVLink servo mapping (PWM → surface radians): a name under aircraft/servo_maps/ or a path to a .toml
+    /// file. Without it, surface columns are left out. (Not an airframe description: mass, inertia and
+    /// geometry are `--airframe` on the commands that need them.)
+    #[arg(long = "servo-map", value_name = "NAME|FILE.toml")]
+    pub servo_map: Option<String>,
     /// Output CSV (written atomically).
     #[arg(long)]
     pub out: PathBuf,
@@ -33,15 +37,15 @@ pub struct IngestArgs {
 
 /// Runs `flightid ingest`.
 pub fn run(args: &IngestArgs) -> anyhow::Result<()> {
-    let airframe = match &args.airframe {
-        Some(name) => Some(Airframe::resolve(name).map_err(|e| UsageError(e.to_string()))?),
+    let servo_map = match &args.servo_map {
+        Some(name) => Some(ServoMap::resolve(name).map_err(|e| UsageError(e.to_string()))?),
         None => None,
     };
     let options = TlogOptions {
         sysid: args.sysid,
         rate_hz: args.resample_hz,
     };
-    let report = data::read_tlog(&args.tlog, airframe.as_ref(), &options)
+    let report = data::read_tlog(&args.tlog, servo_map.as_ref(), &options)
         .map_err(|e| UsageError(e.to_string()))?;
     let unit_warnings = report.record.warnings();
     data::write_csv_atomic(&args.out, &report.record)
@@ -78,7 +82,7 @@ pub fn run(args: &IngestArgs) -> anyhow::Result<()> {
             s.truncated_tail_bytes
         );
         for w in report.warnings.iter().chain(&unit_warnings) {
-            eprintln!("warning: {w}");
+            super::warn(w);
         }
     }
     Ok(())

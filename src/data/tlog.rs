@@ -10,9 +10,9 @@
 //! - HIGHRES_IMU (m/s²) or else SCALED_IMU / RAW_IMU (milli-g) → `ax_m_s2 ay_m_s2 az_m_s2`
 //!   (body FRD specific force, 1-g level flight gives az ≈ −9.81);
 //! - VFR_HUD → `airspeed_m_s` (the autopilot's airspeed: usually indicated, not true), `altitude_m`
-//!   (MSL), and `throttle` (percent/100) when the airframe maps no throttle servo;
+//!   (MSL), and `throttle` (percent/100) when the servo mapping maps no throttle servo;
 //! - AOA_SSA (degrees) → `alpha_rad beta_rad`;
-//! - SERVO_OUTPUT_RAW (port 0) → `elevator_rad aileron_rad rudder_rad throttle` via [`Airframe`].
+//! - SERVO_OUTPUT_RAW (port 0) → `elevator_rad aileron_rad rudder_rad throttle` via [`ServoMap`].
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -20,9 +20,9 @@ use std::path::Path;
 use mavlink::dialects::ardupilotmega::MavMessage;
 use mavlink::{MavlinkVersion, Message};
 
-use super::airframe::Airframe;
 use super::error::{DataError, Warning, WarningKind};
 use super::record::{FlightRecord, G0_M_S2};
+use super::servo_map::ServoMap;
 
 /// Start-of-frame marker of MAVLink v1.
 const STX_V1: u8 = 0xFE;
@@ -358,7 +358,7 @@ const AOA_SSA_ID: u32 = 11020;
 /// Reads a `.tlog` file into the flight-data schema (see the module documentation).
 pub fn read_tlog(
     path: &Path,
-    airframe: Option<&Airframe>,
+    servo_map: Option<&ServoMap>,
     options: &TlogOptions,
 ) -> Result<TlogReport, DataError> {
     let bytes = std::fs::read(path).map_err(|source| DataError::Io {
@@ -366,14 +366,14 @@ pub fn read_tlog(
         action: "cannot read the telemetry log",
         source,
     })?;
-    parse_tlog_bytes(&bytes, &path.display().to_string(), airframe, options)
+    parse_tlog_bytes(&bytes, &path.display().to_string(), servo_map, options)
 }
 
 /// [`read_tlog`] on bytes in memory; `file` names the source in errors and metadata.
 pub fn parse_tlog_bytes(
     bytes: &[u8],
     file: &str,
-    airframe: Option<&Airframe>,
+    servo_map: Option<&ServoMap>,
     options: &TlogOptions,
 ) -> Result<TlogReport, DataError> {
     let err = |message: String| DataError::Tlog {
@@ -446,7 +446,7 @@ pub fn parse_tlog_bytes(
             describe()
         )));
     }
-    let mut record = build_record(series, airframe, options.rate_hz)
+    let mut record = build_record(series, servo_map, options.rate_hz)
         .map_err(|m| err(format!("system id {sysid}: {m}")))?;
     let mut warnings = Vec::new();
     if stats.skipped_bytes > 0 {
@@ -483,7 +483,7 @@ pub fn parse_tlog_bytes(
         ("ax_m_s2", "no HIGHRES_IMU/SCALED_IMU/RAW_IMU"),
         ("airspeed_m_s", "no VFR_HUD"),
         ("alpha_rad", "no AOA_SSA"),
-        ("elevator_rad", "no SERVO_OUTPUT_RAW or no airframe mapping"),
+        ("elevator_rad", "no SERVO_OUTPUT_RAW or no --servo-map"),
     ] {
         if record.column(needed).is_none() {
             warnings.push(Warning {
@@ -505,10 +505,10 @@ pub fn parse_tlog_bytes(
             stats.truncated_tail_bytes
         ),
     );
-    if let Some(af) = airframe {
+    if let Some(af) = servo_map {
         record
             .metadata
-            .insert(1, format!(" airframe servo mapping: {}", af.name));
+            .insert(1, format!(" servo mapping: {}", af.name));
     }
     Ok(TlogReport {
         record,
@@ -642,7 +642,7 @@ fn unwrap_angles(s: &mut [(u64, [f64; 6])], k: usize) {
 /// Puts the collected series onto one uniform grid over the ATTITUDE time span.
 fn build_record(
     series: &mut Series,
-    airframe: Option<&Airframe>,
+    servo_map: Option<&ServoMap>,
     rate_hz: Option<f64>,
 ) -> Result<FlightRecord, String> {
     tidy(&mut series.attitude);
@@ -693,7 +693,7 @@ fn build_record(
         " time_s = log timestamp - {t0_us} µs (Unix epoch); grid {} Hz; linear interpolation per message stream",
         1e6 / dt_us
     ));
-    if let Some(af) = airframe {
+    if let Some(af) = servo_map {
         if !series.servo.is_empty() {
             let surfaces = [
                 ("elevator_rad", af.elevator),

@@ -19,12 +19,15 @@
 //! The contract and how to plug in a model: `docs/estimate.md`.
 
 pub mod covariance;
+pub mod expr;
 mod fit;
 mod integrate;
 mod layout;
 mod linear;
 mod model;
 mod record;
+mod summary;
+mod user_model;
 
 pub use fit::{fit, Estimate, Method, Options, ParameterEstimate, RecordFit, StopReason};
 pub use integrate::simulate_states;
@@ -32,6 +35,8 @@ pub use layout::{Nuisance, NuisanceKind};
 pub use linear::{Entry, LinearModel};
 pub use model::{Model, Parameter, Signature, SimError, StateModel};
 pub use record::{InputHold, InputSignal, Record, Run};
+pub use summary::HIGH_CORRELATION;
+pub use user_model::{ModelFileError, UserModel};
 
 /// What went wrong in an estimation, with what the user needs to fix it.
 #[derive(Debug, thiserror::Error)]
