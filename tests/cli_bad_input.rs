@@ -210,6 +210,8 @@ fn long_fly(tmp: &Path) -> Child {
             "20000",
             "--rate-hz",
             "40",
+            "--sim-rate-hz",
+            "40",
             "--out",
             "long.csv",
         ])

@@ -59,11 +59,11 @@ fn write_record(path: &Path, x0: [f64; 2], bias: [f64; 2], seed: u64) {
     );
     let mut csv = String::from("time_s,elevator_rad,alpha_rad,q_rad_s\n");
     let h = 0.001;
-    for k in 0..n {
+    for (k, &sample) in samples.iter().enumerate() {
         let t = k as f64 * dt;
         csv += &format!(
             "{t},{},{},{}\n",
-            samples[k],
+            sample,
             x[0] + bias[0] + na.sample(&mut rng),
             x[1] + bias[1] + nq.sample(&mut rng)
         );

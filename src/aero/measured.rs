@@ -40,6 +40,9 @@ pub enum MeasuredError {
     /// The estimation itself failed.
     #[error(transparent)]
     Aero(#[from] AeroError),
+    /// The output-error or filter-error fit failed (or its problem is inconsistent).
+    #[error(transparent)]
+    Estimate(#[from] crate::estimate::EstimateError),
 }
 
 /// Which axis to estimate.
@@ -99,6 +102,30 @@ pub fn excited_axis(rec: &data::FlightRecord) -> Option<AxisChoice> {
         (true, false) => Some(AxisChoice::Longitudinal),
         (false, true) => Some(AxisChoice::Lateral),
         (false, false) => None,
+    }
+}
+
+/// Indices of the records that excite an axis (its surfaces move, [`excited_axis`]), or of all records when
+/// none does (an axis forced with `--axis`).
+pub fn records_exciting(
+    records: &[(String, data::FlightRecord)],
+    longitudinal: bool,
+) -> Vec<usize> {
+    let chosen: Vec<usize> = (0..records.len())
+        .filter(|&i| {
+            excited_axis(&records[i].1).is_some_and(|a| {
+                if longitudinal {
+                    a.longitudinal()
+                } else {
+                    a.lateral()
+                }
+            })
+        })
+        .collect();
+    if chosen.is_empty() {
+        (0..records.len()).collect()
+    } else {
+        chosen
     }
 }
 
@@ -364,12 +391,31 @@ pub fn equation_error_measured(
         AxisChoice::Lateral => &["Cl", "Cn", "CY"],
         AxisChoice::Both => &["Cm", "CL", "Cl", "Cn", "CY"],
     };
-    for (name, raw) in records {
+    // Each axis from the records that excite it: a lateral record's incidental pitch motion, stacked into the
+    // C_m regression, biases C_mq by 20–30 % on the generated p51d and c310 records.
+    let lon_records = records_exciting(records, true);
+    let lat_records = records_exciting(records, false);
+    for (i, (name, raw)) in records.iter().enumerate() {
+        let wanted: Vec<&str> = wanted
+            .iter()
+            .copied()
+            .filter(|c| {
+                if matches!(*c, "Cm" | "CL") {
+                    lon_records.contains(&i)
+                } else {
+                    lat_records.contains(&i)
+                }
+            })
+            .collect();
+        let ad = air_data(raw, airframe)?;
+        if wanted.is_empty() {
+            air.push(ad);
+            continue;
+        }
         let bad = |message: String| MeasuredError::Record {
             file: name.clone(),
             message,
         };
-        let ad = air_data(raw, airframe)?;
         let rec = moved_to_cg(raw, &airframe.sensors).map_err(|e| bad(e.to_string()))?;
         let (rec, found) = deskewed(&rec);
         skews.extend(found.into_iter().map(|(c, v)| (name.clone(), c, v)));
@@ -658,6 +704,9 @@ pub struct MeasuredReport {
     pub air_data: Vec<(String, AirData)>,
     /// Fit per output, % (output and filter error).
     pub fit_percent: BTreeMap<String, f64>,
+    /// Whether every fit converged (output and filter error; absent for equation error).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub converged: Option<bool>,
     /// What the reader should know (skipped equations, fixed terms, convergence).
     pub notes: Vec<String>,
 }
@@ -915,6 +964,7 @@ pub fn equation_error_report(
             .zip(ee.air.iter().cloned())
             .collect(),
         fit_percent: BTreeMap::new(),
+        converged: None,
         notes,
     })
 }

@@ -14,6 +14,7 @@
 //! - [`airframe`]: an aircraft's mass, inertia, geometry, thrust line and sensor positions (`--airframe`).
 //! - [`flight_models`]: the nondimensional longitudinal and lateral models fitted to measured records.
 //! - [`measured`]: derivatives from measured records of any aircraft (air data, sensors moved to the CG).
+//! - [`output_error`]: the flight models fitted to measured records by the estimation core (output error).
 //! - [`regression`]: equation-error estimates from flight-data channels (SIDPAC `lesq` style) and the
 //!   Savitzky–Golay differentiator it needs.
 //!
@@ -33,6 +34,7 @@ pub mod flight_models;
 pub mod identifiability;
 pub mod measured;
 pub mod model;
+pub mod output_error;
 pub mod params;
 pub mod regression;
 

@@ -9,6 +9,9 @@ use crate::data::{self, CheckOptions};
 
 /// Check the kinematic consistency of a flight-data CSV.
 #[derive(clap::Args, Debug, Clone)]
+#[command(
+    after_help = "Examples:\n  flightid check flight.csv\n  flightid check flight.csv --from-s 10 --to-s 40 --no-scale-factors --json"
+)]
 pub struct CheckArgs {
     /// Flight-data CSV (docs/data.md); best a maneuver segment of some tens of seconds.
     pub file: PathBuf,

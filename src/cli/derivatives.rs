@@ -7,6 +7,7 @@ use crate::aero::AeroError;
 use crate::cli::UsageError;
 use crate::ident::Method;
 use crate::report;
+use crate::report::text::{wrap, TERMINAL_WIDTH};
 use crate::study::spec::{parse_derivatives, Structure};
 use crate::study::trials::{SensorNoise, TrialOptions};
 use crate::study::{self, Source, StudyOptions};
@@ -78,8 +79,10 @@ pub struct DerivativesCmd {
     #[arg(long = "model", value_enum, default_value = "paper")]
     pub structure: StructureArg,
     /// Free derivatives of the TF route, comma separated (default: Cm_alpha,Cm_q,Cm_alphadot,Cm_de,
-    /// Cl_beta,Cl_p,Cl_da,Cn_beta,Cn_r).
-    #[arg(long, value_delimiter = ',')]
+    /// Cl_beta,Cl_p,Cl_da,Cn_beta,Cn_r). With --airframe --method oe|fem: parameters or groups (speed,
+    /// alphadot, zero, skew, all) to free, `-NAME` to hold, applied in order to the default set
+    /// (docs/derivatives-measured.md).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub free: Option<Vec<String>>,
     /// Estimator: with --airframe ee (equation error), oe (output error) or fem (filter error)
     /// [default ee]; when flying, of the transfer functions: srivc or oe [default srivc].
@@ -183,8 +186,11 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     };
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;
+    let progress = super::common::spinner("derivatives: trim, model check, flights, estimates");
     let mut sim = crate::sim::JsbsimSim::start(&cfg, args.trim.rate_hz)?;
-    let result = study::run(&mut sim, &point, &opts).map_err(classify)?;
+    let result = study::run(&mut sim, &point, &opts).map_err(classify);
+    progress.finish_and_clear();
+    let result = result?;
     let quiet = args.json.as_deref() == Some("-");
     if !quiet {
         println!(
@@ -195,10 +201,19 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
             println!("{}", text_table(&t));
         }
         if !result.identifiability.is_empty() {
-            println!("Identifiability (TF route):\n{}", result.identifiability);
+            println!("Identifiability (TF route):");
+            for line in result.identifiability.lines() {
+                let indent = &line[..line.len() - line.trim_start().len()];
+                let rest = format!("{indent}    ");
+                for l in wrap(line.trim_start(), TERMINAL_WIDTH, indent, &rest) {
+                    println!("{l}");
+                }
+            }
         }
         for n in &result.notes {
-            println!("- {n}");
+            for l in wrap(n, TERMINAL_WIDTH, "- ", "  ") {
+                println!("{l}");
+            }
         }
     }
     let json = result.to_json();
@@ -214,9 +229,13 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Whether the estimation core's filter error method can be used (`--method fem`).
+const FILTER_ERROR_AVAILABLE: bool = false;
+
 /// The measured-data route: `--data … --airframe …`.
 fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()> {
     use crate::aero::measured::{self, AxisChoice, MeasuredError};
+    use crate::aero::output_error;
     let airframe = load_airframe(args, airframe_arg)?;
     let mut records = Vec::new();
     for p in &args.data {
@@ -255,11 +274,49 @@ fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()>
                 UsageError(e.to_string()).into()
             }
             MeasuredError::Aero(a) => classify(a),
+            MeasuredError::Estimate(crate::estimate::EstimateError::Record { .. }) => {
+                UsageError(e.to_string()).into()
+            }
+            MeasuredError::Estimate(_) => e.into(),
         }
     };
     let report = match args.method.as_deref().unwrap_or("ee") {
-        "ee" => measured::equation_error_report(&records, &airframe, axis, args.alphadot)
-            .map_err(classify)?,
+        "ee" => {
+            if args.free.is_some() {
+                return Err(UsageError(
+                    "--free: equation error estimates every term of its regressions; --free chooses the \
+                     free parameters of --method oe|fem"
+                        .into(),
+                )
+                .into());
+            }
+            measured::equation_error_report(&records, &airframe, axis, args.alphadot)
+                .map_err(classify)?
+        }
+        "oe" | "fem" => {
+            let method = if args.method.as_deref() == Some("fem") {
+                if !FILTER_ERROR_AVAILABLE {
+                    return Err(UsageError(
+                        "--method fem: the filter error method is not available in the estimation core \
+                         yet; use --method oe (output error) or ee (equation error)"
+                            .into(),
+                    )
+                    .into());
+                }
+                crate::estimate::Method::Fem
+            } else {
+                crate::estimate::Method::Oe
+            };
+            let free = output_error::parse_free(args.free.as_deref().unwrap_or(&[]))
+                .map_err(|e| UsageError(format!("--free: {e}")))?;
+            let options = output_error::OutputErrorOptions {
+                method,
+                free,
+                alphadot: args.alphadot,
+            };
+            output_error::output_error_report(&records, &airframe, axis, &options)
+                .map_err(classify)?
+        }
         other => {
             return Err(UsageError(format!(
                 "--method {other}: with --airframe the methods are ee, oe and fem"
@@ -267,6 +324,12 @@ fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()>
             .into())
         }
     };
+    if report.converged == Some(false) {
+        eprintln!(
+            "warning: the {} fit did not converge; the estimates below are not a minimum of the cost",
+            report.method.replace('_', " ")
+        );
+    }
     let quiet = args.json.as_deref() == Some("-");
     if !quiet {
         println!("{} ({}):", airframe.name, airframe.source);

@@ -134,6 +134,8 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         }
         None => rate_of(&train)?,
     };
+    let progress =
+        super::common::spinner("diagnose: replay, fit each candidate extension, validate");
     let mut workers = start_workers(&source, rate, args.workers)?;
     let d = diagnose(
         &mut workers,
@@ -141,7 +143,9 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         valid.as_ref(),
         &DiagnoseOptions::default(),
     )
-    .map_err(classify)?;
+    .map_err(classify);
+    progress.finish_and_clear();
+    let d = d?;
     summary(&d, workers.len());
     if let Some(target) = &args.json {
         emit_json(target, &d)?;
@@ -218,7 +222,12 @@ fn summary(d: &Diagnosis, workers: usize) {
     }
     for s in &d.skipped {
         if s.effect != "aero_derivative" {
-            println!("skipped {} on {}: {}", s.effect, s.target, s.reason);
+            let text = format!("skipped {} on {}: {}", s.effect, s.target, s.reason);
+            for line in
+                crate::report::text::wrap(&text, crate::report::text::TERMINAL_WIDTH, "", "  ")
+            {
+                println!("{line}");
+            }
         }
     }
     println!(

@@ -9,6 +9,9 @@ use crate::data::{self, ServoMap, TlogOptions};
 
 /// Convert a MAVLink `.tlog` into a flight-data CSV (docs/data.md).
 #[derive(clap::Args, Debug, Clone)]
+#[command(
+    after_help = "Examples:\n  flightid ingest --tlog tests/fixtures/flight.tlog --airframe c172x --out flight.csv\n  flightid ingest --tlog flight.tlog --airframe my_servos.toml --resample-hz 50 --out flight.csv --json"
+)]
 pub struct IngestArgs {
     /// The telemetry log ([8-byte µs timestamp][MAVLink frame] records).
     #[arg(long)]

@@ -10,8 +10,16 @@ pub const HIGH_CORRELATION: f64 = 0.9;
 impl Estimate {
     /// Parameter table: value, σ, t, σ %, and the parameters each one correlates with above 0.9.
     pub fn table(&self) -> String {
+        let w = self
+            .free
+            .iter()
+            .chain(self.parameters.iter().map(|p| &p.name))
+            .map(|n| n.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(18);
         let mut out = format!(
-            "{:<18} {:>13} {:>11} {:>8} {:>8}  {}\n",
+            "{:<w$} {:>13} {:>11} {:>8} {:>8}  {}\n",
             "parameter", "value", "std_error", "t", "σ %", "|corr| > 0.9"
         );
         let row = |p: &ParameterEstimate, label: String, out: &mut String| {
@@ -27,12 +35,12 @@ impl Estimate {
             };
             if p.fixed {
                 out.push_str(&format!(
-                    "{label:<18} {:>13.6} {:>11} {:>8} {:>8}  fixed\n",
+                    "{label:<w$} {:>13.6} {:>11} {:>8} {:>8}  fixed\n",
                     p.value, "-", "-", "-"
                 ));
             } else {
                 out.push_str(&format!(
-                    "{label:<18} {:>13.6} {:>11.4e} {:>8.1} {:>8.1}  {}{}\n",
+                    "{label:<w$} {:>13.6} {:>11.4e} {:>8.1} {:>8.1}  {}{}\n",
                     p.value,
                     p.std_error,
                     p.t,
