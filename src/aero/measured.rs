@@ -105,6 +105,30 @@ pub fn excited_axis(rec: &data::FlightRecord) -> Option<AxisChoice> {
     }
 }
 
+/// Indices of the records that excite an axis (its surfaces move, [`excited_axis`]), or of all records when
+/// none does (an axis forced with `--axis`).
+pub fn records_exciting(
+    records: &[(String, data::FlightRecord)],
+    longitudinal: bool,
+) -> Vec<usize> {
+    let chosen: Vec<usize> = (0..records.len())
+        .filter(|&i| {
+            excited_axis(&records[i].1).is_some_and(|a| {
+                if longitudinal {
+                    a.longitudinal()
+                } else {
+                    a.lateral()
+                }
+            })
+        })
+        .collect();
+    if chosen.is_empty() {
+        (0..records.len()).collect()
+    } else {
+        chosen
+    }
+}
+
 /// Air density of the 1976 US / ICAO standard atmosphere below 11 km: ρ = ρ0 (1 − L h/T0)^(g/(R L) − 1).
 pub fn standard_density_kg_m3(altitude_m: f64) -> f64 {
     const RHO0: f64 = 1.225;
@@ -367,12 +391,31 @@ pub fn equation_error_measured(
         AxisChoice::Lateral => &["Cl", "Cn", "CY"],
         AxisChoice::Both => &["Cm", "CL", "Cl", "Cn", "CY"],
     };
-    for (name, raw) in records {
+    // Each axis from the records that excite it: a lateral record's incidental pitch motion, stacked into the
+    // C_m regression, biases C_mq by 20–30 % on the generated p51d and c310 records.
+    let lon_records = records_exciting(records, true);
+    let lat_records = records_exciting(records, false);
+    for (i, (name, raw)) in records.iter().enumerate() {
+        let wanted: Vec<&str> = wanted
+            .iter()
+            .copied()
+            .filter(|c| {
+                if matches!(*c, "Cm" | "CL") {
+                    lon_records.contains(&i)
+                } else {
+                    lat_records.contains(&i)
+                }
+            })
+            .collect();
+        let ad = air_data(raw, airframe)?;
+        if wanted.is_empty() {
+            air.push(ad);
+            continue;
+        }
         let bad = |message: String| MeasuredError::Record {
             file: name.clone(),
             message,
         };
-        let ad = air_data(raw, airframe)?;
         let rec = moved_to_cg(raw, &airframe.sensors).map_err(|e| bad(e.to_string()))?;
         let (rec, found) = deskewed(&rec);
         skews.extend(found.into_iter().map(|(c, v)| (name.clone(), c, v)));

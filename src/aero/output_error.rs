@@ -39,10 +39,9 @@ use super::flight_models::{
     LATERAL_STATES, LONGITUDINAL_PARAMETERS, LONGITUDINAL_STATES,
 };
 use super::measured::{
-    air_data, dimensional, equation_error_measured, excited_axis, lateral_modes_at,
-    longitudinal_modes_at, model_constants, modes_with_uncertainty, moved_to_cg,
-    reference_condition, AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport,
-    ReferenceCondition,
+    air_data, dimensional, equation_error_measured, lateral_modes_at, longitudinal_modes_at,
+    model_constants, modes_with_uncertainty, moved_to_cg, records_exciting, reference_condition,
+    AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport, ReferenceCondition,
 };
 use crate::data::{self, G0_M_S2};
 use crate::estimate::{
@@ -309,26 +308,15 @@ const LAT_FREE: [&str; 16] = [
     "tau_beta_s",
 ];
 
-/// The records of one axis: the ones that excite it, or all when none does.
+/// The records of one axis ([`records_exciting`]).
 fn records_for(
     records: &[(String, data::FlightRecord)],
     longitudinal: bool,
 ) -> Vec<&(String, data::FlightRecord)> {
-    let excites = |r: &data::FlightRecord| {
-        excited_axis(r).is_some_and(|a| {
-            if longitudinal {
-                a.longitudinal()
-            } else {
-                a.lateral()
-            }
-        })
-    };
-    let chosen: Vec<_> = records.iter().filter(|(_, r)| excites(r)).collect();
-    if chosen.is_empty() {
-        records.iter().collect()
-    } else {
-        chosen
-    }
+    records_exciting(records, longitudinal)
+        .into_iter()
+        .map(|i| &records[i])
+        .collect()
 }
 
 /// The record's column, or a `MeasuredError::Record` naming it.
