@@ -8,7 +8,7 @@
 //! The record is simulated inside the bench from known parameters with white output noise (for
 //! timing; accuracy is tested elsewhere). Each figure is the median of `--repeat` fits (default 5).
 //!
-//! Run: `cargo bench --bench estimate -- [--repeat 5] [--json FILE]`
+//! Run: `cargo bench --bench estimate -- [--repeat 5] [--case 'toml oe'] [--json FILE]`
 
 use std::time::Instant;
 
@@ -279,6 +279,7 @@ fn main() {
     };
     let repeat: usize = value("--repeat").and_then(|v| v.parse().ok()).unwrap_or(5);
     let json = value("--json");
+    let only = value("--case").unwrap_or_default();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -297,6 +298,10 @@ fn main() {
                 (Method::Fem, 50, &r50),
             ] {
                 let name = format!("{label} {} {rate} Hz", method.name());
+                if !name.contains(only.as_str()) {
+                    out.push(Err(format!("{name}: skipped (--case {only})")));
+                    continue;
+                }
                 out.push(time_fit(&name, m, rec, method, repeat));
             }
         }

@@ -15,7 +15,8 @@ pub struct EstimateCmd {
     /// Flight-data CSV; repeat for a joint fit (one parameter set, nuisance terms per record).
     #[arg(long = "data", required = true)]
     pub data: Vec<PathBuf>,
-    /// Estimator: oe (output error).
+    /// Estimator: oe (output error) or fem (filter error: a steady-state Kalman filter in the
+    /// loop with the process noise estimated; for records with turbulence or drift).
     #[arg(long, default_value = "oe")]
     pub method: String,
     /// Inputs between samples: linear (default) or zoh.
@@ -30,7 +31,8 @@ pub struct EstimateCmd {
 pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
     let method = match args.method.as_str() {
         "oe" => Method::Oe,
-        other => return Err(UsageError(format!("--method {other}: available: oe")).into()),
+        "fem" => Method::Fem,
+        other => return Err(UsageError(format!("--method {other}: available: oe, fem")).into()),
     };
     let hold: InputHold = args.input_hold.parse().map_err(UsageError)?;
     let model = UserModel::load(&args.model).map_err(|e| UsageError(e.to_string()))?;

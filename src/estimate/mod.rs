@@ -20,12 +20,14 @@
 
 pub mod covariance;
 pub mod expr;
+mod fem;
 mod fit;
 mod integrate;
 mod layout;
 mod linear;
 mod model;
 mod record;
+pub mod riccati;
 mod summary;
 mod user_model;
 
@@ -33,7 +35,7 @@ pub use fit::{fit, Estimate, Method, Options, ParameterEstimate, RecordFit, Stop
 pub use integrate::simulate_states;
 pub use layout::{Nuisance, NuisanceKind};
 pub use linear::{Entry, LinearModel};
-pub use model::{Model, Parameter, Signature, SimError, StateModel};
+pub use model::{Discrete, Model, Parameter, Signature, SimError, StateModel};
 pub use record::{InputHold, InputSignal, Record, Run};
 pub use summary::HIGH_CORRELATION;
 pub use user_model::{ModelFileError, UserModel};

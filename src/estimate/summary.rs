@@ -74,6 +74,18 @@ impl Estimate {
             out.push_str(&format!(" {name} {:.1}", self.fit_percent(o)));
         }
         out.push_str(&format!("\nstandard errors: {}\n", self.covariance_method));
+        let process: Vec<String> = self
+            .nuisance
+            .iter()
+            .filter(|p| p.kind == Some(super::NuisanceKind::ProcessNoise))
+            .map(|p| format!("{} {:.4e}", p.name, p.value.max(0.0).sqrt()))
+            .collect();
+        if !process.is_empty() {
+            out.push_str(&format!(
+                "filter error: process_noise rows are q = F_ii² (R: innovation covariance); F_ii: {}\n",
+                process.join(", ")
+            ));
+        }
         for w in &self.warnings {
             out.push_str(&format!("warning: {w}\n"));
         }
