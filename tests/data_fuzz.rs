@@ -162,6 +162,7 @@ fn check_tlog(bytes: &[u8], servo_map: &flightid::data::ServoMap, sysid: Option<
     let opts = TlogOptions {
         sysid,
         rate_hz: None,
+        ..Default::default()
     };
     match parse_tlog_bytes(bytes, "fuzz.tlog", Some(servo_map), &opts) {
         Ok(rep) => {

@@ -22,7 +22,7 @@ pub mod servo_map;
 pub mod tlog;
 
 pub use servo_map::ServoMap;
-pub use tlog::{parse_tlog_bytes, read_tlog, TlogOptions, TlogReport};
+pub use tlog::{parse_tlog_bytes, read_tlog, Stretch, StretchChoice, TlogOptions, TlogReport};
 pub mod segments;
 pub use segments::{
     find_segments, segment_window, ManeuverKind, Segment, SegmentOptions, SegmentRef,
