@@ -193,3 +193,76 @@ fn bad_model_files_exit_2_with_file_line_and_name() {
         );
     }
 }
+
+/// `--report DIR`: overlays and residuals per record and output, the parameter and correlation
+/// tables; a directory flightid did not write is refused before any work (exit 2), an earlier
+/// report is replaced.
+#[test]
+fn report_holds_overlays_residuals_and_the_correlation_matrix() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.csv");
+    write_record(&a, [0.02, -0.05], [0.01, -0.003], 3);
+    let report = dir.path().join("report");
+    let run = |method: &str| {
+        bin()
+            .arg("estimate")
+            .arg("--model")
+            .arg(model_file())
+            .arg("--data")
+            .arg(&a)
+            .arg("--method")
+            .arg(method)
+            .arg("--report")
+            .arg(&report)
+            .output()
+            .unwrap()
+    };
+    let out = run("oe");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for name in ["alpha_rad", "q_rad_s"] {
+        for suffix in ["", "_residual"] {
+            let svg = report.join(format!("record0_{name}{suffix}.svg"));
+            assert!(svg.is_file(), "{} missing", svg.display());
+        }
+    }
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(
+        html.contains("Correlation matrix") && html.contains("x0:alpha_rad@"),
+        "{html}"
+    );
+    assert!(html.contains("measured") && html.contains("model (oe)"));
+    // an earlier report is replaced (here by the filter error method's)
+    let out = run("fem");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(html.contains("model (fem)") && html.contains("process_noise:q_rad_s"));
+    // a directory of the user's is not
+    let mine = dir.path().join("mine");
+    std::fs::create_dir(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "keep").unwrap();
+    let out = bin()
+        .arg("estimate")
+        .arg("--model")
+        .arg(model_file())
+        .arg("--data")
+        .arg(&a)
+        .arg("--report")
+        .arg(&mine)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(mine.join("notes.txt").is_file());
+}

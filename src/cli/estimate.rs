@@ -25,6 +25,11 @@ pub struct EstimateCmd {
     /// Write the estimate as JSON to this file ("-" for stdout).
     #[arg(long)]
     pub json: Option<String>,
+    /// Write a report to this directory (index.html, report.md, SVG overlays of measured vs model
+    /// output and the residuals, the correlation matrix). Replaces only an empty directory or an
+    /// earlier flightid report.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
 }
 
 /// Runs `flightid estimate`.
@@ -35,6 +40,9 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
         other => return Err(UsageError(format!("--method {other}: available: oe, fem")).into()),
     };
     let hold: InputHold = args.input_hold.parse().map_err(UsageError)?;
+    if let Some(dir) = &args.report {
+        crate::report::check_output_dir(dir)?;
+    }
     let model = UserModel::load(&args.model).map_err(|e| UsageError(e.to_string()))?;
     let mut records = Vec::new();
     for path in &args.data {
@@ -61,6 +69,10 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
     print!("{}", est.table());
     if let Some(target) = &args.json {
         super::common::emit_json(target, &est.to_json())?;
+    }
+    if let Some(dir) = &args.report {
+        let index = crate::report::write_report_dir(dir, &est.report(), &est.to_json())?;
+        eprintln!("report: {}", index.display());
     }
     Ok(())
 }

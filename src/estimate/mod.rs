@@ -27,6 +27,7 @@ mod layout;
 mod linear;
 mod model;
 mod record;
+mod report;
 pub mod riccati;
 mod summary;
 mod user_model;
