@@ -81,6 +81,28 @@ pub struct CheckReport {
     pub translational: bool,
     /// Parameters dropped because the data cannot determine them (e.g. a β scale with β ≈ 0).
     pub not_identifiable: Vec<String>,
+    /// Scale factors and time skews not estimated because the maneuver does not move their signal
+    /// (e.g. β on a longitudinal-only record), each with the evidence.
+    pub not_excited: Vec<String>,
+}
+
+/// How much an air-data signal must move (rms about its mean) before a scale factor or a time
+/// skew on it is estimated: 1 m/s for V, 0.5° for α and β. Below that the product of the factor
+/// and the signal is indistinguishable from a bias plus noise, and a "significant" scale factor
+/// on an unexcited axis is an artefact.
+fn excitation_floor(output: usize) -> f64 {
+    if output == 0 {
+        1.0
+    } else {
+        0.5_f64.to_radians()
+    }
+}
+
+/// Root-mean-square deviation from the mean.
+fn rms_about_mean(x: &[f64]) -> f64 {
+    let n = x.len().max(1) as f64;
+    let m = x.iter().sum::<f64>() / n;
+    (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n).sqrt()
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -207,15 +229,39 @@ pub fn check_compatibility(
 
     // Parameter set.
     let mut params: Vec<Param> = (0..3).map(Param::GyroBias).collect();
-    let _ = opts.max_iterations;
+    let mut not_excited = Vec::new();
     if translational {
         params.extend((0..3).map(Param::AccelBias));
         params.extend([Param::OutBias(1), Param::OutBias(2)]);
+        // Scale factors and skews only on what the maneuver moves.
+        let mut wanted = Vec::new();
         if opts.time_skews {
-            params.extend([Param::OutSkew(1), Param::OutSkew(2)]);
+            wanted.extend([Param::OutSkew(1), Param::OutSkew(2)]);
         }
         if opts.scale_factors {
-            params.extend([Param::OutScale(0), Param::OutScale(1), Param::OutScale(2)]);
+            wanted.extend([Param::OutScale(0), Param::OutScale(1), Param::OutScale(2)]);
+        }
+        for p in wanted {
+            let (Param::OutSkew(j) | Param::OutScale(j)) = p else {
+                continue;
+            };
+            let moved = data.out[j].as_deref().map_or(0.0, rms_about_mean);
+            let floor = excitation_floor(j);
+            if moved >= floor {
+                params.push(p);
+            } else {
+                let (shown, unit, floor_shown) = if j == 0 {
+                    (moved, "m/s", floor)
+                } else {
+                    (moved.to_degrees(), "°", floor.to_degrees())
+                };
+                not_excited.push(format!(
+                    "{}: {} moves only {shown:.3} {unit} rms in this record (a scale factor or time \
+                     skew needs at least {floor_shown} {unit})",
+                    p.name().0,
+                    OUT_NAMES[j]
+                ));
+            }
         }
         params.extend((0..3).map(Param::Init));
     }
@@ -357,6 +403,7 @@ pub fn check_compatibility(
         converged,
         translational,
         not_identifiable,
+        not_excited,
     })
 }
 
