@@ -138,13 +138,13 @@ fn tlog_bytes() -> &'static Vec<u8> {
 
 #[divan::bench(sample_count = 5)]
 fn read_tlog_1m_messages(bencher: divan::Bencher) {
-    use flightid::data::{parse_tlog_bytes, Airframe, TlogOptions};
+    use flightid::data::{parse_tlog_bytes, ServoMap, TlogOptions};
     let bytes = tlog_bytes();
-    let airframe_path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("aircraft/airframes/c172x.toml");
-    let airframe = Airframe::load(&airframe_path).expect("c172x mapping");
+    let map_path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("aircraft/servo_maps/c172x.toml");
+    let servo_map = ServoMap::load(&map_path).expect("c172x mapping");
     bencher.bench(|| {
-        let rep = parse_tlog_bytes(bytes, "bench", Some(&airframe), &TlogOptions::default())
+        let rep = parse_tlog_bytes(bytes, "bench", Some(&servo_map), &TlogOptions::default())
             .expect("bench tlog reads");
         assert_eq!(rep.stats.frames, MESSAGES);
         rep

@@ -348,7 +348,9 @@ def main():
     ap.add_argument("--first", type=int, default=0, help="first case index (for splitting work)")
     ap.add_argument("--effects", default=None,
                     help="JSON list of effects for every case instead of random draws ('[]' = clean)")
-    ap.add_argument("--duration", type=float, default=None, help="record length, s (default random 30-90)")
+    ap.add_argument("--duration", type=float, default=None, help="record length, s (default random in the range)")
+    ap.add_argument("--min-duration", type=float, default=30.0, help="shortest random record length, s")
+    ap.add_argument("--max-duration", type=float, default=90.0, help="longest random record length, s")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     root = tempfile.mkdtemp(prefix="gen-diag-")
@@ -373,7 +375,7 @@ def main():
                 "heading_deg": float(rng.uniform(0, 360)), "latitude_deg": float(rng.uniform(-60, 60)),
                 "longitude_deg": float(rng.uniform(-180, 180)),
             }
-            duration = args.duration or float(rng.uniform(30, 90))
+            duration = args.duration or float(rng.uniform(args.min_duration, args.max_duration))
             noise_level = float(rng.uniform(0.5, 1.0))
             truth = {"effects": effects, "condition": cond, "sim_rate_hz": sim_hz, "log_rate_hz": log_hz,
                      "duration_s": duration, "noise_level": noise_level, "turbulence": args.turbulence,

@@ -11,7 +11,9 @@ The protocol stream is a duplicate of the original stdout; file descriptor 1 its
 JSBSim's C++ console output (trim reports, warnings) cannot corrupt the protocol.
 
 Well-behaved simulation (docs/jsbsim.md):
-  * every process works in its own temporary root: a private copy of the aircraft directory with the aircraft
+  * every process works in a scratch directory flightid makes and removes (`scratch_dir` of `load`; the bridge
+    never makes or removes it, so nothing is left when the bridge is killed); each `load` gets its own root
+    inside it: a private copy of the aircraft directory with the aircraft
     XML rewritten, `engine/` and `systems/` linked to the package's, and a private output path;
   * root-level <input> and <output> elements are removed from the private copy: no network listeners, no logs;
   * declared knob properties are added inside <aerodynamics>:
@@ -27,6 +29,7 @@ import array
 import json
 import os
 import shutil
+import signal
 import sys
 import tempfile
 import time
@@ -275,7 +278,10 @@ class Sim:
         self.engine_running = req.get("engine_running", True)
         self.gear_up = req.get("gear_up", False)
         self.engines = int(req.get("engines", 1))
-        self.root = tempfile.mkdtemp(prefix="flightid-jsbsim-")
+        scratch = req.get("scratch_dir")
+        if not scratch or not os.path.isdir(scratch):
+            raise BridgeError("protocol", f"'load' needs an existing scratch_dir, got {scratch!r}")
+        self.root = tempfile.mkdtemp(prefix="load-", dir=scratch)
         os.makedirs(os.path.join(self.root, "output"))
         self.aircraft_dir = req.get("aircraft_dir")
         self.knobs = make_private_aircraft(self.root, self.aircraft, self.surfaces, self.aircraft_dir)
@@ -683,6 +689,9 @@ def export_aircraft(sim, req):
 
 
 def main():
+    # A Ctrl-C reaches the whole process group: flightid handles it (kills this process, removes the scratch
+    # directory), so the bridge must not die first and be reported as a crash.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     sim = None
     stdin = sys.stdin.buffer
     while True:

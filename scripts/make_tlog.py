@@ -10,7 +10,7 @@ Per CSV row (system 1, component 1), all stamped with the row's time:
   SCALED_IMU        ax/ay/az in milli-g                        (int16;   v1 every third row)
   VFR_HUD           airspeed, altitude, throttle percent       (float32 / uint16)
   AOA_SSA           alpha, beta in degrees                     (float32; v2 only, id 11020 > 255)
-  SERVO_OUTPUT_RAW  surfaces and throttle in PWM microseconds  (uint16; mapping from --airframe)
+  SERVO_OUTPUT_RAW  surfaces and throttle in PWM microseconds  (uint16; mapping from --servo-map)
 Unrelated traffic: HEARTBEAT and SYS_STATUS from system 1 once per second, and a second system
 (id 2) sending HEARTBEAT and a slower ATTITUDE stream (every 10th row) with different values.
 Damage on request: --garbage N inserts N runs of random bytes between records, --flip N flips one
@@ -18,7 +18,7 @@ byte inside N HEARTBEAT/SYS_STATUS frames, --truncate cuts the last record short
 
 Prints a JSON summary (frame counts and the damage done) on stdout.
 
-Usage: make_tlog.py IN.csv OUT.tlog --airframe aircraft/airframes/c172x.toml
+Usage: make_tlog.py IN.csv OUT.tlog --servo-map aircraft/servo_maps/c172x.toml
        [--epoch-us 1700000000000000] [--garbage 3] [--flip 2] [--truncate] [--seed 1]
 """
 
@@ -66,7 +66,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("csv")
     ap.add_argument("tlog")
-    ap.add_argument("--airframe", required=True, help="airframe servo mapping TOML")
+    ap.add_argument("--servo-map", required=True, help="servo mapping TOML")
     ap.add_argument("--epoch-us", type=int, default=1_700_000_000_000_000)
     ap.add_argument("--garbage", type=int, default=0, help="runs of random bytes to insert")
     ap.add_argument("--flip", type=int, default=0, help="HEARTBEAT/SYS_STATUS frames to damage")
@@ -75,7 +75,7 @@ def main():
     args = ap.parse_args()
 
     rng = random.Random(args.seed)
-    with open(args.airframe, "rb") as f:
+    with open(args.servo_map, "rb") as f:
         airframe = tomllib.load(f)
     cols = read_flight_csv(args.csv)
     t = cols["time_s"]

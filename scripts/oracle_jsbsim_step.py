@@ -22,7 +22,9 @@ the step, hence tests/ident_jsbsim.rs flies at 2000 Hz.
 Usage: python scripts/oracle_jsbsim_step.py    (the provisioned venv: ~/.cache/flightid/venv-*/bin/python)
 """
 import os
+import shutil
 import sys
+import tempfile
 import tomllib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -78,7 +80,8 @@ def main():
               f"{'zeta_lin':>8} {'zeta_sim':>8} {'zeta_err%':>9}\n")
     for rate in RATES_HZ:
         dt = 1.0 / rate
-        sim = bridge.Sim({"aircraft": "c172x", "dt_s": dt, "surfaces": surfaces})
+        scratch = tempfile.mkdtemp(prefix="flightid-oracle-")
+        sim = bridge.Sim({"aircraft": "c172x", "dt_s": dt, "surfaces": surfaces, "scratch_dir": scratch})
         try:
             point = {"altitude_ft": 4000.0, "speed_kts": 100.0}
             sim.trim(point)
@@ -102,6 +105,7 @@ def main():
                           f"{zeta_lin:>8.4f} {zeta:>8.4f} {100 * (zeta / zeta_lin - 1):>+9.2f}\n")
         finally:
             sim.close()
+            shutil.rmtree(scratch, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,8 @@ For each report directory (one holding index.html, as written by `flightid compa
 Nothing is fetched: the pages are file:// URLs and the reports are self-contained (inline SVG, no network).
 
 Usage:
-  scripts/report_screenshot.py compare-report flightid-demo runs/report --out shots [--figures] [--expect 12]
+  scripts/report_screenshot.py flightid-out/compare flightid-out/demo --out flightid-out/shots [--figures] [--expect 12]
+      [--expect-text TEXT ...]
 Needs Debian's `chromium` (apt-get install -y chromium), or CHROMIUM=/path/to/chrome. Exit 0 when every report
 passes, 1 when one fails, 2 on bad usage.
 """
@@ -33,7 +34,8 @@ window.addEventListener('load', function () {
   var sizes = svgs.map(function (s) { var r = s.getBoundingClientRect(); return [r.width, r.height]; });
   var out = document.createElement('pre');
   out.id = 'flightid-probe';
-  out.textContent = JSON.stringify({svgs: sizes, height: document.documentElement.scrollHeight});
+  out.textContent = JSON.stringify({svgs: sizes, height: document.documentElement.scrollHeight,
+                                   text: document.body.innerText});
   document.body.appendChild(out);
 });
 </script>
@@ -58,7 +60,7 @@ def run_chrome(browser, profile, args, timeout_s=120):
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s)
 
 
-def check_report(browser, report_dir, out_dir, figures, expect):
+def check_report(browser, report_dir, out_dir, figures, expect, texts=()):
     index = os.path.join(report_dir, "index.html")
     if not os.path.isfile(index):
         return False, f"{index}: no such file"
@@ -74,7 +76,10 @@ def check_report(browser, report_dir, out_dir, figures, expect):
         m = re.search(r'<pre id="flightid-probe">(.*?)</pre>', res.stdout, re.S)
         if not m:
             return False, f"{name}: the page did not load in chromium: {res.stderr.strip()[-400:]}"
-        data = json.loads(m.group(1).replace("&quot;", '"'))
+        probe_text = m.group(1)
+        for entity, char in (("&quot;", '"'), ("&lt;", "<"), ("&gt;", ">"), ("&amp;", "&")):
+            probe_text = probe_text.replace(entity, char)
+        data = json.loads(probe_text)
         sizes = data["svgs"]
         blank = [i for i, (w, h) in enumerate(sizes) if not (w > 0 and h > 0)]
         height = min(int(data["height"]) + 20, 30000)
@@ -98,6 +103,9 @@ def check_report(browser, report_dir, out_dir, figures, expect):
         problems.append(f"svg number(s) {blank} rendered with zero size")
     if expect is not None and in_file != expect:
         problems.append(f"expected {expect} figures, the file has {in_file}")
+    missing = [t for t in texts if t not in data.get("text", "")]
+    if missing:
+        problems.append("text not shown on the rendered page: " + "; ".join(repr(t) for t in missing))
     if not os.path.isfile(shot) or os.path.getsize(shot) == 0:
         problems.append("no screenshot written")
     summary = f"{name}: {len(sizes) - len(blank)}/{in_file} figures rendered, page {height} px, screenshot {shot}"
@@ -110,12 +118,14 @@ def main():
     ap.add_argument("--out", default="report-screenshots", help="where the PNGs go")
     ap.add_argument("--figures", action="store_true", help="also one PNG per plot")
     ap.add_argument("--expect", type=int, help="exact number of figures every report must hold")
+    ap.add_argument("--expect-text", action="append", default=[],
+                    help="text that must be visible on every rendered page (repeatable)")
     a = ap.parse_args()
     browser = chromium()
     os.makedirs(a.out, exist_ok=True)
     ok_all = True
     for r in a.reports:
-        ok, line = check_report(browser, r, a.out, a.figures, a.expect)
+        ok, line = check_report(browser, r, a.out, a.figures, a.expect, a.expect_text)
         print(("ok    " if ok else "FAIL  ") + line)
         ok_all &= ok
     sys.exit(0 if ok_all else 1)

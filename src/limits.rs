@@ -43,7 +43,7 @@ pub enum LimitError {
     /// A record that would exceed [`MAX_RECORD_SAMPLES`].
     #[error("{what}: {samples:.0} samples exceed the limit of {max} per record (each sample holds every \
              channel in memory, ~{bytes_per_sample} bytes; the limit keeps a record under ~{max_mb} MB); \
-             shorten the record or lower the rate")]
+             cut the record (e.g. `flightid segments`) or lower the rate")]
     TooManySamples {
         what: String,
         samples: f64,
@@ -130,6 +130,22 @@ pub fn check_samples(what: &str, duration_s: f64, rate_hz: f64) -> Result<usize,
         Err(LimitError::TooManySamples {
             what: what.to_string(),
             samples,
+            max: MAX_RECORD_SAMPLES,
+            bytes_per_sample: BYTES_PER_SAMPLE,
+            max_mb: MAX_RECORD_SAMPLES * BYTES_PER_SAMPLE / 1_000_000,
+        })
+    }
+}
+
+/// A record read from a file, refused above [`MAX_RECORD_SAMPLES`] rows before the work on it starts (the
+/// commands that hold several copies of a record: check, diagnose, replay).
+pub fn check_rows(what: &str, rows: usize) -> Result<(), LimitError> {
+    if rows <= MAX_RECORD_SAMPLES {
+        Ok(())
+    } else {
+        Err(LimitError::TooManySamples {
+            what: what.to_string(),
+            samples: rows as f64,
             max: MAX_RECORD_SAMPLES,
             bytes_per_sample: BYTES_PER_SAMPLE,
             max_mb: MAX_RECORD_SAMPLES * BYTES_PER_SAMPLE / 1_000_000,

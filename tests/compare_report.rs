@@ -54,55 +54,10 @@ fn compare_report_holds_every_plot_and_srivc_matches_the_linearized_short_period
     opens_in_headless_chromium_with_every_plot(&dir, 12);
 }
 
-/// Loads `dir/index.html` in headless Chromium through `scripts/report_screenshot.py` (file:// URL, background
-/// networking off) and requires exactly `figures` rendered `<svg>` elements of non-zero size, plus a page
-/// screenshot. Without a Chromium this check is skipped with a message, unless `FLIGHTID_REQUIRE_BROWSER` is set
-/// (`.ci/run` installs Debian's chromium and sets it), in which case a missing browser fails the test.
+/// The report in headless Chromium with every plot (see `common::browser_check`: a visible skip without a
+/// browser, a failure under CI).
 fn opens_in_headless_chromium_with_every_plot(dir: &std::path::Path, figures: usize) {
-    let have_browser = ["chromium", "chromium-browser", "google-chrome"]
-        .iter()
-        .any(|b| Command::new(b).arg("--version").output().is_ok())
-        || std::env::var_os("CHROMIUM").is_some();
-    if !have_browser {
-        assert!(
-            std::env::var_os("FLIGHTID_REQUIRE_BROWSER").is_none(),
-            "FLIGHTID_REQUIRE_BROWSER is set but no chromium is installed (apt-get install -y chromium)"
-        );
-        eprintln!("skipped the browser check: no chromium (apt-get install -y chromium)");
-        return;
-    }
-    let shots = dir.with_file_name("shots");
-    let out = Command::new("python3")
-        .arg(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/scripts/report_screenshot.py"
-        ))
-        .arg(dir)
-        .arg("--out")
-        .arg(&shots)
-        .args(["--expect", &figures.to_string()])
-        .output()
-        .unwrap();
-    let said = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "browser check failed: {said}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(
-        said.contains(&format!("{figures}/{figures} figures rendered")),
-        "{said}"
-    );
-    let png = shots.join(format!(
-        "{}.png",
-        dir.file_name().unwrap().to_string_lossy()
-    ));
-    assert!(
-        std::fs::metadata(&png)
-            .map(|m| m.len() > 10_000)
-            .unwrap_or(false),
-        "screenshot {png:?}"
-    );
+    common::browser_check(dir, figures, &[]);
 }
 
 /// `flightid compare --aircraft c172x ARGS --report DIR --json FILE`: the report directory (kept alive by the

@@ -1,7 +1,7 @@
 //! Robustness of the readers against random and mutated input (no panic, every
 //! failure a clear error, ≥ 100k cases).
 //!
-//! Volume comes from seeded mutation loops (130k cases, reproducible: the seed and case number are
+//! Volume comes from seeded mutation loops (130k CSV/tlog cases and 6k aircraft/campaign/model files, reproducible: the seed and case number are
 //! printed on failure); proptest adds shrinking on arbitrary bytes and on the write→read round trip.
 //! Beyond "no panic", every record a reader returns must pass the hard validation rules.
 
@@ -153,17 +153,18 @@ fn tlog_seed() -> Vec<u8> {
     out
 }
 
-fn airframe() -> flightid::data::Airframe {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("aircraft/airframes/c172x.toml");
-    flightid::data::Airframe::load(&p).unwrap()
+fn servo_map() -> flightid::data::ServoMap {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("aircraft/servo_maps/c172x.toml");
+    flightid::data::ServoMap::load(&p).unwrap()
 }
 
-fn check_tlog(bytes: &[u8], airframe: &flightid::data::Airframe, sysid: Option<u8>) {
+fn check_tlog(bytes: &[u8], servo_map: &flightid::data::ServoMap, sysid: Option<u8>) {
     let opts = TlogOptions {
         sysid,
         rate_hz: None,
+        ..Default::default()
     };
-    match parse_tlog_bytes(bytes, "fuzz.tlog", Some(airframe), &opts) {
+    match parse_tlog_bytes(bytes, "fuzz.tlog", Some(servo_map), &opts) {
         Ok(rep) => {
             rep.record
                 .validate()
@@ -203,7 +204,7 @@ fn csv_reader_survives_80k_mutated_inputs() {
 #[test]
 fn tlog_reader_survives_50k_mutated_inputs() {
     let seed = tlog_seed();
-    let af = airframe();
+    let af = servo_map();
     let mut rng = StdRng::seed_from_u64(0x71);
     let all_bytes: Vec<u8> = (0..=255).collect();
     let mut accepted = 0;
@@ -225,13 +226,82 @@ fn tlog_reader_survives_50k_mutated_inputs() {
     );
 }
 
+/// Bytes a mutation of a TOML or JSON file inserts: structure, numbers and a little noise.
+const FILE_ALPHABET: &[u8] = b"[]{}=\",:\n#.-+eE0123456789 naninf_\xff\x00\x1b";
+
+/// Mutated aircraft, campaign and model files, each read through its real reader from a real file: no panic,
+/// and an accepted file holds only finite numbers within their ranges (the readers validate them).
+#[test]
+fn toml_and_model_file_readers_survive_6k_mutated_files() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let aircraft = std::fs::read(root.join("aircraft/c172x.toml")).unwrap();
+    let campaign = std::fs::read(root.join("campaigns/c172x_737.toml")).unwrap();
+    let model =
+        br#"{"aircraft": "c172x", "effects": [], "model_effects": [], "notes": {"data": "x.csv"}}"#
+            .to_vec();
+    let tmp = tempfile::tempdir().unwrap();
+    let mut rng = StdRng::seed_from_u64(0x70_41);
+    let mut accepted = [0usize; 3];
+    for case in 0..6_000 {
+        let kind = case % 3;
+        let seed = [&aircraft, &campaign, &model][kind];
+        let input = mutate(&mut rng, seed, FILE_ALPHABET);
+        let r = catch_unwind(AssertUnwindSafe(|| match kind {
+            0 => {
+                let path = tmp.path().join("fuzz.toml");
+                std::fs::write(&path, &input).unwrap();
+                flightid::aircraft::load(path.to_str().unwrap())
+                    .map(|cfg| {
+                        for s in cfg.surfaces.values() {
+                            assert!(
+                                s.min_rad < 0.0 && s.max_rad > 0.0 && s.rad_per_norm.is_finite()
+                            );
+                        }
+                        assert!(cfg.trim.speed_kts.is_finite() && cfg.trim.altitude_ft.is_finite());
+                    })
+                    .is_ok()
+            }
+            1 => {
+                let path = tmp.path().join("campaign.toml");
+                std::fs::write(&path, &input).unwrap();
+                flightid::campaign::CampaignSpec::load(&path)
+                    .map(|spec| {
+                        assert!(
+                            spec.duration_s.is_finite() && spec.duration_s * spec.rate_hz <= 1e6
+                        );
+                    })
+                    .is_ok()
+            }
+            _ => {
+                let path = tmp.path().join("extension.json");
+                std::fs::write(&path, &input).unwrap();
+                flightid::diagnose::extension::ExtensionFile::read(&path).is_ok()
+            }
+        }));
+        match r {
+            Ok(ok) => accepted[kind] += usize::from(ok),
+            Err(_) => panic!(
+                "case {case} panicked on {:?}",
+                String::from_utf8_lossy(&input)
+            ),
+        }
+    }
+    // a fair share of each kind must stay readable, or only the first error is exercised
+    for (kind, n) in accepted.iter().enumerate() {
+        assert!(
+            *n > 100,
+            "kind {kind}: only {n} of 2000 mutated files were accepted"
+        );
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 3000, ..ProptestConfig::default() })]
 
     #[test]
     fn arbitrary_bytes_never_panic_either_reader(bytes in proptest::collection::vec(any::<u8>(), 0..600)) {
         check_csv(&bytes);
-        check_tlog(&bytes, &airframe(), None);
+        check_tlog(&bytes, &servo_map(), None);
     }
 
     #[test]

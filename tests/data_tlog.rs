@@ -4,9 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use flightid::data::tlog::TlogOptions;
+use flightid::data::tlog::{StretchChoice, TlogOptions};
 use flightid::data::{
-    parse_tlog_bytes, read_tlog, write_csv_atomic, Airframe, DataError, FlightRecord,
+    parse_tlog_bytes, read_tlog, write_csv_atomic, DataError, FlightRecord, ServoMap,
 };
 use mavlink::dialects::ardupilotmega::{MavMessage, ATTITUDE_DATA, HEARTBEAT_DATA};
 use mavlink::{MavHeader, MavlinkVersion};
@@ -15,8 +15,8 @@ fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn c172x() -> Airframe {
-    Airframe::load(&repo_root().join("aircraft/airframes/c172x.toml")).unwrap()
+fn c172x() -> ServoMap {
+    ServoMap::load(&repo_root().join("aircraft/servo_maps/c172x.toml")).unwrap()
 }
 
 /// Appends one `.tlog` record: big-endian µs timestamp + frame encoded by the `mavlink` crate.
@@ -167,6 +167,7 @@ fn systems_are_separated_and_the_busiest_is_the_default() {
     let opts = TlogOptions {
         sysid: Some(7),
         rate_hz: Some(10.0),
+        ..Default::default()
     };
     let rep7 = parse_tlog_bytes(&bytes, "mem", None, &opts).unwrap();
     assert_eq!(rep7.sysid, 7);
@@ -184,6 +185,7 @@ fn systems_are_separated_and_the_busiest_is_the_default() {
         &TlogOptions {
             sysid: Some(9),
             rate_hz: None,
+            ..Default::default()
         },
     )
     .unwrap_err()
@@ -194,22 +196,160 @@ fn systems_are_separated_and_the_busiest_is_the_default() {
     );
 }
 
-#[test]
-fn a_corrupt_timestamp_is_dropped_but_a_confirmed_logging_gap_is_kept() {
+/// `simple_records` with the timestamps of records `from..` shifted by `shift_us` (may be negative).
+fn shifted(from: usize, shift_us: i64) -> Vec<Vec<u8>> {
     let mut records = simple_records();
-    // Record 30: high timestamp byte flipped (the frame itself stays valid).
-    records[30][2] ^= 0x40;
-    // Records 60..: the log resumes 120 s later (link lost and regained).
-    for r in records.iter_mut().skip(60) {
-        let t = u64::from_be_bytes(r[..8].try_into().unwrap()) + 120_000_000;
+    for r in records.iter_mut().skip(from) {
+        let t = u64::from_be_bytes(r[..8].try_into().unwrap()).wrapping_add_signed(shift_us);
         r[..8].copy_from_slice(&t.to_be_bytes());
     }
+    records
+}
+
+fn stretch(k: usize) -> TlogOptions {
+    TlogOptions {
+        stretch: Some(StretchChoice::Index(k)),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_corrupt_timestamp_is_dropped_and_a_logging_gap_splits_the_log() {
+    // Records 60..: the log resumes 120 s later (link lost and regained); record 30: high timestamp byte
+    // flipped (the frame itself stays valid).
+    let mut records = shifted(60, 120_000_000);
+    records[30][2] ^= 0x40;
+    let bytes = records.concat();
+    // Nothing is interpolated across the gap: without a choice the log is refused, naming both stretches.
+    let err = parse_tlog_bytes(&bytes, "mem", None, &TlogOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("2 stretches") && err.contains("--stretch"),
+        "{err}"
+    );
+    assert!(err.contains("0.00 to 1.18 s, 59 ATTITUDE samples"), "{err}");
+    assert!(
+        err.contains("121.20 to 121.98 s, 40 ATTITUDE samples (after a gap of 120.020 s)"),
+        "{err}"
+    );
+    let first = parse_tlog_bytes(&bytes, "mem", None, &stretch(1)).unwrap();
+    assert_eq!(first.stats.bad_timestamps, 1);
+    assert_eq!(first.record.len(), 60);
+    assert!((first.record.time_s[59] - 1.18).abs() < 1e-9);
+    let second = parse_tlog_bytes(&bytes, "mem", None, &stretch(2)).unwrap();
+    assert_eq!(second.record.len(), 40);
+    // roll = 0.001·k: the second stretch starts at record 60
+    assert!((second.record.column("phi_rad").unwrap()[0] - 0.060).abs() < 1e-6);
+    let longest = TlogOptions {
+        stretch: Some(StretchChoice::Longest),
+        ..Default::default()
+    };
+    assert_eq!(
+        parse_tlog_bytes(&bytes, "mem", None, &longest)
+            .unwrap()
+            .stretch,
+        0
+    );
+    let err = parse_tlog_bytes(&bytes, "mem", None, &stretch(3)).unwrap_err();
+    assert!(matches!(err, DataError::InvalidArgument(_)), "{err}");
+}
+
+#[test]
+fn a_jump_back_in_log_time_splits_the_log_instead_of_merging_two_stretches() {
+    // Records 60..: the clock steps back 1.5 s, so sorting would interleave them with records 0..59.
+    let bytes = shifted(60, -1_500_000).concat();
+    let err = parse_tlog_bytes(&bytes, "mem", None, &TlogOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("after a jump back of 1.480 s"), "{err}");
+    let second = parse_tlog_bytes(&bytes, "mem", None, &stretch(2)).unwrap();
+    assert_eq!(second.record.len(), 40);
+    assert!((second.record.column("phi_rad").unwrap()[0] - 0.060).abs() < 1e-6);
+}
+
+#[test]
+fn a_short_dropout_is_bridged_but_a_pause_of_more_than_five_intervals_is_not() {
+    // 3 records missing (80 ms between two ATTITUDE, 4 intervals): one stretch, interpolated.
+    let mut records = simple_records();
+    records.drain(40..43);
     let rep = parse_tlog_bytes(&records.concat(), "mem", None, &TlogOptions::default()).unwrap();
-    assert_eq!(rep.stats.bad_timestamps, 1);
-    assert_eq!(rep.stats.frames, 99);
-    // 100 samples at 20 ms plus a 120 s gap: the grid spans 121.98 s.
-    let t = &rep.record.time_s;
-    assert!((t[t.len() - 1] - 121.98).abs() < 1e-9, "{}", t[t.len() - 1]);
+    assert_eq!(rep.stretches.len(), 1);
+    assert_eq!(rep.record.len(), 100);
+    // 6 records missing (140 ms, 7 intervals): two stretches.
+    let mut records = simple_records();
+    records.drain(40..46);
+    let err = parse_tlog_bytes(&records.concat(), "mem", None, &TlogOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("after a gap of 0.140 s"), "{err}");
+}
+
+/// `simple_records` with each timestamp rewritten by `f(k, original)` as 8 raw bytes.
+fn retimed(f: impl Fn(usize, u64) -> [u8; 8]) -> Vec<u8> {
+    let mut records = simple_records();
+    for (k, r) in records.iter_mut().enumerate() {
+        let t = u64::from_be_bytes(r[..8].try_into().unwrap());
+        r[..8].copy_from_slice(&f(k, t));
+    }
+    records.concat()
+}
+
+#[test]
+fn millisecond_little_endian_and_reversed_time_bases_are_refused() {
+    let read = |bytes: &[u8]| {
+        parse_tlog_bytes(bytes, "mem", None, &TlogOptions::default())
+            .unwrap_err()
+            .to_string()
+    };
+    // Milliseconds since the epoch written where microseconds belong: 20 ms steps read as 20 µs.
+    let ms = retimed(|k, _| (1_700_000_000_000 + 20 * k as u64).to_be_bytes());
+    let err = read(&ms);
+    assert!(
+        err.contains("not microseconds") && err.contains("50000 Hz"),
+        "{err}"
+    );
+    // Microseconds since the epoch, little-endian.
+    let le = retimed(|k, _| (1_700_000_000_000_000 + 20_000 * k as u64).to_le_bytes());
+    let err = read(&le);
+    assert!(err.contains("little-endian"), "{err}");
+    // The records in reverse order.
+    let mut records = simple_records();
+    records.reverse();
+    let err = read(&records.concat());
+    assert!(err.contains("runs backwards in 99 of 99 steps"), "{err}");
+}
+
+#[test]
+fn ingest_refuses_a_log_with_a_gap_and_writes_nothing_then_reads_the_chosen_stretch() {
+    let dir = tempfile::tempdir().unwrap();
+    let (log, out) = (dir.path().join("gap.tlog"), dir.path().join("out.csv"));
+    std::fs::write(&log, shifted(60, 120_000_000).concat()).unwrap();
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .args([
+                "ingest",
+                "--tlog",
+                log.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("2 stretches") && e.contains("gap.tlog"), "{e}");
+    assert!(!out.exists(), "a refused log must not leave an output file");
+    let o = run(&["--stretch", "2"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    assert!(e.contains("read stretch 2 of 2"), "{e}");
+    assert_eq!(flightid::data::read_csv(&out).unwrap().len(), 40);
+    let o = run(&["--stretch", "0"]);
+    assert_eq!(o.status.code(), Some(2));
 }
 
 #[test]
@@ -265,8 +405,8 @@ fn make_tlog(csv: &Path, tlog: &Path, extra: &[&str]) -> serde_json::Value {
         .arg(repo_root().join("scripts/make_tlog.py"))
         .arg(csv)
         .arg(tlog)
-        .arg("--airframe")
-        .arg(repo_root().join("aircraft/airframes/c172x.toml"))
+        .arg("--servo-map")
+        .arg(repo_root().join("aircraft/servo_maps/c172x.toml"))
         .args(extra)
         .output()
         .expect("run scripts/make_tlog.py");

@@ -37,6 +37,8 @@ fn fly(out: &Path) {
         "8",
         "--rate-hz",
         "50",
+        "--sim-rate-hz",
+        "50",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -172,8 +174,8 @@ fn missing_channel_skips_its_extensions_and_the_model_and_report_are_written() {
         dir.path().join("model"),
         dir.path().join("report"),
     );
-    // Noise-free data flown by `fly` at 50 Hz: its input convention (each sample held over the step that ends
-    // at it) is declared by replaying at the record's own rate.
+    // Noise-free data simulated and logged by `fly` at 50 Hz: its input convention (each sample held over the
+    // step that ends at it) is declared by replaying at the record's own rate.
     let o = flightid(&[
         "diagnose",
         "--replay-rate-hz",

@@ -11,6 +11,10 @@
 //! - [`model`]: longitudinal (u, α, q, θ) and lateral (β, p, r, φ) state space, θ/δe, φ/δa, φ/δr, modes.
 //! - [`fit`]: derivatives from identified transfer functions by Levenberg–Marquardt, with covariance.
 //! - [`identifiability`]: which derivatives a set of transfer functions determines, in plain words.
+//! - [`airframe`]: an aircraft's mass, inertia, geometry, thrust line and sensor positions (`--airframe`).
+//! - [`flight_models`]: the nondimensional longitudinal and lateral models fitted to measured records.
+//! - [`measured`]: derivatives from measured records of any aircraft (air data, sensors moved to the CG).
+//! - [`output_error`]: the flight models fitted to measured records by the estimation core (output error).
 //! - [`regression`]: equation-error estimates from flight-data channels (SIDPAC `lesq` style) and the
 //!   Savitzky–Golay differentiator it needs.
 //!
@@ -23,13 +27,18 @@
 //! Transfer functions come from `crate::lti::ss2tf`. The JSBSim derivative study (truth, trials, scores,
 //! attribution) that builds on this model is [`crate::study`].
 
+pub mod airframe;
 pub mod coefficients;
 pub mod fit;
+pub mod flight_models;
 pub mod identifiability;
+pub mod measured;
 pub mod model;
+pub mod output_error;
 pub mod params;
 pub mod regression;
 
+pub use airframe::{Airframe, AirframeError};
 pub use fit::{estimate_derivatives, DerivativeEstimate, FitOptions, IdentifiedTf, IdentifiedTfs};
 pub use identifiability::{
     analyse_identifiability, DerivativeVerdict, IdentifiabilityReport, Verdict,

@@ -59,6 +59,12 @@ pub struct FlightRecord<'a> {
     pub ay_m_s2: Option<&'a [f64]>,
     /// Body normal specific force at the CG (≈ −g in level flight).
     pub az_m_s2: Option<&'a [f64]>,
+    /// Body axial specific force at the CG (used with `thrust_n` for the lift equation).
+    pub ax_m_s2: Option<&'a [f64]>,
+    /// Measured dynamic pressure; without it q̄ = ½ ρ V² with [`EquationErrorOptions::air_density_kg_m3`].
+    pub qbar_pa: Option<&'a [f64]>,
+    /// Total thrust along the thrust line ([`EquationErrorOptions::thrust_inclination_rad`]).
+    pub thrust_n: Option<&'a [f64]>,
 }
 
 /// Tuning of the equation-error regression.
@@ -86,6 +92,10 @@ pub struct EquationErrorOptions {
     /// derivative at row k is the mean of the moments at rows k−1 and k (measured on c172x: the C_m residual
     /// drops 7× with the shift). Real sensor data have no such lag: leave it off for them.
     pub response_lags_half_sample: bool,
+    /// Thrust line vs body x, positive nose up (with a `thrust_n` channel).
+    pub thrust_inclination_rad: f64,
+    /// Pitching moment per newton of thrust, positive nose up (with a `thrust_n` channel).
+    pub thrust_moment_arm_m: f64,
 }
 
 impl EquationErrorOptions {
@@ -115,6 +125,8 @@ impl Default for EquationErrorOptions {
             air_density_kg_m3: 1.225,
             g_m_s2: 9.80665,
             response_lags_half_sample: false,
+            thrust_inclination_rad: 0.0,
+            thrust_moment_arm_m: 0.0,
         }
     }
 }
@@ -340,8 +352,8 @@ fn lesq_smoothed(
     lesq(coefficient, names, &smoothed, z, options.max_lag)
 }
 
-/// Least squares with white and coloured-residual standard errors (module doc).
-fn lesq(
+/// Least squares with white and coloured-residual standard errors (module doc); `columns` as given (no smoothing).
+pub(crate) fn lesq(
     coefficient: &'static str,
     names: &[String],
     columns: &[Vec<f64>],
@@ -478,7 +490,17 @@ pub fn equation_error(
 
     // Shared channels (missing ones are reported per equation).
     let v_ch = record.airspeed_m_s;
-    let qbar = |v: &[f64]| -> Vec<f64> { v.iter().map(|v| 0.5 * rho * v * v).collect() };
+    let measured_qbar = record.qbar_pa.filter(|x| x.len() == n);
+    let qbar = |v: &[f64]| -> Vec<f64> {
+        match measured_qbar {
+            Some(q) => q.to_vec(),
+            None => v.iter().map(|v| 0.5 * rho * v * v).collect(),
+        }
+    };
+    // Thrust (measured or from an engine model) acts along its line: its moment leaves the aerodynamic
+    // pitching moment, its x and z components the aerodynamic forces.
+    let thrust = record.thrust_n.filter(|x| x.len() == n);
+    let thrust_moment = |i: usize| thrust.map_or(0.0, |t| t[i] * options.thrust_moment_arm_m);
 
     // ---- C_m
     let cm = (|| -> Result<Result<RegressionResult, AeroError>, String> {
@@ -494,7 +516,8 @@ pub fn equation_error(
             let qb = qbar(v);
             let z: Vec<f64> = (0..n)
                 .map(|i| {
-                    (iyy * qdot[i] + (ixx - izz) * p[i] * r[i] + ixz * (p[i] * p[i] - r[i] * r[i]))
+                    (iyy * qdot[i] + (ixx - izz) * p[i] * r[i] + ixz * (p[i] * p[i] - r[i] * r[i])
+                        - thrust_moment(i))
                         / (qb[i] * s_ref * c)
                 })
                 .collect();
@@ -639,9 +662,24 @@ pub fn equation_error(
             }
         };
         let qb = qbar(v);
-        let z: Vec<f64> = (0..n)
-            .map(|i| -mass.mass_kg * specific[i] / (qb[i] * s_ref * alpha[i].cos()))
-            .collect();
+        let (sin_e, cos_e) = options.thrust_inclination_rad.sin_cos();
+        let ax = record.ax_m_s2.filter(|x| x.len() == n);
+        let z: Vec<f64> = match (thrust, ax) {
+            // Lift from both body forces once thrust is taken out: C_L = (−Z cos α + X sin α)/(q̄S).
+            (Some(t), Some(ax)) => (0..n)
+                .map(|i| {
+                    let z_aero = mass.mass_kg * specific[i] + t[i] * sin_e;
+                    let x_aero = mass.mass_kg * ax[i] - t[i] * cos_e;
+                    (-z_aero * alpha[i].cos() + x_aero * alpha[i].sin()) / (qb[i] * s_ref)
+                })
+                .collect(),
+            _ => (0..n)
+                .map(|i| {
+                    let z_aero = mass.mass_kg * specific[i] + thrust.map_or(0.0, |t| t[i] * sin_e);
+                    -z_aero / (qb[i] * s_ref * alpha[i].cos())
+                })
+                .collect(),
+        };
         let qhat: Vec<f64> = (0..n).map(|i| q[i] * c / (2.0 * v[i])).collect();
         let names: Vec<String> = ["CL_0", "CL_alpha", "CL_q", "CL_de"]
             .map(String::from)

@@ -7,7 +7,7 @@ use super::store::{self, case_path, StorePolicy};
 use super::CampaignError;
 use crate::compare::{modal_summary, paper_options, perturbations, single_surface_plan};
 use crate::ident::{self, Method};
-use crate::sim::{JsbsimSim, Simulator, TrimPoint};
+use crate::sim::{JsbsimSim, SimError, Simulator, TrimPoint};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -220,6 +220,17 @@ pub fn run_case<S: Simulator>(
     methods: &[Method],
     case: &CaseSpec,
 ) -> CaseResult {
+    attempt_case(sim, spec, methods, case).0
+}
+
+/// [`run_case`], and whether the case failed because the simulator process died ([`SimError::Crashed`]): such
+/// a case says nothing about the aircraft and is run again on a fresh process.
+fn attempt_case<S: Simulator>(
+    sim: &mut S,
+    spec: &CampaignSpec,
+    methods: &[Method],
+    case: &CaseSpec,
+) -> (CaseResult, bool) {
     let mut result = CaseResult {
         case: case.clone(),
         rate_hz: spec.rate_hz,
@@ -236,7 +247,7 @@ pub fn run_case<S: Simulator>(
         Ok(t) => t,
         Err(e) => {
             result.error = Some(format!("trim: {e}"));
-            return result;
+            return (result, matches!(e, SimError::Crashed { .. }));
         }
     };
     result.trim_alpha_rad = Some(trim.alpha_rad);
@@ -253,14 +264,14 @@ pub fn run_case<S: Simulator>(
         Ok(r) => r,
         Err(e) => {
             result.error = Some(format!("fly: {e}"));
-            return result;
+            return (result, matches!(e, SimError::Crashed { .. }));
         }
     };
     let (du, dy) = match perturbations(&rec, &case.surface, &case.tf_key) {
         Ok(p) => p,
         Err(e) => {
             result.error = Some(e.to_string());
-            return result;
+            return (result, false);
         }
     };
     let dt_s = 1.0 / spec.rate_hz;
@@ -273,7 +284,7 @@ pub fn run_case<S: Simulator>(
         }
     }
     result.status = "ok".into();
-    result
+    (result, false)
 }
 
 fn identify_one(
@@ -386,10 +397,15 @@ pub fn run_campaign(
                     };
                     let result = match worker.sim_for(case, spec.rate_hz) {
                         Ok(sim) => {
-                            let r = run_case(sim, spec, &methods, case);
-                            if spec.fresh_process_per_case
-                                || r.error.as_deref().is_some_and(|e| e.contains("died"))
-                            {
+                            let (mut r, mut died) = attempt_case(sim, spec, &methods, case);
+                            if died {
+                                // the process died, not the case: once more on a fresh process
+                                worker.sim = None;
+                                if let Ok(sim) = worker.sim_for(case, spec.rate_hz) {
+                                    (r, died) = attempt_case(sim, spec, &methods, case);
+                                }
+                            }
+                            if spec.fresh_process_per_case || died {
                                 worker.sim = None; // a fresh (or, after a crash, working) bridge next
                             }
                             r

@@ -120,12 +120,18 @@ pub enum CampaignAction {
         json: Option<String>,
     },
     /// Summarise a campaign directory: modal parameters vs airspeed/altitude, failures per method.
+    #[command(
+        after_help = "Examples:\n  flightid campaign report out/campaign\n  flightid campaign report out/campaign --report out/campaign-report --json out/campaign.json\n  flightid campaign report out/campaign --json    # the summary as JSON on stdout"
+    )]
     Report {
         /// Campaign output directory.
         dir: PathBuf,
         /// Report directory [default: DIR/report].
         #[arg(long)]
         report: Option<PathBuf>,
+        /// Also write the summary as JSON (to stdout, or to the file given).
+        #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
+        json: Option<String>,
     },
 }
 
@@ -359,12 +365,17 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
             }
             Ok(())
         }
-        CampaignAction::Report { dir, report } => {
+        CampaignAction::Report { dir, report, json } => {
             let target = report.clone().unwrap_or_else(|| dir.join("report"));
             crate::report::check_output_dir(&target)?;
-            let (rep, json) = campaign::campaign_report(dir).map_err(classify)?;
-            let index = crate::report::write_report_dir(&target, &rep, &json)?;
-            println!("report: {}", index.display());
+            let (rep, value) = campaign::campaign_report(dir).map_err(classify)?;
+            let index = crate::report::write_report_dir(&target, &rep, &value)?;
+            if let Some(t) = json {
+                emit_json(t, &value)?;
+            }
+            if json.as_deref() != Some("-") {
+                println!("report: {}", index.display());
+            }
             Ok(())
         }
     }

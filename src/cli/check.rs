@@ -9,6 +9,9 @@ use crate::data::{self, CheckOptions};
 
 /// Check the kinematic consistency of a flight-data CSV.
 #[derive(clap::Args, Debug, Clone)]
+#[command(
+    after_help = "Examples:\n  flightid check flight.csv\n  flightid check flight.csv --from-s 10 --to-s 40 --no-scale-factors --json"
+)]
 pub struct CheckArgs {
     /// Flight-data CSV (docs/data.md); best a maneuver segment of some tens of seconds.
     pub file: PathBuf,
@@ -43,6 +46,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         crate::limits::check_order("--from-s", from_s, "--to-s", to_s)?;
     }
     let mut rec = args.columns.read(&args.file)?;
+    crate::limits::check_rows(&args.file.display().to_string(), rec.len())?;
     if let Some(hz) = args.resample_hz {
         rec = data::resample_uniform(&rec, hz)
             .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;

@@ -85,6 +85,19 @@ pub fn emit_json<T: serde::Serialize>(target: &str, value: &T) -> anyhow::Result
     }
 }
 
+/// A spinner with elapsed time on stderr for work that takes more than a couple of seconds; indicatif draws
+/// nothing when stderr is not a terminal, so piped output stays clean. Finish it with `finish_and_clear`.
+pub fn spinner(message: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new_spinner();
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    pb.set_message(message.to_string());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    pb
+}
+
 /// How a command reads flight-data CSVs: optionally through a column map.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct ColumnsArg {

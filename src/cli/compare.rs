@@ -16,7 +16,7 @@ use std::path::PathBuf;
 /// report.md, *.svg and report.json.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  flightid compare --aircraft c172x --report out/compare\n  flightid compare --aircraft 737 --amplitude-deg 1 --method ls,srivc,oe --report out/737 --json out/737.json\n\nTesting why the linearization misses a response: scale one aerodynamic coefficient function of the model\n(both the nonlinear flight and the linearization use the scaled model). On c172x, phi/rudder fits the\nlinearization at ~26 %; without the sideslip drag CD_beta*|beta| (not differentiable at beta = 0, so the\nlinearization sees none of it) it fits at ~95 %:\n  flightid compare --aircraft c172x --scale CDbeta=0 --report out/no-cdbeta"
+    after_help = "Examples:\n  flightid compare --aircraft c172x --report out/compare\n  flightid compare --aircraft c172x --json out/compare.json\n  flightid compare --aircraft 737 --amplitude-deg 1 --method ls,srivc,oe --report out/737 --json out/737.json\n\nTesting why the linearization misses a response: scale one aerodynamic coefficient function of the model\n(both the nonlinear flight and the linearization use the scaled model). On c172x, phi/rudder fits the\nlinearization at ~26 %; without the sideslip drag CD_beta*|beta| (not differentiable at beta = 0, so the\nlinearization sees none of it) it fits at ~95 %:\n  flightid compare --aircraft c172x --scale CDbeta=0 --report out/no-cdbeta"
 )]
 pub struct CompareCmd {
     #[command(flatten)]
@@ -36,9 +36,10 @@ pub struct CompareCmd {
     /// Amplitudes of the linearity sweep, deg, comma separated.
     #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4,8,12")]
     pub sweep_deg: Vec<f64>,
-    /// Report directory.
+    /// Report directory (index.html, report.md, *.svg, report.json); without it only the terminal summary and
+    /// --json.
     #[arg(long)]
-    pub report: PathBuf,
+    pub report: Option<PathBuf>,
     /// Also write the results as JSON (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     pub json: Option<String>,
@@ -170,7 +171,9 @@ pub fn classify(e: compare::CompareError) -> anyhow::Error {
 
 /// Runs `flightid compare`.
 pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
-    crate::report::check_output_dir(&args.report)?;
+    if let Some(dir) = &args.report {
+        crate::report::check_output_dir(dir)?;
+    }
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;
     let methods: Vec<Method> = args
@@ -193,7 +196,11 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
         sim.set_coefficient_scale(name, *factor)
             .map_err(|e| UsageError(e.to_string()))?;
     }
-    let (outcome, mut report) = compare::run_compare(&mut sim, &opts).map_err(classify)?;
+    let progress =
+        super::common::spinner("trim, linearize, fly doublets, identify, amplitude sweep");
+    let result = compare::run_compare(&mut sim, &opts).map_err(classify);
+    progress.finish_and_clear();
+    let (outcome, mut report) = result?;
     let mut json = compare::outcome_json(&outcome);
     let verdicts = explain_linearization_gaps(
         &mut sim,
@@ -203,29 +210,22 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
         &mut report,
         &mut json,
     )?;
-    let index = crate::report::write_report_dir(&args.report, &report, &json)?;
+    let index = match &args.report {
+        Some(dir) => Some(crate::report::write_report_dir(dir, &report, &json)?),
+        None => None,
+    };
     if let Some(target) = &args.json {
         emit_json(target, &json)?;
     }
     if args.json.as_deref() != Some("-") {
-        for (key, fits) in &outcome.models {
-            for f in fits {
-                println!(
-                    "{key:<15} {:<21} fit {:>9.2} %  {}",
-                    f.model,
-                    f.fit_percent,
-                    f.modal
-                        .iter()
-                        .map(|(k, v)| format!("{k} {v:.4}"))
-                        .collect::<Vec<_>>()
-                        .join("  ")
-                );
-            }
+        for line in
+            compare::notes::terminal_summary(&outcome, opts.duration_s, opts.rate_hz, &verdicts)
+        {
+            println!("{line}");
         }
-        for v in &verdicts {
-            println!("{v}");
+        if let Some(index) = index {
+            println!("report: {}", index.display());
         }
-        println!("report: {}", index.display());
     }
     Ok(())
 }

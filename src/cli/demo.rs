@@ -26,7 +26,7 @@ pub struct DemoCmd {
     #[arg(long, default_value_t = 30.0, value_parser = crate::limits::DURATION_S.parser())]
     pub duration_s: f64,
     /// Report directory (replaced whole; index.html, report.md, *.svg, report.json).
-    #[arg(long, default_value = "flightid-demo")]
+    #[arg(long, default_value = "flightid-out/demo")]
     pub report: PathBuf,
     /// Write the results as JSON (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
@@ -50,8 +50,11 @@ pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
     };
     let mut sim = JsbsimSim::start(&cfg, args.trim.rate_hz)
         .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
-    let (outcome, mut report) =
-        compare::run_compare(&mut sim, &opts).map_err(super::compare::classify)?;
+    let progress =
+        super::common::spinner("trim, linearize, fly doublets, identify, amplitude sweep");
+    let result = compare::run_compare(&mut sim, &opts).map_err(super::compare::classify);
+    progress.finish_and_clear();
+    let (outcome, mut report) = result?;
     let mut json = compare::outcome_json(&outcome);
     let verdicts = super::compare::explain_linearization_gaps(
         &mut sim,
@@ -68,41 +71,9 @@ pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
     if quiet {
         return Ok(());
     }
-    let trim = &outcome.trim;
-    println!(
-        "{} trimmed at {} ft, {} kts: alpha {:.3} deg, elevator {:.3} deg, throttle {:.3}",
-        trim.aircraft,
-        trim.point.altitude_ft,
-        trim.point.speed_kts,
-        trim.alpha_rad.to_degrees(),
-        trim.surfaces_rad["elevator"].to_degrees(),
-        trim.throttle
-    );
-    println!(
-        "\n{:<15} {:<21} {:>10} {:>8} {:>13} {:>8}",
-        "transfer fn", "model", "wn rad/s", "zeta", "real pole", "fit %"
-    );
-    let cell = |v: Option<&f64>, w: usize, d: usize| match v {
-        Some(x) if x.is_finite() => format!("{x:>w$.d$}"),
-        _ => format!("{:>w$}", "-"),
-    };
-    for (key, fits) in &outcome.models {
-        for f in fits {
-            match &f.error {
-                Some(e) => println!("{key:<15} {:<21} failed: {e}", f.model),
-                None => println!(
-                    "{key:<15} {:<21} {} {} {} {}",
-                    f.model,
-                    cell(f.modal.get("osc_omega_n_rad_s"), 10, 4),
-                    cell(f.modal.get("osc_zeta"), 8, 4),
-                    cell(f.modal.get("real_pole_rad_s"), 13, 4),
-                    cell(Some(&f.fit_percent), 8, 2),
-                ),
-            }
-        }
-    }
-    for v in &verdicts {
-        println!("\n{v}");
+    for line in compare::notes::terminal_summary(&outcome, opts.duration_s, opts.rate_hz, &verdicts)
+    {
+        println!("{line}");
     }
     println!("\nreport: {}", index.display());
     Ok(())

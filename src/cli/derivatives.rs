@@ -7,10 +7,22 @@ use crate::aero::AeroError;
 use crate::cli::UsageError;
 use crate::ident::Method;
 use crate::report;
+use crate::report::text::{wrap, TERMINAL_WIDTH};
 use crate::study::spec::{parse_derivatives, Structure};
 use crate::study::trials::{SensorNoise, TrialOptions};
 use crate::study::{self, Source, StudyOptions};
 use std::path::PathBuf;
+
+/// Which axis `--data … --airframe …` estimates.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AxisArg {
+    /// C_L, C_D, C_m (states V, α, θ, q).
+    Longitudinal,
+    /// C_Y, C_l, C_n (states β, p, r, φ).
+    Lateral,
+    /// Both.
+    Both,
+}
 
 /// Model structure for the transfer-function route.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
@@ -23,13 +35,16 @@ pub enum StructureArg {
 
 /// Estimate aerodynamic derivatives and score them against the aircraft's own (JSBSim) values.
 ///
+/// With --data and --airframe: measured records of any aircraft (equation error, output error or filter
+/// error on built-in nondimensional models; see docs/derivatives-measured.md).
+///
 /// Without --from/--data it flies elevator, aileron and rudder doublets on JSBSim, identifies θ/δe, φ/δa, φ/δr,
 /// backs the derivatives out of them through the paper's parametric model, estimates them also by equation
 /// error on the full state, and prints the paper's Table 1 (truth vs estimate, 3σ interval, identifiability)
 /// and Table 3 (errors, 3σ coverage, targets, the structure term behind a miss).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  flightid derivatives --aircraft c172x\n  flightid derivatives --aircraft c172x --noise --report deriv-report\n  flightid identify --data el.csv --input elevator --output theta_rad --json th.json && flightid derivatives --from th.json\n  flightid derivatives --data lateral.csv --json out.json"
+    after_help = "Examples:\n  flightid derivatives --aircraft c172x\n  flightid derivatives --aircraft c172x --noise --report deriv-report\n  flightid identify --data el.csv --input elevator --output theta_rad --json th.json && flightid derivatives --from th.json\n  flightid derivatives --aircraft c172x --data lateral.csv --json out.json\n  flightid derivatives --data lon1.csv --data lon2.csv --airframe my.toml --columns map.toml --method oe"
 )]
 pub struct DerivativesCmd {
     #[command(flatten)]
@@ -38,25 +53,41 @@ pub struct DerivativesCmd {
     /// May carry `mass` / `geometry` objects replacing the JSBSim model's.
     #[arg(long, value_name = "IDENTIFIED.json", conflicts_with = "data")]
     pub from: Vec<PathBuf>,
-    /// A flight-data CSV (docs/data.md) for equation error on the full state. Taken as a JSBSim record
-    /// (`flightid fly`): its differentiated rates lag the moments by half a sample, which is modelled.
+    /// A flight-data CSV (docs/data.md); repeatable (records fitted jointly). With --airframe: measured data
+    /// of that aircraft. Without: a JSBSim record of --aircraft (`flightid fly`), scored against the model's
+    /// own derivatives (its differentiated rates lag the moments by half a sample, which is modelled).
     #[arg(long, value_name = "FLIGHT.csv")]
-    pub data: Option<PathBuf>,
+    pub data: Vec<PathBuf>,
     #[command(flatten)]
     pub columns: ColumnsArg,
-    /// With --data: the CSV is measured sensor data, sampled together, with no integrator lag to model.
+    /// With --data: the aircraft that flew, as an airframe description (FILE.toml: mass, inertia, geometry,
+    /// thrust line, sensor positions; docs/airframe.md) or a JSBSim aircraft name (quantities read from
+    /// its model). Nothing falls back to another aircraft: a missing key is named (exit 2).
+    #[arg(long, value_name = "FILE.toml|NAME", requires = "data")]
+    pub airframe: Option<String>,
+    /// With --airframe: the axis to estimate [default: what the records excite].
+    #[arg(long, value_enum, requires = "airframe")]
+    pub axis: Option<AxisArg>,
+    /// With --airframe: estimate C_mα̇ (and C_Lα̇ for output error) too.
+    #[arg(long, requires = "airframe")]
+    pub alphadot: bool,
+    /// With --data without --airframe: the CSV is measured sensor data, sampled together, with no
+    /// integrator lag to model.
     #[arg(long, requires = "data")]
     pub sensor_data: bool,
     /// Model structure of the transfer-function route.
     #[arg(long = "model", value_enum, default_value = "paper")]
     pub structure: StructureArg,
     /// Free derivatives of the TF route, comma separated (default: Cm_alpha,Cm_q,Cm_alphadot,Cm_de,
-    /// Cl_beta,Cl_p,Cl_da,Cn_beta,Cn_r).
-    #[arg(long, value_delimiter = ',')]
+    /// Cl_beta,Cl_p,Cl_da,Cn_beta,Cn_r). With --airframe --method oe|fem: parameters or groups (speed,
+    /// alphadot, zero, skew, all) to free, `-NAME` to hold, applied in order to the default set
+    /// (docs/derivatives-measured.md).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub free: Option<Vec<String>>,
-    /// Estimator of the transfer functions when flying: srivc or oe.
-    #[arg(long, default_value = "srivc")]
-    pub method: String,
+    /// Estimator: with --airframe ee (equation error), oe (output error) or fem (filter error)
+    /// [default ee]; when flying, of the transfer functions: srivc or oe [default srivc].
+    #[arg(long)]
+    pub method: Option<String>,
     /// Add realistic sensor noise to the flown records (vanes 0.1°, AHRS 0.05°, gyros 0.1°/s, …).
     #[arg(long)]
     pub noise: bool,
@@ -90,15 +121,36 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     if let Some(dir) = &args.report {
         crate::report::check_output_dir(dir)?;
     }
+    if let Some(airframe) = &args.airframe {
+        return run_measured(args, airframe);
+    }
+    // Measured data scored against a JSBSim model only when the user named that model: never the default
+    // c172x by accident.
+    let named_aircraft =
+        std::env::args().any(|a| a == "--aircraft" || a.starts_with("--aircraft="));
+    if args.sensor_data && !named_aircraft {
+        return Err(UsageError(
+            "--sensor-data: measured data need the aircraft that flew them: give --airframe FILE.toml \
+             (mass, inertia, geometry) or --airframe NAME for a JSBSim model (or --aircraft NAME to score \
+             them against that model's own derivatives)"
+                .into(),
+        )
+        .into());
+    }
+    if args.data.len() > 1 {
+        return Err(UsageError("several --data records need --airframe".into()).into());
+    }
     let free = match &args.free {
         Some(names) => Some(parse_derivatives(names).map_err(classify)?),
         None => None,
     };
     let method: Method = args
         .method
+        .as_deref()
+        .unwrap_or("srivc")
         .parse()
         .map_err(|e| UsageError(format!("--method: {e}")))?;
-    let source = if let Some(path) = &args.data {
+    let source = if let Some(path) = args.data.first() {
         let record = args.columns.read(path)?;
         Source::Data {
             record,
@@ -134,8 +186,11 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     };
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;
+    let progress = super::common::spinner("derivatives: trim, model check, flights, estimates");
     let mut sim = crate::sim::JsbsimSim::start(&cfg, args.trim.rate_hz)?;
-    let result = study::run(&mut sim, &point, &opts).map_err(classify)?;
+    let result = study::run(&mut sim, &point, &opts).map_err(classify);
+    progress.finish_and_clear();
+    let result = result?;
     let quiet = args.json.as_deref() == Some("-");
     if !quiet {
         println!(
@@ -146,10 +201,19 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
             println!("{}", text_table(&t));
         }
         if !result.identifiability.is_empty() {
-            println!("Identifiability (TF route):\n{}", result.identifiability);
+            println!("Identifiability (TF route):");
+            for line in result.identifiability.lines() {
+                let indent = &line[..line.len() - line.trim_start().len()];
+                let rest = format!("{indent}    ");
+                for l in wrap(line.trim_start(), TERMINAL_WIDTH, indent, &rest) {
+                    println!("{l}");
+                }
+            }
         }
         for n in &result.notes {
-            println!("- {n}");
+            for l in wrap(n, TERMINAL_WIDTH, "- ", "  ") {
+                println!("{l}");
+            }
         }
     }
     let json = result.to_json();
@@ -163,4 +227,160 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
         emit_json(target, &json)?;
     }
     Ok(())
+}
+
+/// Whether the estimation core's filter error method can be used (`--method fem`).
+const FILTER_ERROR_AVAILABLE: bool = false;
+
+/// The measured-data route: `--data … --airframe …`.
+fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()> {
+    use crate::aero::measured::{self, AxisChoice, MeasuredError};
+    use crate::aero::output_error;
+    let airframe = load_airframe(args, airframe_arg)?;
+    let mut records = Vec::new();
+    for p in &args.data {
+        let rec = args.columns.read(p)?;
+        records.push((p.display().to_string(), rec));
+    }
+    let axis = match args.axis {
+        Some(AxisArg::Longitudinal) => AxisChoice::Longitudinal,
+        Some(AxisArg::Lateral) => AxisChoice::Lateral,
+        Some(AxisArg::Both) => AxisChoice::Both,
+        None => {
+            let mut lon = false;
+            let mut lat = false;
+            for (_, r) in &records {
+                if let Some(a) = measured::excited_axis(r) {
+                    lon |= a.longitudinal();
+                    lat |= a.lateral();
+                }
+            }
+            match (lon, lat) {
+                (true, true) => AxisChoice::Both,
+                (true, false) => AxisChoice::Longitudinal,
+                (false, true) => AxisChoice::Lateral,
+                (false, false) => return Err(UsageError(
+                    "no record moves a control surface by more than 0.5° above its noise: nothing \
+                         excites an axis (give --axis to estimate anyway)"
+                        .into(),
+                )
+                .into()),
+            }
+        }
+    };
+    let classify = |e: MeasuredError| -> anyhow::Error {
+        match e {
+            MeasuredError::Airframe(_) | MeasuredError::Record { .. } => {
+                UsageError(e.to_string()).into()
+            }
+            MeasuredError::Aero(a) => classify(a),
+            MeasuredError::Estimate(crate::estimate::EstimateError::Record { .. }) => {
+                UsageError(e.to_string()).into()
+            }
+            MeasuredError::Estimate(_) => e.into(),
+        }
+    };
+    let report = match args.method.as_deref().unwrap_or("ee") {
+        "ee" => {
+            if args.free.is_some() {
+                return Err(UsageError(
+                    "--free: equation error estimates every term of its regressions; --free chooses the \
+                     free parameters of --method oe|fem"
+                        .into(),
+                )
+                .into());
+            }
+            measured::equation_error_report(&records, &airframe, axis, args.alphadot)
+                .map_err(classify)?
+        }
+        "oe" | "fem" => {
+            let method = if args.method.as_deref() == Some("fem") {
+                if !FILTER_ERROR_AVAILABLE {
+                    return Err(UsageError(
+                        "--method fem: the filter error method is not available in the estimation core \
+                         yet; use --method oe (output error) or ee (equation error)"
+                            .into(),
+                    )
+                    .into());
+                }
+                crate::estimate::Method::Fem
+            } else {
+                crate::estimate::Method::Oe
+            };
+            let free = output_error::parse_free(args.free.as_deref().unwrap_or(&[]))
+                .map_err(|e| UsageError(format!("--free: {e}")))?;
+            let options = output_error::OutputErrorOptions {
+                method,
+                free,
+                alphadot: args.alphadot,
+            };
+            output_error::output_error_report(&records, &airframe, axis, &options)
+                .map_err(classify)?
+        }
+        other => {
+            return Err(UsageError(format!(
+                "--method {other}: with --airframe the methods are ee, oe and fem"
+            ))
+            .into())
+        }
+    };
+    if report.converged == Some(false) {
+        eprintln!(
+            "warning: the {} fit did not converge; the estimates below are not a minimum of the cost",
+            report.method.replace('_', " ")
+        );
+    }
+    let quiet = args.json.as_deref() == Some("-");
+    if !quiet {
+        println!("{} ({}):", airframe.name, airframe.source);
+        print!("{}", report.to_text());
+    }
+    if let Some(target) = &args.json {
+        emit_json(target, &report.to_json())?;
+    }
+    Ok(())
+}
+
+/// `--airframe FILE.toml` or a JSBSim aircraft name (mass, inertia and geometry read from its model at its
+/// default trim).
+fn load_airframe(args: &DerivativesCmd, arg: &str) -> anyhow::Result<crate::aero::Airframe> {
+    use crate::aero::Airframe;
+    let path = std::path::Path::new(arg);
+    if arg.ends_with(".toml") || path.is_file() {
+        return Airframe::load(path).map_err(|e| UsageError(e.to_string()).into());
+    }
+    let trim = TrimArgs {
+        aircraft: arg.to_string(),
+        ..args.trim.clone()
+    };
+    let (mut sim, _) = trim.start_and_trim()?;
+    let truth = sim.aero_truth()?;
+    Ok(airframe_of_model(arg, &truth))
+}
+
+/// The mass, inertia and geometry a JSBSim model uses at its trim (sensors at the CG, no thrust line, the
+/// trim's density).
+fn airframe_of_model(name: &str, truth: &crate::sim::jsbsim::AeroTruth) -> crate::aero::Airframe {
+    use crate::aero::airframe::{Airframe, FlightDefaults, Inertia, SensorPositions, Wing};
+    Airframe {
+        name: name.to_string(),
+        mass_kg: Some(truth.mass_kg),
+        inertia_kg_m2: Inertia {
+            ixx: truth.ixx_kg_m2,
+            iyy: truth.iyy_kg_m2,
+            izz: truth.izz_kg_m2,
+            ixz: truth.ixz_kg_m2,
+        },
+        wing: Wing {
+            area_m2: Some(truth.wing_area_m2),
+            span_m: Some(truth.span_m),
+            mac_m: Some(truth.chord_m),
+        },
+        thrust: None,
+        sensors: SensorPositions::default(),
+        flight: FlightDefaults {
+            density_kg_m3: Some(truth.rho_kg_m3),
+        },
+        source: format!("JSBSim {name}"),
+    }
 }

@@ -117,6 +117,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         crate::report::check_output_dir(dir)?;
     }
     let train = args.columns.read(&args.data)?;
+    crate::limits::check_rows(&args.data.display().to_string(), train.len())?;
     let valid = args
         .validate
         .as_deref()
@@ -133,6 +134,8 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         }
         None => rate_of(&train)?,
     };
+    let progress =
+        super::common::spinner("diagnose: replay, fit each candidate extension, validate");
     let mut workers = start_workers(&source, rate, args.workers)?;
     let d = diagnose(
         &mut workers,
@@ -140,7 +143,9 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         valid.as_ref(),
         &DiagnoseOptions::default(),
     )
-    .map_err(classify)?;
+    .map_err(classify);
+    progress.finish_and_clear();
+    let d = d?;
     summary(&d, workers.len());
     if let Some(target) = &args.json {
         emit_json(target, &d)?;
@@ -213,11 +218,16 @@ fn summary(d: &Diagnosis, workers: usize) {
         println!("no validation record (--validate): the gain on unseen data is not measured");
     }
     for w in &d.warnings {
-        println!("warning: {w}");
+        super::warn(w);
     }
     for s in &d.skipped {
         if s.effect != "aero_derivative" {
-            println!("skipped {} on {}: {}", s.effect, s.target, s.reason);
+            let text = format!("skipped {} on {}: {}", s.effect, s.target, s.reason);
+            for line in
+                crate::report::text::wrap(&text, crate::report::text::TERMINAL_WIDTH, "", "  ")
+            {
+                println!("{line}");
+            }
         }
     }
     println!(

@@ -110,7 +110,7 @@ impl ManeuverArgs {
         }
         let m = self.maneuver()?;
         crate::limits::check_samples(
-            "the record (--duration-s × --rate-hz)",
+            "the simulation (--duration-s × the simulation rate, --sim-rate-hz or --rate-hz)",
             self.duration_s,
             rate_hz,
         )?;
@@ -164,8 +164,11 @@ impl ManeuverArgs {
     }
 }
 
-/// Fly a maneuver from trim and write the flight-data CSV (docs/data.md: all columns, SI units), sampled
-/// at the simulation rate. The first sample is the trim state. Nothing is written if anything fails.
+/// Fly a maneuver from trim and write the flight-data CSV (docs/data.md: all columns, SI units). JSBSim
+/// integrates at --sim-rate-hz (default: 120 Hz, or the smallest multiple of --rate-hz at or above it) and the
+/// record keeps every sample at --rate-hz: a log that is not a subsample of the simulation would need
+/// interpolation, so the simulation rate must be a whole multiple of the logging rate. The first sample is the trim state.
+/// Nothing is written if anything fails.
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples:\n  flightid fly --aircraft c172x --surface elevator --maneuver doublet --amplitude-deg 2 --pulse-s 1 --duration-s 30 --out flight.csv\n  flightid fly --aircraft 737 --surface aileron --surface rudder --maneuver 3211 --amplitude-deg 1 --out lat.csv"
@@ -178,6 +181,11 @@ pub struct FlyCmd {
     /// Output CSV file.
     #[arg(long)]
     pub out: PathBuf,
+    /// JSBSim integration rate, Hz: a whole multiple of --rate-hz (the logging rate). Default: --rate-hz if it is
+    /// at least 120 Hz, else its smallest multiple at or above 120 Hz (a record flown at 50 Hz carries the
+    /// integrator's error: the short-period damping identified from it comes out 9 % low).
+    #[arg(long, value_name = "HZ")]
+    pub sim_rate_hz: Option<f64>,
     /// Also print a JSON summary (to stdout, or to the file given).
     #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     pub json: Option<String>,
@@ -187,16 +195,60 @@ pub struct FlyCmd {
     pub model: Option<PathBuf>,
 }
 
+/// Lowest integration rate `fly` uses by default, Hz.
+pub const MIN_SIM_RATE_HZ: f64 = 120.0;
+
+/// The simulation rate for a logging rate and the number of simulation steps per logged sample.
+pub fn simulation_rate(log_rate_hz: f64, sim_rate_hz: Option<f64>) -> anyhow::Result<(f64, usize)> {
+    let bad = |msg: String| anyhow::Error::from(UsageError(msg));
+    if !(log_rate_hz.is_finite() && (10.0..=2000.0).contains(&log_rate_hz)) {
+        return Err(bad(format!(
+            "--rate-hz must be within 10..2000, got {log_rate_hz}"
+        )));
+    }
+    let sim_hz = sim_rate_hz
+        .unwrap_or_else(|| log_rate_hz * (MIN_SIM_RATE_HZ / log_rate_hz).ceil().max(1.0));
+    let ratio = sim_hz / log_rate_hz;
+    let step = ratio.round();
+    if !(sim_hz.is_finite() && sim_hz <= 2000.0 && step >= 1.0 && (ratio - step).abs() < 1e-9) {
+        return Err(bad(format!(
+            "--sim-rate-hz ({sim_hz}) must be a whole multiple of --rate-hz ({log_rate_hz}) and at most 2000"
+        )));
+    }
+    Ok((sim_hz, step as usize))
+}
+
+/// Keeps every `step`-th sample of a record (the first one included), with its metadata.
+fn every_nth(rec: &data::FlightRecord, step: usize) -> data::FlightRecord {
+    let keep = |v: &[f64]| v.iter().step_by(step).copied().collect::<Vec<_>>();
+    let mut out = data::FlightRecord::new(keep(&rec.time_s));
+    for (name, values) in &rec.columns {
+        out.push_column(name, keep(values));
+    }
+    out.metadata = rec.metadata.clone();
+    out
+}
+
 /// Runs `flightid fly`.
 pub fn run(args: &FlyCmd) -> anyhow::Result<()> {
-    let mut plan = args.maneuver.plan(args.trim.rate_hz)?;
-    let (mut rec, trim) = match &args.model {
+    let log_rate_hz = args.trim.rate_hz;
+    let (sim_rate_hz, step) = simulation_rate(log_rate_hz, args.sim_rate_hz)?;
+    let mut sim_args = args.trim.clone();
+    sim_args.rate_hz = sim_rate_hz;
+    let mut plan = args.maneuver.plan(sim_rate_hz)?;
+    let (rec, trim) = match &args.model {
         None => {
-            let (mut sim, trim) = args.trim.start_and_trim()?;
+            let (mut sim, trim) = sim_args.start_and_trim()?;
             (sim.fly(&plan)?, trim)
         }
-        Some(dir) => fly_model(args, dir, &mut plan)?,
+        Some(dir) => fly_model(&sim_args, dir, &mut plan)?,
     };
+    let mut rec = if step > 1 { every_nth(&rec, step) } else { rec };
+    if step > 1 {
+        rec.metadata.push(format!(
+            "logged at {log_rate_hz} Hz: one sample in {step} of a {sim_rate_hz} Hz simulation"
+        ));
+    }
     rec.metadata.push(format!(
         "maneuver: {:?} on {} amplitude {} deg, start {} s",
         args.maneuver.maneuver,
@@ -206,16 +258,18 @@ pub fn run(args: &FlyCmd) -> anyhow::Result<()> {
     ));
     data::write_csv_atomic(&args.out, &rec)?;
     let summary = serde_json::json!({
-        "out": args.out.display().to_string(), "samples": rec.len(), "rate_hz": args.trim.rate_hz,
+        "out": args.out.display().to_string(), "samples": rec.len(), "rate_hz": log_rate_hz,
+        "sim_rate_hz": sim_rate_hz,
         "aircraft": trim.aircraft, "trim": trim,
     });
     match &args.json {
         Some(target) => emit_json(target, &summary)?,
         None => eprintln!(
-            "wrote {} ({} samples at {} Hz, {} from trim at {} ft, {} kts)",
+            "wrote {} ({} samples at {} Hz, simulated at {} Hz, {} from trim at {} ft, {} kts)",
             args.out.display(),
             rec.len(),
-            args.trim.rate_hz,
+            log_rate_hz,
+            sim_rate_hz,
             args.maneuver.surfaces.join("+"),
             trim.point.altitude_ft,
             trim.point.speed_kts
@@ -227,7 +281,7 @@ pub fn run(args: &FlyCmd) -> anyhow::Result<()> {
 /// Flies the extended model in `dir`: its exported aircraft, with its signal-path effects on the plan and its
 /// sensor effects on the record.
 fn fly_model(
-    args: &FlyCmd,
+    sim_args: &super::common::TrimArgs,
     dir: &std::path::Path,
     plan: &mut crate::sim::FlightPlan,
 ) -> anyhow::Result<(data::FlightRecord, crate::sim::TrimState)> {
@@ -236,9 +290,9 @@ fn fly_model(
     let model = ExtendedModel::read(dir).map_err(|e| UsageError(e.to_string()))?;
     let cfg =
         crate::aircraft::load(&model.extension.aircraft).map_err(|e| UsageError(e.to_string()))?;
-    let point = args.trim.point(&cfg)?;
+    let point = sim_args.point(&cfg)?;
     let mut sim = model
-        .start(&cfg, args.trim.rate_hz)
+        .start(&cfg, sim_args.rate_hz)
         .with_context(|| format!("starting JSBSim on the model in {}", dir.display()))?;
     let effects = model
         .effects(&sim.coefficient_knobs)

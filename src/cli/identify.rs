@@ -167,7 +167,7 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         }
     };
     for w in &r.warnings {
-        eprintln!("warning: {w}");
+        super::warn(w);
     }
     if args.json.as_deref() != Some("-") {
         print_result(

@@ -1,7 +1,7 @@
 //! `flightid linearize`: JSBSim's own linearization at a trim point.
 
 use super::common::{emit_json, TrimArgs};
-use crate::sim::linear::{paper_transfer_functions, submodel_modes, tf_json};
+use crate::sim::linear::{mode_names, paper_transfer_functions, submodel_modes, tf_json};
 use crate::sim::Simulator;
 
 /// Trim, then linearize with JSBSim's FGLinearization: A, B, C, D with state/input names and units, the
@@ -40,6 +40,11 @@ pub fn run(args: &LinearizeCmd) -> anyhow::Result<()> {
         obj.insert("tf".into(), serde_json::Value::Object(tf));
         obj.insert("tf_model".into(), "decoupled 4-state submodels: longitudinal Vt, Alpha, Theta, Q; lateral Beta, Phi, P, R; inputs per radian of surface deflection".into());
         obj.insert("modes".into(), serde_json::to_value(&modes)?);
+        let names: serde_json::Map<String, serde_json::Value> = modes
+            .iter()
+            .map(|(k, ms)| (k.clone(), serde_json::json!(mode_names(k, ms))))
+            .collect();
+        obj.insert("mode_names".into(), serde_json::Value::Object(names));
         obj.insert("trim".into(), serde_json::to_value(&trim)?);
         emit_json(target, &value)?;
         if target == "-" {
@@ -65,14 +70,14 @@ pub fn run(args: &LinearizeCmd) -> anyhow::Result<()> {
         );
     }
     for (name, ms) in &modes {
-        for m in ms {
+        for (m, mode) in ms.iter().zip(mode_names(name, ms)) {
             if m.oscillatory {
                 println!(
-                    "  {name:<13} oscillatory  wn {:8.4} rad/s  zeta {:7.4}",
+                    "  {name:<13} {mode:<24} wn {:8.4} rad/s  zeta {:7.4}",
                     m.omega_n_rad_s, m.zeta
                 );
             } else {
-                println!("  {name:<13} real pole    {:9.5} 1/s", m.pole.re);
+                println!("  {name:<13} {mode:<24} real pole {:9.5} rad/s", m.pole.re);
             }
         }
     }

@@ -12,6 +12,7 @@ pub mod compare;
 pub mod demo;
 pub mod derivatives;
 pub mod diagnose;
+pub mod estimate;
 pub mod fly;
 pub mod identify;
 pub mod ingest;
@@ -55,6 +56,7 @@ pub enum Command {
     Regress(regress::RegressCmd),
     /// Name what the simulation gets wrong on measured data and measure the gain on a validation record.
     Diagnose(diagnose::DiagnoseCmd),
+    Estimate(estimate::EstimateCmd),
     /// Replay measured data on the simulation (optionally with fitted extensions) and compare the outputs.
     Replay(replay::ReplayCmd),
     /// Identify a transfer function from an input column to an output column of a flight-data CSV.
@@ -91,6 +93,7 @@ pub fn main() -> i32 {
         Command::Campaign(a) => campaign::run(a),
         Command::Regress(a) => regress::run(a),
         Command::Diagnose(a) => diagnose::run(a),
+        Command::Estimate(a) => estimate::run(a),
         Command::Replay(a) => replay::run(a),
         Command::Identify(a) => identify::run(a),
         Command::Paper(a) => paper::run(a),
@@ -102,10 +105,19 @@ pub fn main() -> i32 {
     }
 }
 
+/// Prints a warning on stderr, control characters escaped (warnings echo user data too).
+pub fn warn(message: &dyn std::fmt::Display) {
+    eprintln!(
+        "warning: {}",
+        crate::text::escape_control(&message.to_string())
+    );
+}
+
 /// Prints an error chain on one line and picks the exit code.
 pub fn report_error(e: &anyhow::Error) -> i32 {
     let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-    eprintln!("error: {}", chain.join(": "));
+    // messages echo user data (column names, cells, paths): no control character reaches the terminal
+    eprintln!("error: {}", crate::text::escape_control(&chain.join(": ")));
     if e.chain().any(|c| {
         c.downcast_ref::<UsageError>().is_some()
             || c.downcast_ref::<crate::data::DataError>().is_some()

@@ -52,33 +52,7 @@ pub struct PaperCmd {
 
 /// Formats a table as aligned plain text (first column left, others right).
 pub(crate) fn text_table(t: &Table) -> String {
-    let ncol = t.header.len();
-    let mut width = vec![0usize; ncol];
-    for row in std::iter::once(&t.header).chain(&t.rows) {
-        for (i, c) in row.iter().enumerate().take(ncol) {
-            width[i] = width[i].max(c.chars().count());
-        }
-    }
-    let line = |row: &Vec<String>| {
-        row.iter()
-            .enumerate()
-            .take(ncol)
-            .map(|(i, c)| {
-                if i == 0 {
-                    format!("{c:<w$}", w = width[i])
-                } else {
-                    format!("{c:>w$}", w = width[i])
-                }
-            })
-            .collect::<Vec<_>>()
-            .join("  ")
-    };
-    let mut s = format!("{}\n{}\n", t.caption, line(&t.header));
-    for r in &t.rows {
-        s.push_str(&line(r));
-        s.push('\n');
-    }
-    s
+    crate::report::text::text_table(t, crate::report::text::TERMINAL_WIDTH)
 }
 
 /// Runs `flightid paper`.

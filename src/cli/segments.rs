@@ -8,6 +8,9 @@ use crate::data::{self, SegmentOptions};
 
 /// Find maneuvers in a flight-data CSV.
 #[derive(clap::Args, Debug, Clone)]
+#[command(
+    after_help = "Examples:\n  flightid segments flight.csv\n  flightid segments flight.csv --min-amplitude-deg 1 --json"
+)]
 pub struct SegmentsArgs {
     /// Flight-data CSV (docs/data.md).
     pub file: PathBuf,

@@ -9,6 +9,8 @@ use crate::signal::{self, Maneuver};
 use crate::sim::linear::{paper_transfer_functions, tf_json, PAPER_TFS};
 use crate::sim::{FlightPlan, SimError, Simulator, SurfaceInput, TrimPoint};
 use serde::Serialize;
+
+pub mod notes;
 use serde_json::json;
 use std::collections::BTreeMap;
 
@@ -157,6 +159,8 @@ pub struct ModelFit {
     pub tf: Option<crate::sim::linear::TfJson>,
     /// Why the estimator failed, if it did.
     pub error: Option<String>,
+    /// What a reader needs to know about these numbers (unstable poles, why a method drifts, ...).
+    pub notes: Vec<String>,
 }
 
 /// The whole comparison, as JSON and as a report.
@@ -234,18 +238,30 @@ pub fn run_compare<S: Simulator>(
     };
     report.sections.push(Section {
         heading: "Setup".into(),
-        paragraphs: vec![format!(
-            "Trim: alpha {:.3} deg, theta {:.3} deg, throttle {:.3}. Each surface gets a {} deg doublet \
-             (pulse {} s) from trim, {} s recorded at {} Hz. Identified models have 4 poles and 2 zeros; the \
-             reference is JSBSim's linearization reduced to the decoupled 4-state submodels.",
-            trim.alpha_rad.to_degrees(),
-            trim.theta_rad.to_degrees(),
-            trim.throttle,
-            opts.amplitude_deg,
-            opts.pulse_s,
-            opts.duration_s,
-            rate_hz
-        )],
+        paragraphs: vec![
+            format!(
+                "Trim: alpha {:.3} deg, theta {:.3} deg, throttle {:.3}. Each surface gets a {} deg doublet \
+                 (pulse {} s) from trim, {} s recorded at {} Hz. Identified models have 4 poles and 2 zeros; the \
+                 reference is JSBSim's linearization reduced to the decoupled 4-state submodels. Fits of the \
+                 slow modes depend on the record length: `flightid demo` flies 30 s records and `flightid \
+                 compare` 20 s by default, so their fit % differ for the same aircraft.",
+                trim.alpha_rad.to_degrees(),
+                trim.theta_rad.to_degrees(),
+                trim.throttle,
+                opts.amplitude_deg,
+                opts.pulse_s,
+                opts.duration_s,
+                rate_hz
+            ),
+            format!(
+                "Models: {}.",
+                std::iter::once("jsbsim_linearization")
+                    .chain(opts.methods.iter().map(|m| m.name()))
+                    .map(|m| format!("{m} = {}", notes::in_full(m)))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            ),
+        ],
         ..Default::default()
     });
     let mut models = BTreeMap::new();
@@ -278,6 +294,7 @@ pub fn run_compare<S: Simulator>(
             ise_rad2_s: ident::ise(&dy, &lin_y, dt_s),
             tf: Some(tf_json(lin_tf)),
             error: None,
+            notes: Vec::new(),
         }];
         let deg = |v: &[f64]| v.iter().map(|x| x.to_degrees()).collect::<Vec<_>>();
         let reference = |label: &str, x: &[f64], y: Vec<f64>| Series {
@@ -292,9 +309,13 @@ pub fn run_compare<S: Simulator>(
         let mut bode_mag = vec![reference("JSBSim linearization", &omega, mag)];
         let mut bode_phase = vec![reference("JSBSim linearization", &omega, ph)];
         let mut identified: Vec<(String, TransferFunction)> = Vec::new();
+        let mut ls_one_step_percent = None;
         for &method in &opts.methods {
             match ident::identify(&du, &dy, dt_s, &paper_options(method)) {
                 Ok(r) => {
+                    if method == Method::Ls {
+                        ls_one_step_percent = Some(r.fit_one_step_percent);
+                    }
                     let y_hat = lti::lsim(&r.tf, &du, dt_s);
                     fits.push(model_fit(&r, &lin_modal, &dy, &y_hat, dt_s));
                     let limit = 3.0 * max_abs(&deg(&dy));
@@ -317,9 +338,12 @@ pub fn run_compare<S: Simulator>(
                     ise_rad2_s: f64::NAN,
                     tf: None,
                     error: Some(e.to_string()),
+                    notes: Vec::new(),
                 }),
             }
         }
+        notes::note_oe_repeating_srivc(&mut fits);
+        notes::note_ls_drift(&mut fits, ls_one_step_percent);
         // amplitude sweep: the fixed linear models against fresh nonlinear flights at each amplitude
         let mut curves: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
         for &amp_deg in &opts.sweep_amplitudes_deg {
@@ -391,15 +415,27 @@ fn model_fit(
                 .map(|l| (k.clone(), 100.0 * (v - l) / l.abs().max(1e-12)))
         })
         .collect();
+    let fit_percent = ident::nrmse_fit(dy, y_hat);
     ModelFit {
         model: r.method.clone(),
         modal,
         modal_error_percent,
-        fit_percent: ident::nrmse_fit(dy, y_hat),
+        fit_percent,
         ise_rad2_s: ident::ise(dy, y_hat, dt_s),
         tf: Some(tf_json(&r.tf)),
         error: None,
+        notes: notes::model_notes(r),
     }
+}
+
+/// The note column of a model's row: its failure, or its notes.
+fn note_cell(f: &ModelFit) -> String {
+    f.error
+        .iter()
+        .chain(&f.notes)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 fn max_abs(v: &[f64]) -> f64 {
@@ -430,14 +466,15 @@ fn tf_section(
 ) -> Section {
     let stem = key.replace('/', "_");
     let (out, inp) = key.split_once('/').unwrap_or((key, ""));
+    let (osc_mode, real_mode) = notes::mode_names(key);
     let quantities = [
-        ("osc_omega_n_rad_s", "ωn osc, rad/s"),
-        ("osc_zeta", "ζ osc"),
-        ("real_pole_rad_s", "real pole, rad/s"),
+        ("osc_omega_n_rad_s", format!("{osc_mode} ωn, rad/s")),
+        ("osc_zeta", format!("{osc_mode} ζ")),
+        ("real_pole_rad_s", format!("{real_mode}, rad/s")),
     ];
     let mut header = vec!["model".to_string()];
-    for (_, label) in quantities {
-        header.push(label.to_string());
+    for (_, label) in &quantities {
+        header.push(label.clone());
         header.push("error %".to_string());
     }
     header.extend(["fit %".into(), "ISE, rad²·s".into(), "note".into()]);
@@ -445,13 +482,13 @@ fn tf_section(
         .iter()
         .map(|f| {
             let mut row = vec![f.model.clone()];
-            for (q, _) in quantities {
-                row.push(fmt(f.modal.get(q), 4));
-                row.push(fmt(f.modal_error_percent.get(q), 1));
+            for (q, _) in &quantities {
+                row.push(fmt(f.modal.get(*q), 4));
+                row.push(fmt(f.modal_error_percent.get(*q), 1));
             }
             row.push(fmt(Some(&f.fit_percent), 2));
             row.push(format!("{:.3e}", f.ise_rad2_s));
-            row.push(f.error.clone().unwrap_or_default());
+            row.push(note_cell(f));
             row
         })
         .collect();
@@ -561,11 +598,12 @@ fn overview_section(models: &BTreeMap<String, Vec<ModelFit>>) -> Section {
                 vec![
                     key.clone(),
                     f.model.clone(),
+                    notes::mode_names(key).0.to_string(),
                     fmt(f.modal.get("osc_omega_n_rad_s"), 4),
                     fmt(f.modal.get("osc_zeta"), 4),
                     fmt(f.modal.get("real_pole_rad_s"), 4),
                     fmt(Some(&f.fit_percent), 2),
-                    f.error.clone().unwrap_or_default(),
+                    note_cell(f),
                 ]
             })
         })
@@ -583,6 +621,7 @@ fn overview_section(models: &BTreeMap<String, Vec<ModelFit>>) -> Section {
             header: [
                 "transfer function",
                 "model",
+                "oscillatory mode",
                 "ωn osc, rad/s",
                 "ζ osc",
                 "real pole, rad/s",

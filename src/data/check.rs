@@ -206,7 +206,7 @@ pub fn check_compatibility(
     };
     let air = ["airspeed_m_s", "alpha_rad", "beta_rad"].map(|n| rec.column(n).map(<[f64]>::to_vec));
     let translational = accel.is_some() && air.iter().all(Option::is_some);
-    let psi = rec.column("psi_rad").map(unwrap);
+    let psi = rec.column("psi_rad").map(crate::signal::unwrap_rad);
     let [v_m, a_m, b_m] = air;
     let out: [Option<Vec<f64>>; 6] = if translational {
         [v_m, a_m, b_m, Some(phi.to_vec()), Some(theta.to_vec()), psi]
@@ -543,20 +543,6 @@ fn fit(data: &Data, params: &[Param], start: Vec<f64>, max_iterations: usize) ->
         iterations,
         converged,
     }
-}
-
-/// Unwraps an angle sequence so consecutive samples differ by less than π.
-fn unwrap(x: &[f64]) -> Vec<f64> {
-    let tau = std::f64::consts::TAU;
-    let mut out = Vec::with_capacity(x.len());
-    let mut offset = 0.0;
-    for (i, &v) in x.iter().enumerate() {
-        if i > 0 {
-            offset -= tau * ((v - x[i - 1]) / tau).round();
-        }
-        out.push(v + offset);
-    }
-    out
 }
 
 /// Rigid-body kinematics: state derivative for rates ω and specific force f.

@@ -124,10 +124,10 @@ pub enum DataError {
         columns: String,
         present: String,
     },
-    /// An airframe mapping file is missing or invalid.
-    #[error("airframe `{airframe}` ({file}): {message}")]
-    Airframe {
-        airframe: String,
+    /// A servo mapping file (`--servo-map`) is missing or invalid.
+    #[error("servo mapping `{servo_map}` ({file}): {message}")]
+    ServoMap {
+        servo_map: String,
         file: PathBuf,
         message: String,
     },

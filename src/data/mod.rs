@@ -18,11 +18,11 @@ pub use error::{DataError, Warning, WarningKind, IN_MEMORY};
 pub use record::{sampling_warning, unit_warnings, FlightRecord, G0_M_S2, SCHEMA_COLUMNS};
 pub use resample::{resample_uniform, RESAMPLE_METHOD};
 
-pub mod airframe;
+pub mod servo_map;
 pub mod tlog;
 
-pub use airframe::Airframe;
-pub use tlog::{parse_tlog_bytes, read_tlog, TlogOptions, TlogReport};
+pub use servo_map::ServoMap;
+pub use tlog::{parse_tlog_bytes, read_tlog, Stretch, StretchChoice, TlogOptions, TlogReport};
 pub mod segments;
 pub use segments::{
     find_segments, segment_window, ManeuverKind, Segment, SegmentOptions, SegmentRef,

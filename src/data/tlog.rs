@@ -10,9 +10,9 @@
 //! - HIGHRES_IMU (m/s²) or else SCALED_IMU / RAW_IMU (milli-g) → `ax_m_s2 ay_m_s2 az_m_s2`
 //!   (body FRD specific force, 1-g level flight gives az ≈ −9.81);
 //! - VFR_HUD → `airspeed_m_s` (the autopilot's airspeed: usually indicated, not true), `altitude_m`
-//!   (MSL), and `throttle` (percent/100) when the airframe maps no throttle servo;
+//!   (MSL), and `throttle` (percent/100) when the servo mapping maps no throttle servo;
 //! - AOA_SSA (degrees) → `alpha_rad beta_rad`;
-//! - SERVO_OUTPUT_RAW (port 0) → `elevator_rad aileron_rad rudder_rad throttle` via [`Airframe`].
+//! - SERVO_OUTPUT_RAW (port 0) → `elevator_rad aileron_rad rudder_rad throttle` via [`ServoMap`].
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -20,9 +20,9 @@ use std::path::Path;
 use mavlink::dialects::ardupilotmega::MavMessage;
 use mavlink::{MavlinkVersion, Message};
 
-use super::airframe::Airframe;
 use super::error::{DataError, Warning, WarningKind};
 use super::record::{FlightRecord, G0_M_S2};
+use super::servo_map::ServoMap;
 
 /// Start-of-frame marker of MAVLink v1.
 const STX_V1: u8 = 0xFE;
@@ -294,6 +294,42 @@ fn accept<'a>(
     visit(frame);
 }
 
+/// A step back in log time up to this (µs) is jitter between message streams, not a jump back.
+const BACKWARD_JITTER_US: u64 = 50_000;
+/// A pause in the ATTITUDE stream longer than this many median intervals breaks the log: nothing is
+/// interpolated across it.
+const GAP_INTERVALS: f64 = 5.0;
+/// Log times after 2100-01-01 (µs since the Unix epoch) are not microsecond timestamps.
+const LATEST_EPOCH_US: u64 = 4_102_444_800_000_000;
+/// Log times after 2000-01-01 (µs since the Unix epoch): a plausible ground-station clock.
+const EARLIEST_EPOCH_US: u64 = 946_684_800_000_000;
+/// An ATTITUDE rate above this (Hz, in log time) means the timestamps are not microseconds.
+const MAX_ATTITUDE_RATE_HZ: f64 = 5000.0;
+
+/// Which stretch of a log with breaks in its time base to read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StretchChoice {
+    /// The K-th stretch in log order, from 1.
+    Index(usize),
+    /// The stretch with the most ATTITUDE samples.
+    Longest,
+}
+
+impl std::str::FromStr for StretchChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "longest" => Ok(Self::Longest),
+            _ => match s.parse::<usize>() {
+                Ok(k) if k >= 1 => Ok(Self::Index(k)),
+                _ => Err(format!(
+                    "expected a stretch number from 1 or `longest`, got '{s}'"
+                )),
+            },
+        }
+    }
+}
+
 /// Options of [`read_tlog`].
 #[derive(Debug, Clone, Default)]
 pub struct TlogOptions {
@@ -301,6 +337,38 @@ pub struct TlogOptions {
     pub sysid: Option<u8>,
     /// Output grid rate, Hz; default: the ATTITUDE rate (1 / median ATTITUDE interval).
     pub rate_hz: Option<f64>,
+    /// The stretch to read when the time base breaks (a gap or a jump back); without it such a log is
+    /// refused with the list of its stretches.
+    pub stretch: Option<StretchChoice>,
+}
+
+/// A stretch of a log over which its time base is continuous (no gap longer than a few ATTITUDE intervals, no
+/// jump back).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stretch {
+    /// First and last ATTITUDE time, s after the system's first ATTITUDE in log order (negative after a jump
+    /// back to before it).
+    pub start_s: f64,
+    /// See `start_s`.
+    pub end_s: f64,
+    /// ATTITUDE samples in it.
+    pub attitude_samples: usize,
+    /// What ended the stretch before it (`None` for the first).
+    pub after: Option<String>,
+}
+
+impl std::fmt::Display for Stretch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:.2} to {:.2} s, {} ATTITUDE samples",
+            self.start_s, self.end_s, self.attitude_samples
+        )?;
+        if let Some(a) = &self.after {
+            write!(f, " (after {a})")?;
+        }
+        Ok(())
+    }
 }
 
 /// A system seen in the log.
@@ -329,6 +397,10 @@ pub struct TlogReport {
     pub messages_by_name: BTreeMap<String, usize>,
     /// Soft problems (skipped bytes, missing message types).
     pub warnings: Vec<Warning>,
+    /// The stretches of continuous log time of the extracted system.
+    pub stretches: Vec<Stretch>,
+    /// Which of them the record holds (index into `stretches`).
+    pub stretch: usize,
 }
 
 /// Time series of one system, collected from its messages (times in µs).
@@ -341,6 +413,38 @@ struct Series {
     vfr_hud: Vec<(u64, [f64; 3])>,
     aoa_ssa: Vec<(u64, [f64; 2])>,
     servo: Vec<(u64, [f64; 8])>,
+}
+
+impl Series {
+    /// Sorts every stream by time (see [`tidy`]).
+    fn tidy(&mut self) {
+        tidy(&mut self.attitude);
+        tidy(&mut self.highres_imu);
+        tidy(&mut self.scaled_imu);
+        tidy(&mut self.raw_imu);
+        tidy(&mut self.vfr_hud);
+        tidy(&mut self.aoa_ssa);
+        tidy(&mut self.servo);
+    }
+
+    /// The samples of every stream within `[from_us, to_us]`.
+    fn window(&self, from_us: u64, to_us: u64) -> Series {
+        fn cut<const N: usize>(s: &[(u64, [f64; N])], a: u64, b: u64) -> Vec<(u64, [f64; N])> {
+            s.iter()
+                .filter(|(t, _)| (a..=b).contains(t))
+                .copied()
+                .collect()
+        }
+        Series {
+            attitude: cut(&self.attitude, from_us, to_us),
+            highres_imu: cut(&self.highres_imu, from_us, to_us),
+            scaled_imu: cut(&self.scaled_imu, from_us, to_us),
+            raw_imu: cut(&self.raw_imu, from_us, to_us),
+            vfr_hud: cut(&self.vfr_hud, from_us, to_us),
+            aoa_ssa: cut(&self.aoa_ssa, from_us, to_us),
+            servo: cut(&self.servo, from_us, to_us),
+        }
+    }
 }
 
 /// Smallest default grid step, µs (1 kHz).
@@ -358,7 +462,7 @@ const AOA_SSA_ID: u32 = 11020;
 /// Reads a `.tlog` file into the flight-data schema (see the module documentation).
 pub fn read_tlog(
     path: &Path,
-    airframe: Option<&Airframe>,
+    servo_map: Option<&ServoMap>,
     options: &TlogOptions,
 ) -> Result<TlogReport, DataError> {
     let bytes = std::fs::read(path).map_err(|source| DataError::Io {
@@ -366,14 +470,14 @@ pub fn read_tlog(
         action: "cannot read the telemetry log",
         source,
     })?;
-    parse_tlog_bytes(&bytes, &path.display().to_string(), airframe, options)
+    parse_tlog_bytes(&bytes, &path.display().to_string(), servo_map, options)
 }
 
 /// [`read_tlog`] on bytes in memory; `file` names the source in errors and metadata.
 pub fn parse_tlog_bytes(
     bytes: &[u8],
     file: &str,
-    airframe: Option<&Airframe>,
+    servo_map: Option<&ServoMap>,
     options: &TlogOptions,
 ) -> Result<TlogReport, DataError> {
     let err = |message: String| DataError::Tlog {
@@ -387,14 +491,41 @@ pub fn parse_tlog_bytes(
             )));
         }
     }
-    let mut per_system: BTreeMap<u8, (Series, usize)> = BTreeMap::new();
+    // Frames in log order; a jump back in log time starts a new run (what came before it is not merged with
+    // what came after it by sorting).
+    let mut per_run: BTreeMap<(u8, usize), (Series, usize)> = BTreeMap::new();
     let mut by_id: HashMap<u32, usize> = HashMap::new();
+    let mut run = 0usize;
+    let mut jumps_back: Vec<String> = Vec::new();
+    let (mut steps, mut steps_back) = (0usize, 0usize);
+    let mut latest_us: Option<u64> = None;
+    let mut previous_us: Option<u64> = None;
     let stats = scan_frames(bytes, |frame| {
+        let t = frame.time_us;
+        if let Some(p) = previous_us {
+            steps += 1;
+            steps_back += usize::from(t < p);
+        }
+        previous_us = Some(t);
+        if let Some(l) = latest_us {
+            if t + BACKWARD_JITTER_US < l {
+                run += 1;
+                jumps_back.push(format!("a jump back of {:.3} s", (l - t) as f64 * 1e-6));
+                latest_us = Some(t);
+            }
+        }
+        latest_us = Some(latest_us.map_or(t, |l| l.max(t)));
         *by_id.entry(frame.msgid).or_insert(0) += 1;
-        let entry = per_system.entry(frame.sysid).or_default();
+        let entry = per_run.entry((frame.sysid, run)).or_default();
         entry.1 += 1;
         collect(&mut entry.0, frame);
     });
+    let mut per_system: BTreeMap<u8, (Vec<(usize, Series)>, usize)> = BTreeMap::new();
+    for ((sysid, r), (series, n)) in per_run {
+        let entry = per_system.entry(sysid).or_default();
+        entry.0.push((r, series));
+        entry.1 += n;
+    }
     let messages_by_name: BTreeMap<String, usize> = by_id
         .iter()
         .map(|(&id, &count)| {
@@ -405,9 +536,9 @@ pub fn parse_tlog_bytes(
         .collect();
     let systems: Vec<SystemSummary> = per_system
         .iter()
-        .map(|(&sysid, (s, n))| SystemSummary {
+        .map(|(&sysid, (runs, n))| SystemSummary {
             sysid,
-            attitude_messages: s.attitude.len(),
+            attitude_messages: runs.iter().map(|(_, s)| s.attitude.len()).sum(),
             messages: *n,
         })
         .collect();
@@ -432,22 +563,76 @@ pub fn parse_tlog_bytes(
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let Some((series, _)) = per_system.get_mut(&sysid) else {
+    let Some((runs, _)) = per_system.get_mut(&sysid) else {
         return Err(err(format!(
             "system id {sysid} sent no valid message; systems present: {}",
             describe()
         )));
     };
-    if series.attitude.len() < 2 {
+    if stats.bad_timestamps >= 10 && stats.bad_timestamps * 2 > stats.frames + stats.bad_timestamps
+    {
+        let first = bytes
+            .get(..8)
+            .map_or(0, |b| u64::from_be_bytes(b.try_into().unwrap_or([0; 8])));
         return Err(err(format!(
-            "system id {sysid} sent {} ATTITUDE messages; at least 2 are needed for the time base \
-             (systems present: {})",
-            series.attitude.len(),
+            "{} of {} valid frames have log times more than 10 s from their neighbours': the time base is not \
+             usable.{}",
+            stats.bad_timestamps,
+            stats.frames + stats.bad_timestamps,
+            little_endian_hint(first)
+        )));
+    }
+    let attitude_messages: usize = runs.iter().map(|(_, s)| s.attitude.len()).sum();
+    if attitude_messages < 2 {
+        return Err(err(format!(
+            "system id {sysid} sent {attitude_messages} ATTITUDE messages; at least 2 are needed for the time \
+             base (systems present: {})",
             describe()
         )));
     }
-    let mut record = build_record(series, airframe, options.rate_hz)
+    if steps >= 10 && steps_back * 2 > steps {
+        return Err(err(format!(
+            "the log time runs backwards in {steps_back} of {steps} steps between frames: the records are in \
+             reverse order, or the 8-byte field before each frame is not the log time"
+        )));
+    }
+    for (_, series) in runs.iter_mut() {
+        series.tidy();
+    }
+    check_time_units(runs, sysid).map_err(err)?;
+    let (stretches, windows) = stretches(runs, &jumps_back);
+    let chosen = match (options.stretch, stretches.len()) {
+        (None, 1) | (Some(StretchChoice::Index(1)), 1) => 0,
+        (None, n) => {
+            return Err(err(format!(
+                "system id {sysid}: the log time breaks into {n} stretches; nothing is interpolated across \
+                 a break, so ingest one of them with --stretch K (or --stretch longest):\n{}",
+                list_stretches(&stretches)
+            )))
+        }
+        (Some(StretchChoice::Longest), _) => (0..stretches.len())
+            .max_by_key(|&k| (stretches[k].attitude_samples, std::cmp::Reverse(k)))
+            .unwrap_or(0),
+        (Some(StretchChoice::Index(k)), n) if k <= n => k - 1,
+        (Some(StretchChoice::Index(k)), n) => {
+            return Err(DataError::InvalidArgument(format!(
+                "--stretch {k}: system id {sysid} of {file} has {n} stretch(es):\n{}",
+                list_stretches(&stretches)
+            )))
+        }
+    };
+    let (run_index, from_us, to_us) = windows[chosen];
+    let mut series = runs[run_index].1.window(from_us, to_us);
+    let mut record = build_record(&mut series, servo_map, options.rate_hz)
         .map_err(|m| err(format!("system id {sysid}: {m}")))?;
+    if stretches.len() > 1 {
+        record.metadata.push(format!(
+            " stretch {} of {} of the log: {}",
+            chosen + 1,
+            stretches.len(),
+            stretches[chosen]
+        ));
+    }
     let mut warnings = Vec::new();
     if stats.skipped_bytes > 0 {
         warnings.push(Warning {
@@ -483,7 +668,7 @@ pub fn parse_tlog_bytes(
         ("ax_m_s2", "no HIGHRES_IMU/SCALED_IMU/RAW_IMU"),
         ("airspeed_m_s", "no VFR_HUD"),
         ("alpha_rad", "no AOA_SSA"),
-        ("elevator_rad", "no SERVO_OUTPUT_RAW or no airframe mapping"),
+        ("elevator_rad", "no SERVO_OUTPUT_RAW or no --servo-map"),
     ] {
         if record.column(needed).is_none() {
             warnings.push(Warning {
@@ -505,10 +690,10 @@ pub fn parse_tlog_bytes(
             stats.truncated_tail_bytes
         ),
     );
-    if let Some(af) = airframe {
+    if let Some(af) = servo_map {
         record
             .metadata
-            .insert(1, format!(" airframe servo mapping: {}", af.name));
+            .insert(1, format!(" servo mapping: {}", af.name));
     }
     Ok(TlogReport {
         record,
@@ -517,7 +702,120 @@ pub fn parse_tlog_bytes(
         stats,
         messages_by_name,
         warnings,
+        stretches,
+        stretch: chosen,
     })
+}
+
+/// The stretches, one per line, numbered from 1.
+fn list_stretches(stretches: &[Stretch]) -> String {
+    stretches
+        .iter()
+        .enumerate()
+        .map(|(k, s)| format!("  {}: {s}", k + 1))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Refuses log times that are not microseconds since the Unix epoch or since the log's start: times after the
+/// year 2100 (little-endian timestamps read as big-endian look like that) and an ATTITUDE rate no autopilot
+/// sends (millisecond timestamps look like that).
+fn check_time_units(runs: &[(usize, Series)], sysid: u8) -> Result<(), String> {
+    let att: Vec<u64> = runs
+        .iter()
+        .flat_map(|(_, s)| s.attitude.iter().map(|(t, _)| *t))
+        .collect();
+    let (Some(&lo), Some(&hi)) = (att.iter().min(), att.iter().max()) else {
+        return Ok(());
+    };
+    if hi > LATEST_EPOCH_US {
+        return Err(format!(
+            "system id {sysid}: log times reach {hi} µs, after the year 2100: not microseconds since the Unix \
+             epoch.{}",
+            little_endian_hint(hi)
+        ));
+    }
+    let span_s = (hi - lo) as f64 * 1e-6;
+    let rate_hz = (att.len() - 1) as f64 / span_s.max(1e-12);
+    if att.len() >= 10 && rate_hz > MAX_ATTITUDE_RATE_HZ {
+        return Err(format!(
+            "system id {sysid}: {} ATTITUDE messages within {:.6} s of log time ({:.0} Hz): no autopilot sends \
+             attitude that fast, so the times are not microseconds (milliseconds read as microseconds look \
+             like this; the .tlog format stores microseconds)",
+            att.len(),
+            span_s,
+            rate_hz
+        ));
+    }
+    Ok(())
+}
+
+/// A sentence saying that a log time read big-endian is a plausible epoch time with its bytes reversed, or "".
+fn little_endian_hint(time_us: u64) -> &'static str {
+    if (EARLIEST_EPOCH_US..LATEST_EPOCH_US).contains(&time_us.swap_bytes()) {
+        " The times read as a plausible date with their bytes reversed: the log was written little-endian, and \
+         the .tlog format stores the time big-endian."
+    } else {
+        ""
+    }
+}
+
+/// Splits the runs of a system (separated by jumps back) at pauses of the ATTITUDE stream longer than
+/// [`GAP_INTERVALS`] median intervals. Returns the stretches and, for each, its run (index into `runs`) and
+/// time window in µs.
+fn stretches(
+    runs: &[(usize, Series)],
+    jumps_back: &[String],
+) -> (Vec<Stretch>, Vec<(usize, u64, u64)>) {
+    let mut intervals: Vec<f64> = runs
+        .iter()
+        .flat_map(|(_, s)| s.attitude.windows(2).map(|w| (w[1].0 - w[0].0) as f64))
+        .filter(|d| *d >= MIN_DEFAULT_STEP_US / 2.0)
+        .collect();
+    let median_us = if intervals.is_empty() {
+        MIN_DEFAULT_STEP_US
+    } else {
+        super::record::median_in_place(&mut intervals).max(MIN_DEFAULT_STEP_US)
+    };
+    let gap_us = GAP_INTERVALS * median_us;
+    // Times from the first ATTITUDE in log order (a stretch after a jump back can start before it).
+    let origin_us = runs
+        .iter()
+        .find_map(|(_, s)| s.attitude.first().map(|a| a.0))
+        .unwrap_or(0);
+    let rel = |t: u64| (t as f64 - origin_us as f64) * 1e-6;
+    let (mut out, mut windows) = (Vec::new(), Vec::new());
+    let mut why: Option<String> = None;
+    for (k, (run, series)) in runs.iter().enumerate() {
+        if k > 0 {
+            why = jumps_back.get(run - 1).cloned().or(why);
+        }
+        let att = &series.attitude;
+        let mut start = 0usize;
+        for i in 0..att.len() {
+            let last = i + 1 == att.len();
+            let gap = !last && (att[i + 1].0 - att[i].0) as f64 > gap_us;
+            if gap || last {
+                if i > start {
+                    out.push(Stretch {
+                        start_s: rel(att[start].0),
+                        end_s: rel(att[i].0),
+                        attitude_samples: i + 1 - start,
+                        after: why.take(),
+                    });
+                    windows.push((k, att[start].0, att[i].0));
+                }
+                if gap {
+                    why = Some(format!(
+                        "a gap of {:.3} s",
+                        (att[i + 1].0 - att[i].0) as f64 * 1e-6
+                    ));
+                }
+                start = i + 1;
+            }
+        }
+    }
+    (out, windows)
 }
 
 /// Decodes the messages the schema needs and appends them to the system's series.
@@ -642,16 +940,10 @@ fn unwrap_angles(s: &mut [(u64, [f64; 6])], k: usize) {
 /// Puts the collected series onto one uniform grid over the ATTITUDE time span.
 fn build_record(
     series: &mut Series,
-    airframe: Option<&Airframe>,
+    servo_map: Option<&ServoMap>,
     rate_hz: Option<f64>,
 ) -> Result<FlightRecord, String> {
-    tidy(&mut series.attitude);
-    tidy(&mut series.highres_imu);
-    tidy(&mut series.scaled_imu);
-    tidy(&mut series.raw_imu);
-    tidy(&mut series.vfr_hud);
-    tidy(&mut series.aoa_ssa);
-    tidy(&mut series.servo);
+    series.tidy();
     let att = &mut series.attitude;
     // Drop ATTITUDE duplicates (the same sample relayed twice, µs apart).
     let mut last_kept: Option<u64> = None;
@@ -693,7 +985,7 @@ fn build_record(
         " time_s = log timestamp - {t0_us} µs (Unix epoch); grid {} Hz; linear interpolation per message stream",
         1e6 / dt_us
     ));
-    if let Some(af) = airframe {
+    if let Some(af) = servo_map {
         if !series.servo.is_empty() {
             let surfaces = [
                 ("elevator_rad", af.elevator),

@@ -337,11 +337,8 @@ impl Extension for AeroDerivative {
 }
 
 /// docs/diagnose.md derivative names and the coefficient function names of JSBSim's c172x that carry them.
-pub const DERIVATIVE_KNOBS: [(&str, &str); 23] = [
+pub const DERIVATIVE_KNOBS: [(&str, &str); 18] = [
     ("CL_alpha", "CLwbh"),
-    ("CL_q", "CLq"),
-    ("CL_alphadot", "CLadot"),
-    ("CL_de", "CLDe"),
     ("CD_0", "CDo"),
     ("Cm_0", "Cmo"),
     ("Cm_alpha", "Cmalpha"),
@@ -359,8 +356,6 @@ pub const DERIVATIVE_KNOBS: [(&str, &str); 23] = [
     ("Cn_r", "Cnr"),
     ("Cn_da", "Cnda"),
     ("Cn_dr", "Cndr"),
-    ("CY_p", "CYp"),
-    ("CY_r", "CYr"),
 ];
 
 /// Output columns that may carry a sensor bias or scale. Airspeed and altitude are not among them: they set

@@ -50,15 +50,29 @@ pub fn prepare(
     valid: Option<&FlightRecord>,
 ) -> Result<Prepared, DiagnoseError> {
     let mut case = ReplayCase::new(train)?;
-    let mut vcase = valid.map(ReplayCase::new).transpose()?;
-    if let Some(v) = &vcase {
-        if (v.rate_hz - case.rate_hz).abs() > 1e-6 * case.rate_hz {
-            return Err(DiagnoseError::BadData(format!(
-                "validation record rate {:.3} Hz differs from the training record rate {:.3} Hz",
-                v.rate_hz, case.rate_hz
-            )));
+    // The simulation steps at a whole multiple of the training record's rate; a validation record sampled at
+    // another rate is interpolated onto the training rate (linearly, no filtering) and the warning says so.
+    let mut rate_note = None;
+    let valid = match valid {
+        Some(v) => {
+            let v_rate_hz = ReplayCase::new(v)?.rate_hz;
+            if (v_rate_hz - case.rate_hz).abs() > 1e-6 * case.rate_hz {
+                rate_note = Some(format!(
+                    "the validation record ({v_rate_hz:.3} Hz) was interpolated linearly onto the training \
+                     record's rate ({:.3} Hz) for the replay",
+                    case.rate_hz
+                ));
+                Some(std::borrow::Cow::Owned(
+                    crate::data::resample_uniform(v, case.rate_hz)
+                        .map_err(|e| DiagnoseError::BadData(format!("validation record: {e}")))?,
+                ))
+            } else {
+                Some(std::borrow::Cow::Borrowed(v))
+            }
         }
-    }
+        None => None,
+    };
+    let mut vcase = valid.as_deref().map(ReplayCase::new).transpose()?;
     // A surface without a column is held at its trim in the replay: if it moved in flight, its effect is
     // unmodelled and any cause named on the axes it drives is suspect.
     let mut warnings: Vec<String> = replay::INPUTS
@@ -71,6 +85,7 @@ pub fn prepare(
             )
         })
         .collect();
+    warnings.extend(rate_note);
     // Compare only the channels the simulation produces (a linear model may lack accelerations).
     let (probe, _) = replay::replay(worker.sim.as_mut(), &case, &[]).map_err(sim_err("replay"))?;
     let missing: Vec<String> = case

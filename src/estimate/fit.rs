@@ -23,6 +23,7 @@
 //! Standard errors: Cramér–Rao bounds `M⁻¹` corrected for coloured residuals (Morelli & Klein
 //! 1994, see [`super::covariance`]); both are returned.
 
+use std::sync::RwLock;
 use std::time::Instant;
 
 use faer::prelude::*;
@@ -31,8 +32,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::covariance::{lag_weighted_products, lag_weights, sandwich};
+use super::fem;
 use super::layout::{Layout, Nuisance, NuisanceKind, RecordTerms};
-use super::model::{Model, Parameter, SimError};
+use super::model::{Model, Parameter, SimError, StateModel};
 use super::record::{InputHold, InputSignal, Record, Run};
 use super::EstimateError;
 use crate::ident::nrmse_fit as fit_percent;
@@ -227,27 +229,72 @@ pub fn fit(
     options: &Options,
 ) -> Result<Estimate, EstimateError> {
     let started = Instant::now();
-    let layout = Layout::new(model.signature(), parameters, records, nuisance)?;
-    let problem = Problem {
+    let mut layout = Layout::new(model.signature(), parameters, records, nuisance)?;
+    let max_step_s: Vec<f64> = records
+        .iter()
+        .map(|r| options.max_step_s.unwrap_or(0.5 * r.median_dt_s()))
+        .collect();
+    let problem = |layout: Layout, method: Method| Problem {
         model,
         layout,
         records,
         hold: options.hold,
-        max_step_s: records
-            .iter()
-            .map(|r| options.max_step_s.unwrap_or(0.5 * r.median_dt_s()))
-            .collect(),
+        max_step_s: max_step_s.clone(),
+        method,
+        gain_noise: RwLock::new(Vec::new()),
     };
-    match options.method {
-        Method::Oe => {}
-        Method::Fem => {
+    if options.method == Method::Fem {
+        let Some(sm) = model.state_model() else {
             return Err(EstimateError::Invalid(
-                "the filter error method is not available yet".into(),
-            ))
-        }
+                "the filter error method needs a model with a state-space form (ẋ = f, y = h)"
+                    .into(),
+            ));
+        };
+        // start from the output-error estimate (the filter error method's usual start,
+        // Jategaonkar §5.7): at q = 0 the two coincide, and the process noise is then only what
+        // the output-error residuals cannot explain
+        let oe = problem(layout.clone(), Method::Oe).minimise(options)?;
+        layout.start = oe.phi;
+        let theta = layout.theta(&layout.start);
+        let scale = process_noise_scale(sm, &theta, &records[0], options.hold);
+        layout.add_process_noise(&model.signature().states, &scale);
     }
+    let problem = problem(layout, options.method);
     let solution = problem.minimise(options)?;
     Ok(problem.summarise(solution, options.method, started))
+}
+
+/// Typical process-noise variance of each state: the `q` at which a random walk's increment over
+/// one sample, `q Δt`, matches (1 % of the spread of) the outputs that observe the state
+/// (finite-difference steps are relative to it). 1e-6 for an unobserved state.
+fn process_noise_scale(
+    sm: &dyn StateModel,
+    theta: &[f64],
+    rec: &Record,
+    hold: InputHold,
+) -> Vec<f64> {
+    let input = InputSignal::measured(&rec.time_s, &rec.inputs, hold);
+    let mut u = vec![0.0; rec.inputs.len()];
+    input.at(rec.time_s[0], &mut u);
+    let (_, c) = fem::linearise(sm, theta, &rec.initial_state, &u);
+    let dt = rec.median_dt_s().max(f64::MIN_POSITIVE);
+    (0..c.ncols())
+        .map(|i| {
+            (0..c.nrows())
+                .filter(|&o| c[(o, i)].abs() > 1e-12)
+                .map(|o| (1e-2 * spread(&rec.outputs[o]) / c[(o, i)].abs()).powi(2) / dt)
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .map(|v| if v.is_finite() { v } else { 1e-6 })
+        .collect()
+}
+
+/// Standard deviation of a column.
+fn spread(v: &[f64]) -> f64 {
+    let n = v.len().max(1) as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt()
 }
 
 /// Outputs of every record, `[record][output][k]`.
@@ -260,6 +307,10 @@ struct Problem<'a> {
     records: &'a [Record],
     hold: InputHold,
     max_step_s: Vec<f64>,
+    method: Method,
+    /// Filter error: the innovation variances the gain is computed with (held fixed during a
+    /// parameter update, replaced by the relaxation step).
+    gain_noise: RwLock<Vec<f64>>,
 }
 
 /// Where the iterations ended.
@@ -300,6 +351,9 @@ impl Problem<'_> {
         let terms = self.layout.record_terms(phi, r);
         let rec = &self.records[r];
         let run = self.run(r, &terms);
+        if self.method == Method::Fem {
+            return self.filter(phi, &theta, &terms, &run);
+        }
         let mut y = self.model.simulate(&theta, &terms.x0, &run)?;
         let outputs = &self.model.signature().outputs;
         if y.len() != outputs.len() || y.iter().any(|c| c.len() != rec.len()) {
@@ -324,6 +378,61 @@ impl Problem<'_> {
             }
         }
         Ok(y)
+    }
+
+    /// Filter error: the one-step-ahead predictions of record `run.record` (see [`fem`]).
+    fn filter(
+        &self,
+        phi: &[f64],
+        theta: &[f64],
+        terms: &RecordTerms,
+        run: &Run<'_>,
+    ) -> Result<Vec<Vec<f64>>, SimError> {
+        let sm = self
+            .model
+            .state_model()
+            .ok_or_else(|| SimError::Failed("no state-space form".into()))?;
+        let rec = &self.records[run.record];
+        let mut u = vec![0.0; rec.inputs.len()];
+        run.input.at(rec.time_s[0], &mut u);
+        let (a, c) = fem::linearise(sm, theta, &terms.x0, &u);
+        let q = self.layout.process_noise(phi, a.nrows());
+        let r = self
+            .gain_noise
+            .read()
+            .map_err(|_| SimError::Failed("the filter's noise estimate is unavailable".into()))?
+            .clone();
+        let gain = fem::gain(&a, &c, &q, &r, rec.median_dt_s())?;
+        fem::filter(
+            sm,
+            theta,
+            &terms.x0,
+            run,
+            &terms.output_bias,
+            &rec.outputs,
+            &gain,
+        )
+    }
+
+    /// Filter error: F–R compensation of φ's process-noise variances for R moving from `old` to
+    /// `new` (see [`fem`]), with the output matrix linearised on the first record.
+    fn compensate(&self, phi: &mut [f64], old: &[f64], new: &[f64]) {
+        let Some(sm) = self.model.state_model() else {
+            return;
+        };
+        let theta = self.layout.theta(phi);
+        let terms = self.layout.record_terms(phi, 0);
+        let rec = &self.records[0];
+        let run = self.run(0, &terms);
+        let mut u = vec![0.0; rec.inputs.len()];
+        run.input.at(rec.time_s[0], &mut u);
+        let (_, c) = fem::linearise(sm, &theta, &terms.x0, &u);
+        let entries = self.layout.process_noise_entries();
+        let mut q: Vec<f64> = entries.iter().map(|&j| phi[j]).collect();
+        fem::compensate(&mut q, &c, old, new);
+        for (&j, v) in entries.iter().zip(q) {
+            phi[j] = v;
+        }
     }
 
     /// Outputs of every record (in parallel when the model allows it).
@@ -410,7 +519,8 @@ impl Problem<'_> {
         let off = self.offsets();
         let mut col = vec![0.0; *off.last().unwrap()];
         if let Some(slot) = self.layout.slot(j) {
-            if slot.kind == NuisanceKind::OutputBias {
+            // exact for output error; under the filter a bias also moves the state corrections
+            if slot.kind == NuisanceKind::OutputBias && self.method == Method::Oe {
                 let r = slot.record.unwrap_or(0);
                 let n = self.records[r].len();
                 let start = off[r] + slot.index * n;
@@ -463,7 +573,7 @@ impl Problem<'_> {
         let p = self.layout.len();
         let nf = self.layout.free.len();
         let mut analytic: Vec<Option<Vec<f64>>> = vec![None; p];
-        if nf > 0 {
+        if nf > 0 && self.method == Method::Oe {
             let theta = self.layout.theta(phi);
             let off = self.offsets();
             let mut cols = vec![vec![0.0; *off.last().unwrap()]; nf];
@@ -546,6 +656,17 @@ impl Problem<'_> {
                 })?;
         let mut res = self.residuals(&pred);
         let mut noise = self.noise(&res);
+        self.set_gain_noise(&noise);
+        if self.method == Method::Fem {
+            // q = 0 at the start: the filter is the simulation, the first R is the output-error R
+            pred = self
+                .predict_all(&phi)
+                .map_err(|(r, source)| EstimateError::StartDiverges {
+                    record: self.records[r].name.clone(),
+                    source,
+                })?;
+            res = self.residuals(&pred);
+        }
         let mut history = vec![self.cost(&res, &noise)];
         let mut mu = 1e-3;
         let mut stop = StopReason::MaxIterations;
@@ -614,6 +735,27 @@ impl Problem<'_> {
                 .zip(&noise)
                 .map(|(a, b)| (a / b - 1.0).abs())
                 .fold(0.0, f64::max);
+            if self.method == Method::Fem {
+                let mut compensated = phi.clone();
+                self.compensate(&mut compensated, &noise, &new_noise);
+                self.set_gain_noise(&new_noise);
+                match self.predict_all(&compensated) {
+                    Ok(p) => {
+                        phi = compensated;
+                        pred = p;
+                    }
+                    // the compensated gain breaks the constraint: keep F, re-filter with new R
+                    Err(_) => match self.predict_all(&phi) {
+                        Ok(p) => pred = p,
+                        Err(_) => {
+                            self.set_gain_noise(&noise);
+                            stop = StopReason::NoDescent;
+                            break;
+                        }
+                    },
+                }
+                res = self.residuals(&pred);
+            }
             noise = new_noise;
             history.push(self.cost(&res, &noise));
             if gain < options.tolerance && noise_change < 1e-3 {
@@ -629,6 +771,13 @@ impl Problem<'_> {
             stop,
             cost_history: history,
         })
+    }
+
+    /// The innovation variances the filter's gain uses from now on.
+    fn set_gain_noise(&self, noise: &[f64]) {
+        if let Ok(mut g) = self.gain_noise.write() {
+            *g = noise.to_vec();
+        }
     }
 
     /// Covariance, correlation, per-record fits and the named results.
@@ -703,7 +852,11 @@ impl Problem<'_> {
                 )
             })
             .collect();
-        for pe in parameters.iter().chain(&nuisance).filter(|p| p.at_bound) {
+        // a process-noise variance at 0 is the output-error answer, not a bound hit
+        let noteworthy = |p: &&ParameterEstimate| {
+            p.at_bound && !(p.kind == Some(NuisanceKind::ProcessNoise) && p.value == 0.0)
+        };
+        for pe in parameters.iter().chain(&nuisance).filter(noteworthy) {
             warnings.push(format!("{} ended on a bound ({})", pe.name, pe.value));
         }
         let correlation: Vec<Vec<f64>> = (0..p)
@@ -778,6 +931,7 @@ impl Problem<'_> {
                     NuisanceKind::OutputBias => "bias",
                     NuisanceKind::InputBias => "input_bias",
                     NuisanceKind::InputSkew => "skew",
+                    NuisanceKind::ProcessNoise => "process_noise",
                 };
                 match s.record {
                     Some(r) => format!("{kind}:{}@{}", s.target, self.records[r].name),

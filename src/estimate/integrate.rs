@@ -11,7 +11,7 @@ use super::model::{SimError, StateModel};
 use super::record::Run;
 
 /// Largest magnitude a state or output may reach before the simulation counts as diverged.
-const DIVERGED: f64 = 1e12;
+pub(crate) const DIVERGED: f64 = 1e12;
 
 /// Outputs `[output][k]` of `model` at the run's sample times, starting from `x0` at the first.
 pub fn simulate_states(
@@ -28,29 +28,11 @@ pub fn simulate_states(
     let mut x = x0.to_vec();
     let mut u = vec![0.0; nu];
     let mut y = vec![0.0; ny];
-    let mut a = vec![0.0; nu];
-    let mut b = vec![0.0; nu];
-    let mut stage = Stages::new(nx);
+    let mut stage = Stages::new(nx, nu);
     for k in 0..n {
         if k > 0 {
             let (start, end) = (time[k - 1], time[k]);
-            let tiny = 1e-9 * (end - start);
-            let mut t0 = start;
-            while t0 < end - tiny {
-                let t1 = match run.input.next_breakpoint(t0 + tiny) {
-                    Some(bp) if bp < end - tiny => bp,
-                    _ => end,
-                };
-                let mid = 0.5 * (t0 + t1);
-                run.input.piece(mid, &mut a, &mut b);
-                let steps = ((t1 - t0) / run.max_step_s).ceil().max(1.0) as usize;
-                let h = (t1 - t0) / steps as f64;
-                for s in 0..steps {
-                    let t = t0 + s as f64 * h - mid;
-                    stage.rk4(model, theta, &mut x, t, h, &a, &b, &mut u);
-                }
-                t0 = t1;
-            }
+            stage.advance(model, theta, &mut x, run, start, end, &mut u);
             if let Some(i) = x.iter().position(|v| !v.is_finite() || v.abs() > DIVERGED) {
                 return Err(SimError::Diverged {
                     time_s: end - time[0],
@@ -73,23 +55,61 @@ pub fn simulate_states(
     Ok(y_out)
 }
 
-/// Work space of one RK4 step.
-struct Stages {
+/// Work space of the integrator.
+pub(crate) struct Stages {
     k1: Vec<f64>,
     k2: Vec<f64>,
     k3: Vec<f64>,
     k4: Vec<f64>,
     tmp: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
 }
 
 impl Stages {
-    fn new(nx: usize) -> Stages {
+    pub(crate) fn new(nx: usize, nu: usize) -> Stages {
         Stages {
             k1: vec![0.0; nx],
             k2: vec![0.0; nx],
             k3: vec![0.0; nx],
             k4: vec![0.0; nx],
             tmp: vec![0.0; nx],
+            a: vec![0.0; nu],
+            b: vec![0.0; nu],
+        }
+    }
+
+    /// Integrates `x` from `start` to `end` (module doc: RK4 at most `run.max_step_s` long,
+    /// split at the input's breakpoints). `u` is scratch of the input's length.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn advance(
+        &mut self,
+        model: &dyn StateModel,
+        theta: &[f64],
+        x: &mut [f64],
+        run: &Run<'_>,
+        start: f64,
+        end: f64,
+        u: &mut [f64],
+    ) {
+        let tiny = 1e-9 * (end - start);
+        let mut t0 = start;
+        while t0 < end - tiny {
+            let t1 = match run.input.next_breakpoint(t0 + tiny) {
+                Some(bp) if bp < end - tiny => bp,
+                _ => end,
+            };
+            let mid = 0.5 * (t0 + t1);
+            let (mut a, mut b) = (std::mem::take(&mut self.a), std::mem::take(&mut self.b));
+            run.input.piece(mid, &mut a, &mut b);
+            let steps = ((t1 - t0) / run.max_step_s).ceil().max(1.0) as usize;
+            let h = (t1 - t0) / steps as f64;
+            for s in 0..steps {
+                let t = t0 + s as f64 * h - mid;
+                self.rk4(model, theta, x, t, h, &a, &b, u);
+            }
+            (self.a, self.b) = (a, b);
+            t0 = t1;
         }
     }
 

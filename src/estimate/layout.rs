@@ -34,6 +34,9 @@ pub enum NuisanceKind {
     InputBias,
     /// Input time skew, s, shared by all records.
     InputSkew,
+    /// Process-noise variance `q_i = F_ii²` of a state, shared by all records (filter error
+    /// method only).
+    ProcessNoise,
 }
 
 /// One entry of φ after the model parameters.
@@ -276,6 +279,7 @@ impl Layout {
             let v = phi[self.free.len() + k];
             match (slot.kind, slot.record) {
                 (NuisanceKind::InputSkew, _) => t.input_skew_s[slot.index] = v,
+                (NuisanceKind::ProcessNoise, _) => {}
                 (_, Some(rec)) if rec != r => {}
                 (NuisanceKind::InitialState, _) => t.x0[slot.index] = v,
                 (NuisanceKind::OutputBias, _) => t.output_bias[slot.index] = v,
@@ -293,6 +297,44 @@ impl Layout {
     /// The record that φ entry `j` alone affects (None: all records).
     pub fn only_record(&self, j: usize) -> Option<usize> {
         self.slot(j).and_then(|s| s.record)
+    }
+
+    /// Appends a process-noise variance per state (start 0, bounded below by 0) with the given
+    /// typical magnitudes.
+    pub fn add_process_noise(&mut self, states: &[String], scale: &[f64]) {
+        for (i, (name, sc)) in states.iter().zip(scale).enumerate() {
+            self.slots.push(Slot {
+                kind: NuisanceKind::ProcessNoise,
+                record: None,
+                index: i,
+                target: name.clone(),
+            });
+            self.start.push(0.0);
+            self.lower.push(0.0);
+            self.upper.push(f64::INFINITY);
+            self.scale.push(*sc);
+        }
+    }
+
+    /// The process-noise variances per state for φ (zeros when none are estimated).
+    pub fn process_noise(&self, phi: &[f64], n_states: usize) -> Vec<f64> {
+        let mut q = vec![0.0; n_states];
+        for (k, slot) in self.slots.iter().enumerate() {
+            if slot.kind == NuisanceKind::ProcessNoise {
+                q[slot.index] = phi[self.free.len() + k];
+            }
+        }
+        q
+    }
+
+    /// Indices into φ of the process-noise variances, in state order.
+    pub fn process_noise_entries(&self) -> Vec<usize> {
+        self.slots
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.kind == NuisanceKind::ProcessNoise)
+            .map(|(k, _)| self.free.len() + k)
+            .collect()
     }
 
     /// Clamps φ into its bounds.

@@ -12,7 +12,7 @@
 use faer::Mat;
 
 use super::integrate::simulate_states;
-use super::model::{Model, Signature, SimError, StateModel};
+use super::model::{Discrete, Model, Signature, SimError, StateModel};
 use super::record::{InputHold, Run};
 use super::EstimateError;
 use crate::lti::expm;
@@ -133,6 +133,39 @@ impl LinearModel {
         }
     }
 
+    /// Φ, Γ₁, Γ₂ over `h` for the hold (module doc).
+    fn transition(&self, num: &Numeric, h: f64, hold: InputHold) -> Discrete {
+        let (n, m) = (self.signature.states.len(), self.signature.inputs.len());
+        let size = n + 2 * m;
+        let mut big = Mat::<f64>::zeros(size, size);
+        for i in 0..n {
+            for j in 0..n {
+                big[(i, j)] = num.a[i * n + j] * h;
+            }
+            for j in 0..m {
+                big[(i, n + j)] = num.b[i * m + j] * h;
+            }
+        }
+        for j in 0..m {
+            big[(n + j, n + m + j)] = 1.0;
+        }
+        let e = expm(&big);
+        let linear = hold == InputHold::Linear;
+        Discrete {
+            phi: (0..n * n).map(|k| e[(k / n, k % n)]).collect(),
+            gamma1: (0..n * m).map(|k| e[(k / m, n + k % m)]).collect(),
+            gamma2: (0..n * m)
+                .map(|k| {
+                    if linear {
+                        e[(k / m, n + m + k % m)]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect(),
+        }
+    }
+
     /// Exact discretisation on a uniform grid (module doc); `None` when the run is not uniform or
     /// has skewed inputs.
     #[allow(clippy::needless_range_loop)] // row-major matrix-vector products read best indexed
@@ -155,24 +188,12 @@ impl LinearModel {
             self.signature.outputs.len(),
         );
         let num = self.numeric(theta);
-        let size = n + 2 * m;
-        let mut big = Mat::<f64>::zeros(size, size);
-        for i in 0..n {
-            for j in 0..n {
-                big[(i, j)] = num.a[i * n + j] * h;
-            }
-            for j in 0..m {
-                big[(i, n + j)] = num.b[i * m + j] * h;
-            }
-        }
-        for j in 0..m {
-            big[(n + j, n + m + j)] = 1.0;
-        }
-        let e = expm(&big);
-        let phi: Vec<f64> = (0..n * n).map(|k| e[(k / n, k % n)]).collect();
-        let g1: Vec<f64> = (0..n * m).map(|k| e[(k / m, n + k % m)]).collect();
+        let Discrete {
+            phi,
+            gamma1: g1,
+            gamma2: g2,
+        } = self.transition(&num, h, run.input.hold());
         let linear = run.input.hold() == InputHold::Linear;
-        let g2: Vec<f64> = (0..n * m).map(|k| e[(k / m, n + m + k % m)]).collect();
         let mut x = x0.to_vec();
         let mut next = vec![0.0; n];
         let mut y = vec![vec![0.0; len]; p];
@@ -233,6 +254,10 @@ impl StateModel for LinearModel {
                     .map(|(e, v)| e.value(theta) * v)
                     .sum::<f64>();
         }
+    }
+
+    fn discrete(&self, theta: &[f64], dt_s: f64, hold: InputHold) -> Option<Discrete> {
+        Some(self.transition(&self.numeric(theta), dt_s, hold))
     }
 
     fn outputs(&self, theta: &[f64], x: &[f64], u: &[f64], y: &mut [f64]) {

@@ -19,19 +19,26 @@
 //! The contract and how to plug in a model: `docs/estimate.md`.
 
 pub mod covariance;
+pub mod expr;
+mod fem;
 mod fit;
 mod integrate;
 mod layout;
 mod linear;
 mod model;
 mod record;
+pub mod riccati;
+mod summary;
+mod user_model;
 
 pub use fit::{fit, Estimate, Method, Options, ParameterEstimate, RecordFit, StopReason};
 pub use integrate::simulate_states;
 pub use layout::{Nuisance, NuisanceKind};
 pub use linear::{Entry, LinearModel};
-pub use model::{Model, Parameter, Signature, SimError, StateModel};
+pub use model::{Discrete, Model, Parameter, Signature, SimError, StateModel};
 pub use record::{InputHold, InputSignal, Record, Run};
+pub use summary::HIGH_CORRELATION;
+pub use user_model::{ModelFileError, UserModel};
 
 /// What went wrong in an estimation, with what the user needs to fix it.
 #[derive(Debug, thiserror::Error)]

@@ -1,6 +1,6 @@
 //! The model trait the core fits, and the state-space form most models take.
 
-use super::record::Run;
+use super::record::{InputHold, Run};
 
 /// Names of a model's parameters, states, inputs and outputs, in the order the model uses them.
 ///
@@ -134,4 +134,23 @@ pub trait StateModel: Sync {
     fn derivatives(&self, theta: &[f64], x: &[f64], u: &[f64], dx: &mut [f64]);
     /// `y = h(x, u, θ)`.
     fn outputs(&self, theta: &[f64], x: &[f64], u: &[f64], y: &mut [f64]);
+
+    /// The exact transition over one sample interval `dt_s` for the declared hold, if the model
+    /// is linear and has it (see [`Discrete`]). The default `None`: the core integrates `f`.
+    fn discrete(&self, _theta: &[f64], _dt_s: f64, _hold: InputHold) -> Option<Discrete> {
+        None
+    }
+}
+
+/// A linear model's exact transition over one sample interval `h` (Franklin, Powell & Workman,
+/// *Digital Control of Dynamic Systems*, 3rd ed., §6.3.2): `x_{k+1} = Φ x_k + Γ₁ u_k + Γ₂ (u_{k+1}
+/// − u_k)` with `Γ₂ = 0` for a zero-order hold. Row-major: `phi` n×n, `gamma1`, `gamma2` n×m.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Discrete {
+    /// Φ = e^{A h}.
+    pub phi: Vec<f64>,
+    /// Γ₁ = ∫₀ʰ e^{A s} ds B.
+    pub gamma1: Vec<f64>,
+    /// Γ₂ (linear interpolation's ramp term; zeros for a zero-order hold).
+    pub gamma2: Vec<f64>,
 }

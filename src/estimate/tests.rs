@@ -214,3 +214,148 @@ fn a_diverging_start_is_a_clear_error() {
     .unwrap_err();
     assert!(matches!(err, EstimateError::StartDiverges { .. }), "{err}");
 }
+
+/// The short-period record of [`record`] with process noise: white `F w` on α̇ and q̇ (spectral
+/// densities `q_alpha`, `q_q`), integrated by Euler–Maruyama at 1 ms; measured outputs with
+/// white noise.
+fn turbulent_record(dt_s: f64, q_psd: [f64; 2], noise: [f64; 2], seed: u64) -> Record {
+    let clean = record("t", dt_s, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], seed);
+    let [za, zde, ma, mq, mde] = TRUTH;
+    let mut rng = StdRng::seed_from_u64(seed ^ 0x5eed);
+    let h = 1e-3;
+    let sub = (dt_s / h).round() as usize;
+    let de = &clean.inputs[0];
+    let n = clean.len();
+    let mut x = [0.0f64; 2];
+    let mut outputs = vec![vec![0.0; n]; 2];
+    for k in 0..n {
+        for o in 0..2 {
+            outputs[o][k] = x[o] + noise[o] * rng.sample::<f64, _>(StandardNormal);
+        }
+        if k + 1 == n {
+            break;
+        }
+        for s in 0..sub {
+            let f = s as f64 / sub as f64;
+            let u = de[k] + f * (de[k + 1] - de[k]);
+            let w: [f64; 2] = [
+                (q_psd[0] / h).sqrt() * rng.sample::<f64, _>(StandardNormal),
+                (q_psd[1] / h).sqrt() * rng.sample::<f64, _>(StandardNormal),
+            ];
+            let dx = [
+                za * x[0] + x[1] + zde * u + w[0],
+                ma * x[0] + mq * x[1] + mde * u + w[1],
+            ];
+            x = [x[0] + h * dx[0], x[1] + h * dx[1]];
+        }
+    }
+    Record { outputs, ..clean }
+}
+
+#[test]
+fn without_process_noise_the_filter_error_method_gives_the_output_error_answer() {
+    let rec = record("a", 0.02, [0.01, -0.02], [0.002, 0.005], [0.0, 0.0], 21);
+    let nuisance = Nuisance {
+        initial_state: vec![0, 1],
+        ..Nuisance::default()
+    };
+    let oe = fit(
+        &short_period(),
+        &start(),
+        &[rec.clone()],
+        &nuisance,
+        &Options::default(),
+    )
+    .unwrap();
+    let fem = fit(
+        &short_period(),
+        &start(),
+        &[rec],
+        &nuisance,
+        &Options {
+            method: Method::Fem,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    assert!(fem.converged, "{:?}", fem.stop);
+    // the process noise stays on its bound 0: the gain is 0 and the filter is the simulation
+    for n in fem
+        .nuisance
+        .iter()
+        .filter(|n| n.kind == Some(NuisanceKind::ProcessNoise))
+    {
+        assert_eq!(n.value, 0.0, "{n:?}");
+    }
+    for (a, b) in oe.parameters.iter().zip(&fem.parameters) {
+        assert!(
+            (a.value - b.value).abs() < 0.05 * a.std_error,
+            "{}: oe {} fem {}",
+            a.name,
+            a.value,
+            b.value
+        );
+    }
+}
+
+#[test]
+fn with_process_noise_the_filter_error_method_finds_the_truth() {
+    let recs: Vec<Record> = (0..2)
+        .map(|s| turbulent_record(0.02, [2e-4, 4e-3], [0.001, 0.002], 31 + s))
+        .collect();
+    let nuisance = Nuisance {
+        initial_state: vec![0, 1],
+        ..Nuisance::default()
+    };
+    let oe = fit(
+        &short_period(),
+        &start(),
+        &recs,
+        &nuisance,
+        &Options::default(),
+    )
+    .unwrap();
+    let fem = fit(
+        &short_period(),
+        &start(),
+        &recs,
+        &nuisance,
+        &Options {
+            method: Method::Fem,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    for ((a, b), t) in oe.parameters.iter().zip(&fem.parameters).zip(TRUTH) {
+        eprintln!(
+            "{}: truth {t} oe {:.3} ± {:.3} ({:.1}σ)  fem {:.3} ± {:.3} ({:.1}σ)",
+            a.name,
+            a.value,
+            a.std_error,
+            (a.value - t) / a.std_error,
+            b.value,
+            b.std_error,
+            (b.value - t) / b.std_error
+        );
+    }
+    assert!(fem.converged, "{:?}", fem.stop);
+    // within 3σ of the truth (the generator's noise is what the model assumes)
+    for (b, t) in fem.parameters.iter().zip(TRUTH) {
+        assert!((b.value - t).abs() < 3.0 * b.std_error, "{}", b.name);
+    }
+    // the process-noise spectral densities too (2e-4 and 4e-3 in the generator)
+    let q: Vec<&ParameterEstimate> = fem
+        .nuisance
+        .iter()
+        .filter(|n| n.kind == Some(NuisanceKind::ProcessNoise))
+        .collect();
+    for (n, truth) in q.iter().zip([2e-4, 4e-3]) {
+        assert!((n.value - truth).abs() < 3.0 * n.std_error, "{n:?}");
+    }
+    // output error, blind to the turbulence, misses M_δe by more than 3σ here
+    let m_de = oe.parameter("M_de").unwrap();
+    assert!(
+        (m_de.value - TRUTH[4]).abs() > 3.0 * m_de.std_error,
+        "{m_de:?}"
+    );
+}

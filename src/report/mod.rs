@@ -1,6 +1,8 @@
 //! Reports: SVG line plots (plotters, no system fonts), Markdown and self-contained HTML (inline SVG, no
 //! network), and the JSON behind every table. Every file is written atomically.
 
+pub mod text;
+
 use plotters::prelude::*;
 use serde::Serialize;
 use std::io::Write;

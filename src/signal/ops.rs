@@ -89,3 +89,51 @@ mod tests {
         }
     }
 }
+
+/// Unwraps an angle sequence (rad) so that consecutive samples differ by less than π.
+pub fn unwrap_rad(x: &[f64]) -> Vec<f64> {
+    let tau = std::f64::consts::TAU;
+    let mut out = Vec::with_capacity(x.len());
+    let mut offset = 0.0;
+    for (i, &v) in x.iter().enumerate() {
+        if i > 0 {
+            offset -= tau * ((v - x[i - 1]) / tau).round();
+        }
+        out.push(v + offset);
+    }
+    out
+}
+
+/// A heading sequence (rad) unwrapped and shifted by whole turns so that it starts within (−π, π]: JSBSim reports
+/// ψ in [0, 2π), so a trim at heading 0 that settles a hair left of north would start at 6.283185 rad.
+pub fn heading_from_zero_rad(psi: &[f64]) -> Vec<f64> {
+    let tau = std::f64::consts::TAU;
+    let mut out = unwrap_rad(psi);
+    if let Some(&first) = out.first() {
+        let turns = (first / tau).round();
+        let turns = if first - turns * tau <= -std::f64::consts::PI {
+            turns - 1.0
+        } else {
+            turns
+        };
+        out.iter_mut().for_each(|v| *v -= turns * tau);
+    }
+    out
+}
+
+#[cfg(test)]
+mod heading_tests {
+    use super::*;
+
+    /// A trim a hair left of north starts at −1e−7 rad, not 2π − 1e−7, and crossing north stays continuous.
+    #[test]
+    fn heading_starts_within_half_a_turn_of_zero() {
+        let tau = std::f64::consts::TAU;
+        let psi = [tau - 1e-7, tau - 2e-7, 1e-7, 0.2];
+        let h = heading_from_zero_rad(&psi);
+        assert!((h[0] + 1e-7).abs() < 1e-12, "{h:?}");
+        assert!((h[2] - 1e-7).abs() < 1e-12, "{h:?}");
+        assert!((h[3] - 0.2).abs() < 1e-12, "{h:?}");
+        assert!((heading_from_zero_rad(&[3.0 * tau + 0.5])[0] - 0.5).abs() < 1e-12);
+    }
+}

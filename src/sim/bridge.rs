@@ -2,6 +2,7 @@
 //! batch protocol — one JSON line per request, whole float64 arrays as raw little-endian bytes.
 
 use super::env;
+use super::scratch::ScratchDir;
 use super::SimError;
 use serde_json::{json, Value};
 use std::collections::VecDeque;
@@ -17,6 +18,8 @@ pub struct Bridge {
     stdin: ChildStdin,
     stdout: BufReader<ChildStdout>,
     stderr_tail: Arc<Mutex<VecDeque<String>>>,
+    /// The process's working directory; dropped (removed) after the process is gone (see `Drop`).
+    scratch: ScratchDir,
 }
 
 /// A response: its JSON header and the float64 payload (empty when there is none).
@@ -32,6 +35,14 @@ impl Bridge {
     pub fn spawn() -> Result<Self, SimError> {
         let python = env::python()?;
         let script = env::bridge_script()?;
+        let scratch = ScratchDir::create().map_err(|source| SimError::Spawn {
+            python: format!(
+                "{} (making its scratch directory in {})",
+                python.display(),
+                std::env::temp_dir().display()
+            ),
+            source,
+        })?;
         let mut child = Command::new(&python)
             .arg("-u")
             .arg(&script)
@@ -48,6 +59,7 @@ impl Bridge {
                 python: python.display().to_string(),
                 source,
             })?;
+        scratch.set_process(child.id());
         let stdin = child.stdin.take().expect("stdin is piped");
         let stdout =
             BufReader::with_capacity(1 << 20, child.stdout.take().expect("stdout is piped"));
@@ -69,7 +81,13 @@ impl Bridge {
             stdin,
             stdout,
             stderr_tail,
+            scratch,
         })
+    }
+
+    /// The process's scratch directory (passed with `load`; removed by flightid when the bridge is dropped).
+    pub fn scratch_dir(&self) -> &std::path::Path {
+        self.scratch.path()
     }
 
     /// Operating-system process id of the Python process.
@@ -189,6 +207,8 @@ fn describe_status(s: std::process::ExitStatus) -> String {
 }
 
 impl Drop for Bridge {
+    /// Asks the process to quit, kills it if it does not, and waits for it; the scratch directory field is
+    /// dropped (removed) after this, so the process can no longer write into it.
     fn drop(&mut self) {
         let _ = self.stdin.write_all(b"{\"cmd\":\"quit\"}\n");
         let _ = self.stdin.flush();

@@ -112,6 +112,7 @@ impl JsbsimSim {
         let mut req = json!({
             "cmd": "load", "aircraft": config.model, "dt_s": 1.0 / rate_hz, "surfaces": surfaces,
             "engine_running": config.engine_running, "gear_up": config.gear_up, "engines": config.engines,
+            "scratch_dir": bridge.scratch_dir().display().to_string(),
         });
         if let Some(dir) = model_dir {
             let abs = std::fs::canonicalize(dir).map_err(|e| {
@@ -502,7 +503,12 @@ impl Simulator for JsbsimSim {
             rec.push_column(&format!("{s}_rad"), column(j, 1.0));
         }
         for (i, (name, _, factor)) in RECORDED.iter().enumerate() {
-            rec.push_column(name, column(SURFACES.len() + i, *factor));
+            let values = column(SURFACES.len() + i, *factor);
+            if *name == "psi_rad" {
+                rec.push_column(name, crate::signal::heading_from_zero_rad(&values));
+            } else {
+                rec.push_column(name, values);
+            }
         }
         for (i, prop) in self.extra_record.iter().enumerate() {
             rec.push_column(prop, column(SURFACES.len() + RECORDED.len() + i, 1.0));

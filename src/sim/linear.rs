@@ -91,6 +91,48 @@ pub fn tf_json(tf: &TransferFunction) -> TfJson {
     }
 }
 
+/// The classical name of each mode of a decoupled submodel (`longitudinal` or `lateral`), in the order given.
+///
+/// Longitudinal: of two oscillatory pairs the faster is the short period and the slower the phugoid; a single
+/// pair is the short period when faster than 1 rad/s (its real poles are then an aperiodic phugoid), else the
+/// phugoid (with an aperiodic short period). Lateral: the oscillatory pair is the Dutch roll, the fastest real
+/// pole the roll subsidence and the slowest the spiral (Etkin & Reid, *Dynamics of Flight*, ch. 6–7).
+pub fn mode_names(submodel: &str, modes: &[Mode]) -> Vec<&'static str> {
+    let osc: Vec<f64> = modes
+        .iter()
+        .filter(|m| m.oscillatory)
+        .map(|m| m.omega_n_rad_s)
+        .collect();
+    let real: Vec<f64> = modes
+        .iter()
+        .filter(|m| !m.oscillatory)
+        .map(|m| m.pole.re.abs())
+        .collect();
+    let fastest_osc = osc.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let fastest_real = real.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let slowest_real = real.iter().copied().fold(f64::INFINITY, f64::min);
+    modes
+        .iter()
+        .map(|m| match (submodel, m.oscillatory) {
+            ("longitudinal", true) if osc.len() >= 2 => {
+                if m.omega_n_rad_s == fastest_osc {
+                    "short period"
+                } else {
+                    "phugoid"
+                }
+            }
+            ("longitudinal", true) if m.omega_n_rad_s > 1.0 => "short period",
+            ("longitudinal", true) => "phugoid",
+            ("longitudinal", false) if osc.iter().any(|w| *w > 1.0) => "phugoid (aperiodic)",
+            ("longitudinal", false) => "short period (aperiodic)",
+            ("lateral", true) => "Dutch roll",
+            ("lateral", false) if real.len() >= 2 && m.pole.re.abs() == slowest_real => "spiral",
+            ("lateral", false) if m.pole.re.abs() == fastest_real => "roll subsidence",
+            _ => "other",
+        })
+        .collect()
+}
+
 /// Modal parameters of the decoupled longitudinal and lateral submodels.
 pub fn submodel_modes(lin: &Linearization) -> Result<BTreeMap<String, Vec<Mode>>, SimError> {
     let mut out = BTreeMap::new();

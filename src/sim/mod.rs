@@ -8,6 +8,7 @@ pub mod env;
 pub mod jsbsim;
 pub mod linear;
 pub mod linear_model;
+pub mod scratch;
 
 use crate::data::FlightRecord;
 use serde::{Deserialize, Serialize};

@@ -348,6 +348,9 @@ pub fn equation_error_with(
         // differentiated body velocities instead.
         ay_m_s2: None,
         az_m_s2: None,
+        ax_m_s2: None,
+        qbar_pa: None,
+        thrust_n: None,
     };
     let options = EquationErrorOptions {
         air_density_kg_m3: truth.rho_kg_m3,

@@ -1,4 +1,4 @@
-//! Per-airframe MAVLink servo mapping (`aircraft/airframes/NAME.toml`): PWM → surface radians.
+//! Per-airframe MAVLink servo mapping (`aircraft/servo_maps/NAME.toml`): PWM → surface radians.
 
 use std::path::{Path, PathBuf};
 
@@ -54,8 +54,8 @@ impl ThrottleMap {
 /// The servo mapping of one airframe.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Airframe {
-    /// Airframe name (the file stem).
+pub struct ServoMap {
+    /// ServoMap name (the file stem).
     pub name: String,
     /// Elevator mapping, if the elevator is on a servo output.
     pub elevator: Option<SurfaceMap>,
@@ -70,19 +70,19 @@ pub struct Airframe {
 /// Highest servo channel SERVO_OUTPUT_RAW carries in this dialect build (servo1..servo8).
 pub const MAX_SERVO_CHANNEL: u8 = 8;
 
-impl Airframe {
+impl ServoMap {
     /// Parses and checks a mapping from TOML text; `file` names it in errors.
     pub fn from_toml_str(text: &str, file: &Path) -> Result<Self, DataError> {
         let name = file
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let err = |message: String| DataError::Airframe {
-            airframe: name.clone(),
+        let err = |message: String| DataError::ServoMap {
+            servo_map: name.clone(),
             file: file.to_path_buf(),
             message,
         };
-        let af: Airframe = toml::from_str(text).map_err(|e| err(e.to_string()))?;
+        let af: ServoMap = toml::from_str(text).map_err(|e| err(e.to_string()))?;
         let surfaces = [
             ("elevator", af.elevator),
             ("aileron", af.aileron),
@@ -133,21 +133,21 @@ impl Airframe {
     pub fn load(path: &Path) -> Result<Self, DataError> {
         let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
             file: path.to_path_buf(),
-            action: "cannot read the airframe mapping",
+            action: "cannot read the servo mapping",
             source,
         })?;
         Self::from_toml_str(&text, path)
     }
 
-    /// Finds `NAME.toml` under `aircraft/airframes/` of the given root.
+    /// Finds `NAME.toml` under `aircraft/servo_maps/` of the given root.
     pub fn path_in(root: &Path, name: &str) -> PathBuf {
         root.join("aircraft")
-            .join("airframes")
+            .join("servo_maps")
             .join(format!("{name}.toml"))
     }
 
-    /// Resolves an `--airframe` argument: a path to a `.toml` file, or a name looked up under
-    /// `$FLIGHTID_ROOT/aircraft/airframes`, `./aircraft/airframes`, then the source tree's.
+    /// Resolves an `--servo-map` argument: a path to a `.toml` file, or a name looked up under
+    /// `$FLIGHTID_ROOT/aircraft/servo_maps`, `./aircraft/servo_maps`, then the source tree's.
     pub fn resolve(name_or_path: &str) -> Result<Self, DataError> {
         let as_path = Path::new(name_or_path);
         if name_or_path.ends_with(".toml") || as_path.components().count() > 1 {
@@ -165,11 +165,11 @@ impl Airframe {
                 return Self::load(&p);
             }
         }
-        Err(DataError::Airframe {
-            airframe: name_or_path.to_string(),
+        Err(DataError::ServoMap {
+            servo_map: name_or_path.to_string(),
             file: Self::path_in(Path::new("."), name_or_path),
             message: format!(
-                "no such airframe mapping (looked under {})",
+                "no such servo mapping (looked under {})",
                 roots
                     .iter()
                     .map(|r| Self::path_in(r, name_or_path).display().to_string())

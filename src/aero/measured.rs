@@ -1,0 +1,1026 @@
+//! Derivatives from measured records of any aircraft: the record's own air data, sensor positions moved to the
+//! CG, the axis the record excites, and equation error over one or several records (`derivatives --data …
+//! --airframe …`).
+//!
+//! Unlike the JSBSim study ([`super::study`]), nothing here comes from a trim or a simulator: mass, inertia,
+//! geometry, thrust line and sensor positions come from an [`Airframe`]; dynamic pressure from the record's
+//! `qbar_pa`, else ½ρV² with ρ from `altitude_m` (ISA) or the airframe's `flight.density_kg_m3`.
+//!
+//! Sensors away from the CG (Morelli & Klein §9.3, Jategaonkar §10.2): with r the sensor position in body axes,
+//! - accelerometers: a_CG = a_IMU − ω̇ × r − ω × (ω × r);
+//! - α vane: α_CG = α_v + (q x − p y)/V; β vane: β_CG = β_v − (r x − p z)/V
+//!   (the local flow at the vane carries ω × r; first order in the rates).
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use super::airframe::{Airframe, AirframeError, SensorPositions};
+use super::regression::{
+    equation_error, lesq, savitzky_golay_derivative, EquationErrorOptions,
+    FlightRecord as Channels, RegressionResult,
+};
+use super::AeroError;
+use crate::data::{self, G0_M_S2};
+
+/// Why a measured-data estimate cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub enum MeasuredError {
+    /// The airframe description lacks something the estimate needs (bad input).
+    #[error(transparent)]
+    Airframe(#[from] AirframeError),
+    /// The record lacks a channel or is unusable (bad input).
+    #[error("{file}: {message}")]
+    Record {
+        /// Which record.
+        file: String,
+        /// What is missing or wrong.
+        message: String,
+    },
+    /// The estimation itself failed.
+    #[error(transparent)]
+    Aero(#[from] AeroError),
+    /// The output-error or filter-error fit failed (or its problem is inconsistent).
+    #[error(transparent)]
+    Estimate(#[from] crate::estimate::EstimateError),
+}
+
+/// Which axis to estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AxisChoice {
+    /// C_L, C_D, C_m (states V, α, θ, q).
+    Longitudinal,
+    /// C_Y, C_l, C_n (states β, p, r, φ).
+    Lateral,
+    /// Both.
+    Both,
+}
+
+impl AxisChoice {
+    /// Whether the longitudinal axis is included.
+    pub fn longitudinal(self) -> bool {
+        matches!(self, AxisChoice::Longitudinal | AxisChoice::Both)
+    }
+
+    /// Whether the lateral-directional axis is included.
+    pub fn lateral(self) -> bool {
+        matches!(self, AxisChoice::Lateral | AxisChoice::Both)
+    }
+}
+
+/// A surface moves in a record when its peak-to-peak excursion exceeds both 0.5° and 20× its sample noise
+/// (noise: the RMS of first differences / √2, which white noise dominates at logging rates).
+pub fn surface_moves(values: &[f64]) -> bool {
+    if values.len() < 3 {
+        return false;
+    }
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let n = (values.len() - 1) as f64;
+    let noise = (values
+        .windows(2)
+        .map(|w| (w[1] - w[0]).powi(2))
+        .sum::<f64>()
+        / n
+        / 2.0)
+        .sqrt();
+    hi - lo > 0.5f64.to_radians().max(20.0 * noise)
+}
+
+/// The axes a record excites: longitudinal when the elevator moves, lateral when the aileron or rudder moves.
+pub fn excited_axis(rec: &data::FlightRecord) -> Option<AxisChoice> {
+    let moves = |c: &str| rec.column(c).is_some_and(surface_moves);
+    match (
+        moves("elevator_rad"),
+        moves("aileron_rad") || moves("rudder_rad"),
+    ) {
+        (true, true) => Some(AxisChoice::Both),
+        (true, false) => Some(AxisChoice::Longitudinal),
+        (false, true) => Some(AxisChoice::Lateral),
+        (false, false) => None,
+    }
+}
+
+/// Indices of the records that excite an axis (its surfaces move, [`excited_axis`]), or of all records when
+/// none does (an axis forced with `--axis`).
+pub fn records_exciting(
+    records: &[(String, data::FlightRecord)],
+    longitudinal: bool,
+) -> Vec<usize> {
+    let chosen: Vec<usize> = (0..records.len())
+        .filter(|&i| {
+            excited_axis(&records[i].1).is_some_and(|a| {
+                if longitudinal {
+                    a.longitudinal()
+                } else {
+                    a.lateral()
+                }
+            })
+        })
+        .collect();
+    if chosen.is_empty() {
+        (0..records.len()).collect()
+    } else {
+        chosen
+    }
+}
+
+/// Air density of the 1976 US / ICAO standard atmosphere below 11 km: ρ = ρ0 (1 − L h/T0)^(g/(R L) − 1).
+pub fn standard_density_kg_m3(altitude_m: f64) -> f64 {
+    const RHO0: f64 = 1.225;
+    const T0: f64 = 288.15;
+    const LAPSE: f64 = 0.0065;
+    const R: f64 = 287.052_87;
+    let h = altitude_m.clamp(-1000.0, 11_000.0);
+    RHO0 * (1.0 - LAPSE * h / T0).powf(G0_M_S2 / (R * LAPSE) - 1.0)
+}
+
+/// Where the record's air density comes from.
+#[derive(Debug, Clone, Serialize)]
+pub struct AirData {
+    /// Mean density over the record, kg/m³.
+    pub density_kg_m3: f64,
+    /// `qbar_pa`, `altitude_m (ISA)` or `airframe flight.density_kg_m3`.
+    pub source: String,
+}
+
+/// The record's air density: from `qbar_pa` and `airspeed_m_s` (ρ = 2 q̄/V², averaged), else ISA at the mean
+/// `altitude_m`, else the airframe's `flight.density_kg_m3`.
+pub fn air_data(rec: &data::FlightRecord, airframe: &Airframe) -> Result<AirData, AirframeError> {
+    if let (Some(q), Some(v)) = (rec.column("qbar_pa"), rec.column("airspeed_m_s")) {
+        let rho: Vec<f64> = q
+            .iter()
+            .zip(v)
+            .filter(|(_, v)| **v > 1.0)
+            .map(|(q, v)| 2.0 * q / (v * v))
+            .collect();
+        if !rho.is_empty() {
+            return Ok(AirData {
+                density_kg_m3: rho.iter().sum::<f64>() / rho.len() as f64,
+                source: "qbar_pa".into(),
+            });
+        }
+    }
+    if let Some(h) = rec.column("altitude_m").filter(|h| !h.is_empty()) {
+        let mean = h.iter().sum::<f64>() / h.len() as f64;
+        return Ok(AirData {
+            density_kg_m3: standard_density_kg_m3(mean),
+            source: "altitude_m (ISA)".into(),
+        });
+    }
+    Ok(AirData {
+        density_kg_m3: airframe.density("a record without qbar_pa or altitude_m")?,
+        source: "airframe flight.density_kg_m3".into(),
+    })
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// The record with α, β and the accelerations moved from their sensors to the CG (module doc). Rates not
+/// in the record count as zero; angular accelerations are Savitzky–Golay derivatives of the rates.
+pub fn moved_to_cg(
+    rec: &data::FlightRecord,
+    sensors: &SensorPositions,
+) -> Result<data::FlightRecord, AeroError> {
+    let n = rec.len();
+    let mut out = rec.clone();
+    let zeros = vec![0.0; n];
+    let rate = |c: &str| rec.column(c).unwrap_or(&zeros).to_vec();
+    let (p, q, r) = (rate("p_rad_s"), rate("q_rad_s"), rate("r_rad_s"));
+    let dt = rec.dt_s().unwrap_or(f64::NAN);
+    let imu = sensors.imu_m;
+    if imu != [0.0; 3] && n > 12 {
+        let d = |x: &[f64]| savitzky_golay_derivative(x, dt, 5, 2);
+        let (pd, qd, rd) = (d(&p)?, d(&q)?, d(&r)?);
+        let mut acc: Vec<Option<Vec<f64>>> = ["ax_m_s2", "ay_m_s2", "az_m_s2"]
+            .iter()
+            .map(|c| rec.column(c).map(|v| v.to_vec()))
+            .collect();
+        for i in 0..n {
+            let w = [p[i], q[i], r[i]];
+            let tangential = cross([pd[i], qd[i], rd[i]], imu);
+            let centripetal = cross(w, cross(w, imu));
+            for (k, a) in acc.iter_mut().enumerate() {
+                if let Some(a) = a {
+                    a[i] -= tangential[k] + centripetal[k];
+                }
+            }
+        }
+        for (c, a) in ["ax_m_s2", "ay_m_s2", "az_m_s2"].iter().zip(acc) {
+            if let Some(a) = a {
+                out.push_column(c, a);
+            }
+        }
+    }
+    if let Some(v) = rec.column("airspeed_m_s") {
+        let [x, y, z] = sensors.alpha_vane_m;
+        if let Some(alpha) = rec.column("alpha_rad").filter(|_| x != 0.0 || y != 0.0) {
+            let a = (0..n)
+                .map(|i| alpha[i] + (q[i] * x - p[i] * y) / v[i])
+                .collect();
+            out.push_column("alpha_rad", a);
+        }
+        let [x, _, z2] = sensors.beta_vane_m;
+        let _ = z;
+        if let Some(beta) = rec.column("beta_rad").filter(|_| x != 0.0 || z2 != 0.0) {
+            let b = (0..n)
+                .map(|i| beta[i] - (r[i] * x - p[i] * z2) / v[i])
+                .collect();
+            out.push_column("beta_rad", b);
+        }
+    }
+    Ok(out)
+}
+
+/// The time skews of the α and β vanes (s, the vane reads late) estimated by the flight-path reconstruction
+/// of [`data::check_compatibility`] on a record already moved to the CG, and the record with α and β shifted
+/// back by them (α(t) = α_m(t + τ), linear interpolation; the ends hold). Skews the reconstruction does not
+/// find significant are left alone.
+pub fn deskewed(rec: &data::FlightRecord) -> (data::FlightRecord, Vec<(String, f64)>) {
+    let opts = data::CheckOptions {
+        scale_factors: false,
+        time_skews: true,
+        ..data::CheckOptions::default()
+    };
+    let Ok(report) = data::check_compatibility(rec, &opts) else {
+        return (rec.clone(), Vec::new());
+    };
+    let mut out = rec.clone();
+    let mut skews = Vec::new();
+    for e in report
+        .instrument
+        .iter()
+        .filter(|e| e.name.starts_with("skew_") && e.significant)
+    {
+        let Some(x) = rec.column(&e.column) else {
+            continue;
+        };
+        let t = &rec.time_s;
+        let shifted = t
+            .iter()
+            .map(|&ti| interpolate(t, x, ti + e.value))
+            .collect();
+        out.push_column(&e.column, shifted);
+        skews.push((e.column.clone(), e.value));
+    }
+    (out, skews)
+}
+
+/// Linear interpolation of (t, x) at `at`, holding the end values outside.
+fn interpolate(t: &[f64], x: &[f64], at: f64) -> f64 {
+    let k = t.partition_point(|&v| v <= at);
+    if k == 0 {
+        return x[0];
+    }
+    if k >= t.len() {
+        return x[t.len() - 1];
+    }
+    let w = (at - t[k - 1]) / (t[k] - t[k - 1]);
+    x[k - 1] + w * (x[k] - x[k - 1])
+}
+
+/// One estimated derivative.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Estimate {
+    /// Value (nondimensional, per rad or per reference rate).
+    pub value: f64,
+    /// Standard error (equation error: coloured-residual corrected; output error: Cramér–Rao bound).
+    pub std_error: f64,
+}
+
+/// Equation-error estimates from measured records.
+#[derive(Debug, Clone)]
+pub struct MeasuredEquationError {
+    /// The axis estimated.
+    pub axis: AxisChoice,
+    /// Estimates by name (`Cm_alpha`, `Cm_0`, …).
+    pub derivatives: BTreeMap<String, Estimate>,
+    /// The stacked regressions.
+    pub equations: Vec<RegressionResult>,
+    /// Air data per record.
+    pub air: Vec<AirData>,
+    /// Equations left out and why.
+    pub skipped: Vec<(String, String)>,
+    /// Vane time skews removed before the regression: (record, column, skew s).
+    pub skews: Vec<(String, String, f64)>,
+}
+
+/// One coefficient's regression over all records: term names, regressor columns, response.
+type Stacked = (Vec<String>, Vec<Vec<f64>>, Vec<f64>);
+
+/// The equation-error channels of a record already moved to the CG.
+fn channels(rec: &data::FlightRecord) -> Channels<'_> {
+    let col = |c: &str| rec.column(c);
+    Channels {
+        time_s: &rec.time_s,
+        alpha_rad: col("alpha_rad"),
+        beta_rad: col("beta_rad"),
+        p_rad_s: col("p_rad_s"),
+        q_rad_s: col("q_rad_s"),
+        r_rad_s: col("r_rad_s"),
+        phi_rad: col("phi_rad"),
+        theta_rad: col("theta_rad"),
+        airspeed_m_s: col("airspeed_m_s"),
+        elevator_rad: col("elevator_rad"),
+        aileron_rad: col("aileron_rad"),
+        rudder_rad: col("rudder_rad"),
+        ay_m_s2: col("ay_m_s2"),
+        az_m_s2: col("az_m_s2"),
+        ax_m_s2: col("ax_m_s2"),
+        qbar_pa: col("qbar_pa"),
+        thrust_n: col("thrust_n"),
+    }
+}
+
+/// Equation error (Morelli & Klein §5.1, [`equation_error`]) over several measured records: each record's
+/// coefficients are reconstructed with its own airspeed, dynamic pressure and density and its sensors moved
+/// to the CG; the regressions of all records are stacked into one least-squares problem per coefficient.
+/// `records` pairs a name (for messages) with the record.
+pub fn equation_error_measured(
+    records: &[(String, data::FlightRecord)],
+    airframe: &Airframe,
+    axis: AxisChoice,
+    include_alphadot: bool,
+) -> Result<MeasuredEquationError, MeasuredError> {
+    let lon = axis.longitudinal();
+    let lat = axis.lateral();
+    let purpose = |what: &str| format!("equation error on the {what} axis");
+    // Mass and inertia: the axis's own must be known; the other inertias only scale the inertial coupling
+    // terms, (I_xx − I_zz) p r in C_m and (I_zz − I_yy) q r, (I_yy − I_xx) p q in C_l, C_n. When unknown they
+    // are set equal to a known one, which drops the coupling (small on a maneuver of one axis).
+    let mut mass =
+        airframe.mass_properties(lon, &purpose(if lon { "longitudinal" } else { "lateral" }))?;
+    if lat {
+        let m = airframe.mass_properties(false, &purpose("lateral"))?;
+        mass.ixx_kg_m2 = m.ixx_kg_m2;
+        mass.izz_kg_m2 = m.izz_kg_m2;
+    }
+    if mass.iyy_kg_m2 <= 0.0 {
+        mass.iyy_kg_m2 = mass.izz_kg_m2;
+    }
+    if mass.ixx_kg_m2 <= 0.0 || mass.izz_kg_m2 <= 0.0 {
+        mass.ixx_kg_m2 = mass.iyy_kg_m2;
+        mass.izz_kg_m2 = mass.iyy_kg_m2;
+    }
+    let mut geometry = airframe.geometry(lon, &purpose("longitudinal"))?;
+    if lat {
+        geometry.span_m = airframe.geometry(false, &purpose("lateral"))?.span_m;
+    }
+    if !geometry.span_m.is_finite() {
+        geometry.span_m = geometry.chord_m;
+    }
+    if !geometry.chord_m.is_finite() {
+        geometry.chord_m = geometry.span_m;
+    }
+    let mut stacked: BTreeMap<&'static str, Stacked> = BTreeMap::new();
+    let mut air = Vec::new();
+    let mut skipped = Vec::new();
+    let mut skews = Vec::new();
+    let wanted: &[&str] = match axis {
+        AxisChoice::Longitudinal => &["Cm", "CL"],
+        AxisChoice::Lateral => &["Cl", "Cn", "CY"],
+        AxisChoice::Both => &["Cm", "CL", "Cl", "Cn", "CY"],
+    };
+    // Each axis from the records that excite it: a lateral record's incidental pitch motion, stacked into the
+    // C_m regression, biases C_mq by 20–30 % on the generated p51d and c310 records.
+    let lon_records = records_exciting(records, true);
+    let lat_records = records_exciting(records, false);
+    for (i, (name, raw)) in records.iter().enumerate() {
+        let wanted: Vec<&str> = wanted
+            .iter()
+            .copied()
+            .filter(|c| {
+                if matches!(*c, "Cm" | "CL") {
+                    lon_records.contains(&i)
+                } else {
+                    lat_records.contains(&i)
+                }
+            })
+            .collect();
+        let ad = air_data(raw, airframe)?;
+        if wanted.is_empty() {
+            air.push(ad);
+            continue;
+        }
+        let bad = |message: String| MeasuredError::Record {
+            file: name.clone(),
+            message,
+        };
+        let rec = moved_to_cg(raw, &airframe.sensors).map_err(|e| bad(e.to_string()))?;
+        let (rec, found) = deskewed(&rec);
+        skews.extend(found.into_iter().map(|(c, v)| (name.clone(), c, v)));
+        let thrust = if rec.column("thrust_n").is_some() {
+            Some(airframe.thrust_line("a record with thrust_n")?)
+        } else {
+            None
+        };
+        let options = EquationErrorOptions {
+            air_density_kg_m3: ad.density_kg_m3,
+            g_m_s2: G0_M_S2,
+            include_alphadot,
+            thrust_inclination_rad: thrust.map_or(0.0, |t| t.inclination_rad),
+            thrust_moment_arm_m: thrust.map_or(0.0, |t| t.moment_arm_m),
+            half_window: 3,
+            ..EquationErrorOptions::default()
+        };
+        let res =
+            equation_error(&channels(&rec), &mass, &geometry, &options).map_err(|e| match e {
+                AeroError::BadRecord(m) => bad(m),
+                other => MeasuredError::Aero(other),
+            })?;
+        for (c, why) in res.skipped {
+            if wanted.contains(&c) {
+                skipped.push((c.to_string(), format!("{name}: {why}")));
+            }
+        }
+        for eq in res.equations {
+            if !wanted.contains(&eq.coefficient) {
+                continue;
+            }
+            let names: Vec<String> = eq.terms.iter().map(|t| t.name.clone()).collect();
+            let entry = stacked
+                .entry(eq.coefficient)
+                .or_insert_with(|| (names.clone(), vec![Vec::new(); names.len()], Vec::new()));
+            if entry.0 != names {
+                skipped.push((
+                    eq.coefficient.to_string(),
+                    format!(
+                        "{name}: regressors {names:?} differ from the first record's; left out"
+                    ),
+                ));
+                continue;
+            }
+            for (col, x) in entry.1.iter_mut().zip(&eq.regressors) {
+                col.extend_from_slice(x);
+            }
+            entry.2.extend_from_slice(&eq.response);
+        }
+        air.push(ad);
+    }
+    let mut equations = Vec::new();
+    let mut derivatives = BTreeMap::new();
+    for (coefficient, (names, cols, z)) in stacked {
+        let res = lesq(coefficient, &names, &cols, &z, None)?;
+        for t in &res.terms {
+            derivatives.insert(
+                t.name.clone(),
+                Estimate {
+                    value: t.value,
+                    std_error: t.std_error_colored,
+                },
+            );
+        }
+        equations.push(res);
+    }
+    if equations.is_empty() {
+        let why = skipped
+            .iter()
+            .map(|(c, w)| format!("{c}: {w}"))
+            .collect::<Vec<_>>()
+            .join("; ");
+        return Err(MeasuredError::Record {
+            file: records
+                .iter()
+                .map(|(n, _)| n.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            message: format!("no coefficient equation could be formed ({why})"),
+        });
+    }
+    Ok(MeasuredEquationError {
+        axis,
+        derivatives,
+        equations,
+        air,
+        skipped,
+        skews,
+    })
+}
+
+/// Mean flight condition of the records: the reference point of the dimensional derivatives and modes.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ReferenceCondition {
+    /// Mean true airspeed, m/s.
+    pub airspeed_m_s: f64,
+    /// Mean air density, kg/m³.
+    pub density_kg_m3: f64,
+    /// Mean angle of attack (at the CG), rad.
+    pub alpha_rad: f64,
+    /// Mean pitch attitude, rad.
+    pub theta_rad: f64,
+    /// Mean elevator, rad.
+    pub elevator_rad: f64,
+    /// Mean thrust, N (0 when not measured).
+    pub thrust_n: f64,
+}
+
+impl ReferenceCondition {
+    /// Dynamic pressure ½ρV², Pa.
+    pub fn qbar_pa(&self) -> f64 {
+        0.5 * self.density_kg_m3 * self.airspeed_m_s * self.airspeed_m_s
+    }
+}
+
+/// The mean condition over records (each already moved to the CG) and their densities.
+pub fn reference_condition(recs: &[data::FlightRecord], air: &[AirData]) -> ReferenceCondition {
+    let mean = |c: &str| {
+        let (mut sum, mut n) = (0.0, 0usize);
+        for r in recs {
+            if let Some(v) = r.column(c) {
+                sum += v.iter().sum::<f64>();
+                n += v.len();
+            }
+        }
+        if n > 0 {
+            sum / n as f64
+        } else {
+            0.0
+        }
+    };
+    ReferenceCondition {
+        airspeed_m_s: mean("airspeed_m_s"),
+        density_kg_m3: air.iter().map(|a| a.density_kg_m3).sum::<f64>() / air.len().max(1) as f64,
+        alpha_rad: mean("alpha_rad"),
+        theta_rad: mean("theta_rad"),
+        elevator_rad: mean("elevator_rad"),
+        thrust_n: mean("thrust_n"),
+    }
+}
+
+/// Dimensional derivatives (Etkin & Reid §4.9 / Klein & Morelli Table 3.x conventions) from nondimensional
+/// estimates at the reference condition: M_α = q̄Sc̄ C_mα/I_yy, M_q = q̄Sc̄² C_mq/(2V I_yy),
+/// M_δe = q̄Sc̄ C_mδe/I_yy, Z_α = −q̄S C_Lα/(mV), L_β, L_p = q̄Sb² C_lp/(2V I_xx), L_δa, L_δr, N_β, N_r,
+/// N_δa, N_δr likewise with I_zz, Y_β = q̄S C_Yβ/m. σ scales by the same factor.
+pub fn dimensional(
+    est: &BTreeMap<String, Estimate>,
+    airframe: &Airframe,
+    cond: &ReferenceCondition,
+) -> BTreeMap<String, Estimate> {
+    let qs = cond.qbar_pa() * airframe.wing.area_m2.unwrap_or(f64::NAN);
+    let v = cond.airspeed_m_s;
+    let c = airframe.wing.mac_m.unwrap_or(f64::NAN);
+    let b = airframe.wing.span_m.unwrap_or(f64::NAN);
+    let i = airframe.inertia_kg_m2;
+    let m = airframe.mass_kg.unwrap_or(f64::NAN);
+    let table: [(&str, &str, f64); 16] = [
+        ("M_alpha", "Cm_alpha", qs * c / i.iyy),
+        ("M_q", "Cm_q", qs * c * c / (2.0 * v * i.iyy)),
+        ("M_alphadot", "Cm_alphadot", qs * c * c / (2.0 * v * i.iyy)),
+        ("M_de", "Cm_de", qs * c / i.iyy),
+        ("Z_alpha", "CL_alpha", -qs / (m * v)),
+        ("Z_de", "CL_de", -qs / (m * v)),
+        ("X_u", "CD_V", -qs / (m * v)),
+        ("Y_beta", "CY_beta", qs / m),
+        ("L_beta", "Cl_beta", qs * b / i.ixx),
+        ("L_p", "Cl_p", qs * b * b / (2.0 * v * i.ixx)),
+        ("L_da", "Cl_da", qs * b / i.ixx),
+        ("L_dr", "Cl_dr", qs * b / i.ixx),
+        ("N_beta", "Cn_beta", qs * b / i.izz),
+        ("N_r", "Cn_r", qs * b * b / (2.0 * v * i.izz)),
+        ("N_da", "Cn_da", qs * b / i.izz),
+        ("N_dr", "Cn_dr", qs * b / i.izz),
+    ];
+    table
+        .iter()
+        .filter(|(_, _, k)| k.is_finite() && *k != 0.0)
+        .filter_map(|(name, nondim, k)| {
+            est.get(*nondim).map(|e| {
+                (
+                    name.to_string(),
+                    Estimate {
+                        value: e.value * k,
+                        std_error: e.std_error * k.abs(),
+                    },
+                )
+            })
+        })
+        .collect()
+}
+
+/// A mode with the standard errors of its numbers (first-order propagation of the parameter covariance
+/// through the model's eigenvalues, Jategaonkar §4.17).
+#[derive(Debug, Clone, Serialize)]
+pub struct ModeEstimate {
+    /// The mode and its numbers.
+    #[serde(flatten)]
+    pub mode: super::flight_models::NamedMode,
+    /// σ of ωn (oscillatory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub omega_n_std: Option<f64>,
+    /// σ of ζ (oscillatory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub zeta_std: Option<f64>,
+    /// σ of the pole (real).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pole_std: Option<f64>,
+}
+
+/// Modes of `modes_of(θ)` with σ from the covariance `cov` of the entries `free` of θ (delta method with
+/// central differences, steps of 1e-3 σ; modes matched by name and order).
+pub fn modes_with_uncertainty(
+    theta: &[f64],
+    free: &[usize],
+    cov: &[Vec<f64>],
+    modes_of: impl Fn(&[f64]) -> Vec<super::flight_models::NamedMode>,
+) -> Vec<ModeEstimate> {
+    let base = modes_of(theta);
+    let numbers = |m: &super::flight_models::NamedMode| {
+        [
+            m.omega_n_rad_s.unwrap_or(f64::NAN),
+            m.zeta.unwrap_or(f64::NAN),
+            m.pole_1_s.unwrap_or(f64::NAN),
+        ]
+    };
+    // Jacobian rows: d(mode number)/dθ_j for each free j.
+    let mut grads: Vec<Vec<[f64; 3]>> = vec![Vec::new(); base.len()];
+    for (j, &k) in free.iter().enumerate() {
+        let h = (1e-3 * cov[j][j].max(0.0).sqrt()).max(1e-9 * theta[k].abs().max(1e-6));
+        let (mut up, mut dn) = (theta.to_vec(), theta.to_vec());
+        up[k] += h;
+        dn[k] -= h;
+        let (mu, md) = (modes_of(&up), modes_of(&dn));
+        for (i, m) in base.iter().enumerate() {
+            let same = |v: &Vec<super::flight_models::NamedMode>| {
+                v.iter()
+                    .filter(|x| x.mode == m.mode)
+                    .nth(base[..i].iter().filter(|x| x.mode == m.mode).count())
+                    .map(numbers)
+            };
+            let g = match (same(&mu), same(&md)) {
+                (Some(a), Some(b)) => [0, 1, 2].map(|q| (a[q] - b[q]) / (2.0 * h)),
+                _ => [f64::NAN; 3],
+            };
+            grads[i].push(g);
+        }
+    }
+    base.into_iter()
+        .zip(grads)
+        .map(|(mode, g)| {
+            let sd = |q: usize| {
+                let mut var = 0.0;
+                for a in 0..g.len() {
+                    for b in 0..g.len() {
+                        var += g[a][q] * cov[a][b] * g[b][q];
+                    }
+                }
+                var.max(0.0).sqrt()
+            };
+            ModeEstimate {
+                omega_n_std: mode.omega_n_rad_s.map(|_| sd(0)),
+                zeta_std: mode.zeta.map(|_| sd(1)),
+                pole_std: mode.pole_1_s.map(|_| sd(2)),
+                mode,
+            }
+        })
+        .collect()
+}
+
+/// What `derivatives --data … --airframe …` reports, whatever the method.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeasuredReport {
+    /// `equation_error`, `output_error` or `filter_error`.
+    pub method: &'static str,
+    /// The axis estimated.
+    pub axis: AxisChoice,
+    /// Nondimensional estimates by name (flightid names: `Cm_alpha`, `Cl_p`, …; zero terms `Cm_0`, …).
+    pub derivatives: BTreeMap<String, Estimate>,
+    /// Dimensional derivatives at the reference condition ([`dimensional`]).
+    pub dimensional: BTreeMap<String, Estimate>,
+    /// Modes with σ.
+    pub modes: Vec<ModeEstimate>,
+    /// The mean flight condition.
+    pub reference: ReferenceCondition,
+    /// Air data per record: (record, density and its source).
+    pub air_data: Vec<(String, AirData)>,
+    /// Fit per output, % (output and filter error).
+    pub fit_percent: BTreeMap<String, f64>,
+    /// Whether every fit converged (output and filter error; absent for equation error).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub converged: Option<bool>,
+    /// What the reader should know (skipped equations, fixed terms, convergence).
+    pub notes: Vec<String>,
+}
+
+impl MeasuredReport {
+    /// The JSON document: `{"derivatives": {"Cm_alpha": {"value", "std_error"}}, "modes": […], …}`.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::to_value(self).unwrap_or(serde_json::Value::Null)
+    }
+
+    /// The text tables.
+    pub fn to_text(&self) -> String {
+        let mut out = format!(
+            "{} ({:?} axis) at V = {:.1} m/s, ρ = {:.4} kg/m³, q̄ = {:.0} Pa\n\n",
+            self.method.replace('_', " "),
+            self.axis,
+            self.reference.airspeed_m_s,
+            self.reference.density_kg_m3,
+            self.reference.qbar_pa()
+        );
+        out += &format!(
+            "{:<14} {:>12} {:>12} {:>8}\n",
+            "derivative", "value", "std error", "σ/|v| %"
+        );
+        for (k, e) in &self.derivatives {
+            out += &format!(
+                "{:<14} {:>12.5} {:>12.5} {:>8.1}\n",
+                k,
+                e.value,
+                e.std_error,
+                100.0 * e.std_error / e.value.abs().max(1e-12)
+            );
+        }
+        if !self.dimensional.is_empty() {
+            out += &format!(
+                "\n{:<14} {:>12} {:>12}\n",
+                "dimensional", "value", "std error"
+            );
+            for (k, e) in &self.dimensional {
+                out += &format!("{:<14} {:>12.5} {:>12.5}\n", k, e.value, e.std_error);
+            }
+        }
+        if !self.modes.is_empty() {
+            out += "\nmodes\n";
+            for m in &self.modes {
+                match (m.mode.omega_n_rad_s, m.mode.zeta, m.mode.pole_1_s) {
+                    (Some(w), Some(z), _) => {
+                        out += &format!(
+                            "{:<14} ωn {:.4} ± {:.4} rad/s, ζ {:.4} ± {:.4}\n",
+                            m.mode.mode,
+                            w,
+                            m.omega_n_std.unwrap_or(f64::NAN),
+                            z,
+                            m.zeta_std.unwrap_or(f64::NAN)
+                        )
+                    }
+                    (_, _, Some(p)) => {
+                        out += &format!(
+                            "{:<14} pole {:.4} ± {:.4} 1/s\n",
+                            m.mode.mode,
+                            p,
+                            m.pole_std.unwrap_or(f64::NAN)
+                        )
+                    }
+                    _ => {}
+                }
+            }
+        }
+        if !self.fit_percent.is_empty() {
+            out += "\nfit %: ";
+            out += &self
+                .fit_percent
+                .iter()
+                .map(|(k, v)| format!("{k} {v:.1}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            out += "\n";
+        }
+        for n in &self.notes {
+            out += &format!("- {n}\n");
+        }
+        out
+    }
+}
+
+/// The model constants of an airframe for an axis (missing keys named).
+pub fn model_constants(
+    airframe: &Airframe,
+    longitudinal: bool,
+    v_ref_m_s: f64,
+) -> Result<super::flight_models::Constants, AirframeError> {
+    let purpose = if longitudinal {
+        "the longitudinal model"
+    } else {
+        "the lateral-directional model"
+    };
+    let mut mass = airframe.mass_properties(longitudinal, purpose)?;
+    if longitudinal {
+        // I_xx, I_zz do not enter the longitudinal equations.
+        mass.ixx_kg_m2 = mass.iyy_kg_m2;
+        mass.izz_kg_m2 = mass.iyy_kg_m2;
+    } else if mass.iyy_kg_m2 <= 0.0 {
+        // I_yy only enters the (I_yy − I_zz) q r coupling: taken as I_zz (coupling dropped) when unknown.
+        mass.iyy_kg_m2 = mass.izz_kg_m2;
+    }
+    let thrust = airframe.thrust.unwrap_or_default();
+    Ok(super::flight_models::Constants {
+        mass,
+        geometry: airframe.geometry(longitudinal, purpose)?,
+        thrust_inclination_rad: thrust.inclination_rad,
+        thrust_moment_arm_m: thrust.moment_arm_m,
+        sensors: airframe.sensors,
+        v_ref_m_s,
+        g_m_s2: G0_M_S2,
+    })
+}
+
+/// Longitudinal modes of θ at the reference condition: the full model's Jacobian, or (`short_period_only`:
+/// no drag terms estimated) the short period of its α–q block.
+pub fn longitudinal_modes_at(
+    c: &super::flight_models::Constants,
+    cond: &ReferenceCondition,
+    theta: &[f64],
+    short_period_only: bool,
+) -> Vec<super::flight_models::NamedMode> {
+    use super::flight_models as fm;
+    let u = fm::LonInputs {
+        elevator_rad: cond.elevator_rad,
+        thrust_n: cond.thrust_n,
+        density_kg_m3: cond.density_kg_m3,
+    };
+    let f = |x: &[f64; 4]| fm::longitudinal(c, theta, x, &u).dx;
+    let x0 = [cond.airspeed_m_s, cond.alpha_rad, cond.theta_rad, 0.0];
+    if short_period_only {
+        // α–q block: x = (α, q) with V and θ frozen.
+        let g = |y: &[f64; 4]| {
+            let d = f(&[x0[0], y[0], x0[2], y[1]]);
+            [d[1], d[3], -y[2], -y[3]]
+        };
+        let ev = fm::jacobian_eigenvalues(g, [x0[1], 0.0, 0.0, 0.0]).unwrap_or_default();
+        let sp: Vec<(f64, f64)> = ev
+            .into_iter()
+            .filter(|e| e.0 > -0.999 || e.1 != 0.0)
+            .collect();
+        return fm::longitudinal_modes(&sp)
+            .into_iter()
+            .filter(|m| m.mode.starts_with("short_period"))
+            .collect();
+    }
+    fm::longitudinal_modes(&fm::jacobian_eigenvalues(f, x0).unwrap_or_default())
+}
+
+/// Lateral-directional modes of θ at the reference condition (wings level, β = p = r = 0).
+pub fn lateral_modes_at(
+    c: &super::flight_models::Constants,
+    cond: &ReferenceCondition,
+    theta: &[f64],
+) -> Vec<super::flight_models::NamedMode> {
+    use super::flight_models as fm;
+    let u = fm::LatInputs {
+        aileron_rad: 0.0,
+        rudder_rad: 0.0,
+        airspeed_m_s: cond.airspeed_m_s,
+        alpha_rad: cond.alpha_rad,
+        theta_rad: cond.theta_rad,
+        q_rad_s: 0.0,
+        density_kg_m3: cond.density_kg_m3,
+    };
+    let f = |x: &[f64; 4]| fm::lateral(c, theta, x, &u).dx;
+    fm::lateral_modes(&fm::jacobian_eigenvalues(f, [0.0; 4]).unwrap_or_default())
+}
+
+/// θ of a built-in model from named estimates (absent names 0), and the indices present.
+pub fn theta_from(names: &[&str], est: &BTreeMap<String, Estimate>) -> (Vec<f64>, Vec<usize>) {
+    let theta = names
+        .iter()
+        .map(|n| est.get(*n).map_or(0.0, |e| e.value))
+        .collect();
+    let free = (0..names.len())
+        .filter(|&k| est.contains_key(names[k]))
+        .collect();
+    (theta, free)
+}
+
+/// The equation-error report: estimates, dimensional derivatives, modes (σ from the diagonal of the
+/// estimates' covariance: the equations are separate regressions), for records named by `records`.
+pub fn equation_error_report(
+    records: &[(String, data::FlightRecord)],
+    airframe: &Airframe,
+    axis: AxisChoice,
+    include_alphadot: bool,
+) -> Result<MeasuredReport, MeasuredError> {
+    use super::flight_models as fm;
+    let ee = equation_error_measured(records, airframe, axis, include_alphadot)?;
+    let moved: Vec<data::FlightRecord> = records
+        .iter()
+        .map(|(_, r)| moved_to_cg(r, &airframe.sensors))
+        .collect::<Result<_, _>>()?;
+    let cond = reference_condition(&moved, &ee.air);
+    let mut modes = Vec::new();
+    let diag = |theta_names: &[&str], free: &[usize]| -> Vec<Vec<f64>> {
+        free.iter()
+            .enumerate()
+            .map(|(a, &k)| {
+                let s = ee.derivatives[theta_names[k]].std_error;
+                (0..free.len())
+                    .map(|b| if a == b { s * s } else { 0.0 })
+                    .collect()
+            })
+            .collect()
+    };
+    if axis.longitudinal() && ee.derivatives.contains_key("Cm_alpha") {
+        let c = model_constants(airframe, true, cond.airspeed_m_s)?;
+        let (theta, free) = theta_from(&fm::LONGITUDINAL_PARAMETERS, &ee.derivatives);
+        let cov = diag(&fm::LONGITUDINAL_PARAMETERS, &free);
+        modes.extend(modes_with_uncertainty(&theta, &free, &cov, |t| {
+            longitudinal_modes_at(&c, &cond, t, true)
+        }));
+    }
+    if axis.lateral() && ee.derivatives.contains_key("Cl_p") && ee.derivatives.contains_key("Cn_r")
+    {
+        let c = model_constants(airframe, false, cond.airspeed_m_s)?;
+        let (theta, free) = theta_from(&fm::LATERAL_PARAMETERS, &ee.derivatives);
+        let cov = diag(&fm::LATERAL_PARAMETERS, &free);
+        modes.extend(modes_with_uncertainty(&theta, &free, &cov, |t| {
+            lateral_modes_at(&c, &cond, t)
+        }));
+    }
+    let mut notes: Vec<String> = ee
+        .skipped
+        .iter()
+        .map(|(c, why)| format!("{c} not estimated: {why}"))
+        .collect();
+    for (rec, col, v) in &ee.skews {
+        notes.push(format!(
+            "{rec}: {col} read {:.0} ms late (flight-path reconstruction); shifted back before the regression",
+            1000.0 * v
+        ));
+    }
+    notes.push(
+        "equation error: standard errors corrected for coloured residuals (Morelli & Klein eq. 5.73); \
+         the phugoid needs the drag equation, which only output error estimates"
+            .into(),
+    );
+    Ok(MeasuredReport {
+        method: "equation_error",
+        axis,
+        dimensional: dimensional(&ee.derivatives, airframe, &cond),
+        derivatives: ee.derivatives,
+        modes,
+        reference: cond,
+        air_data: records
+            .iter()
+            .map(|(n, _)| n.clone())
+            .zip(ee.air.iter().cloned())
+            .collect(),
+        fit_percent: BTreeMap::new(),
+        converged: None,
+        notes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn isa_density_matches_the_standard_table() {
+        // ICAO standard atmosphere: 1.2250 at 0 m, 1.0066 at 2000 m, 0.7364 at 5000 m (4 digits).
+        for (h, rho) in [(0.0, 1.2250), (2000.0, 1.0066), (5000.0, 0.7364)] {
+            assert!((standard_density_kg_m3(h) - rho).abs() < 6e-4, "{h}");
+        }
+    }
+
+    #[test]
+    fn sensors_ahead_of_the_cg_are_moved_back_exactly_for_steady_rates() {
+        // Steady pull-up q = 0.1 rad/s at 50 m/s; vane 3 m ahead reads α − q x/V; IMU 1 m ahead and 0.5 m
+        // below reads a_z − q² z (no q̇), a_x − q² x.
+        let n = 50;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.02).collect();
+        let mut rec = data::FlightRecord::new(t);
+        let (q, v, x, z) = (0.1, 50.0, 1.0, 0.5);
+        rec.push_column("q_rad_s", vec![q; n]);
+        rec.push_column("airspeed_m_s", vec![v; n]);
+        rec.push_column("alpha_rad", vec![0.05 - q * 3.0 / v; n]);
+        rec.push_column("ax_m_s2", vec![1.0 - q * q * x; n]);
+        rec.push_column("az_m_s2", vec![-9.0 - q * q * z; n]);
+        let sensors = SensorPositions {
+            imu_m: [x, 0.0, z],
+            alpha_vane_m: [3.0, 0.0, 0.0],
+            beta_vane_m: [0.0; 3],
+        };
+        let cg = moved_to_cg(&rec, &sensors).unwrap();
+        let at = |c: &str| cg.column(c).unwrap()[25];
+        assert!((at("alpha_rad") - 0.05).abs() < 1e-12);
+        assert!((at("ax_m_s2") - 1.0).abs() < 1e-9);
+        assert!((at("az_m_s2") + 9.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_still_surface_with_noise_does_not_count_as_excitation() {
+        let quiet: Vec<f64> = (0..500)
+            .map(|i| 0.02 + 1e-4 * ((i * 7919) % 13) as f64)
+            .collect();
+        assert!(!surface_moves(&quiet));
+        let doublet: Vec<f64> = (0..500)
+            .map(|i| {
+                if (100..150).contains(&i) {
+                    0.02 + 0.03
+                } else {
+                    0.02
+                }
+            })
+            .collect();
+        assert!(surface_moves(&doublet));
+    }
+}

@@ -1,0 +1,212 @@
+//! The filter error method: a steady-state Kalman filter in the loop, the process noise estimated
+//! with the parameters (Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., ch. 5;
+//! Maine & Iliff, *Formulation and implementation of a practical algorithm for parameter
+//! estimation with process and measurement noise*, SIAM J. Appl. Math. 41(3), 1981).
+//!
+//! Model: `ẋ = f(x, u, θ) + F w`, `z = h(x, u, θ) + b_y + v`, `w` unit white noise, `F` diagonal.
+//! Per record, with the innovation covariance `R` held fixed during a parameter update:
+//!
+//! - gain: `A = ∂f/∂x`, `C = ∂h/∂x` at the record's initial state and first input (central
+//!   differences; exact for a linear model), `P` the stabilising solution of
+//!   `A P + P Aᵀ − P Cᵀ (Δt R)⁻¹ C P + F Fᵀ = 0` ([`super::riccati`]), `K = P Cᵀ R⁻¹`
+//!   (Jategaonkar §5.3, the steady-state filter of a time-invariant or linearised system);
+//! - filter: prediction `ỹ_k = h(x̃_k, u_k) + b_y`, innovation `v_k = z_k − ỹ_k`, correction
+//!   `x̂_k = x̃_k + K v_k`, then `x̃_{k+1}` by integrating `f` from `x̂_k` over the sample
+//!   interval with the nonlinear model (the "mixed" formulation for nonlinear systems: nonlinear
+//!   state propagation, gain from the linearisation, recomputed at every evaluation, so every
+//!   perturbed parameter vector gets its own gain — the finite-difference response gradients
+//!   include the gain's dependence on θ and F, §5.4).
+//!
+//! The cost is the output-error cost with innovations in place of output errors, so the
+//! optimiser, R relaxation and Cramér–Rao bounds are those of [`super::fit`]. Two additions:
+//!
+//! - **F–R compensation** (Maine & Iliff; Jategaonkar §5.5): after each R update, every `F_ii` is
+//!   rescaled by `√(Σ_k C_ki² / R_kk,old ÷ Σ_k C_ki² / R_kk,new)`, which keeps the gain — and
+//!   with it the progress of the parameter update — when R changes (scaling R and F F ᵀ by the
+//!   same factor leaves `K` unchanged).
+//! - **constraint**: `R = C P Cᵀ + G Gᵀ` needs `G Gᵀ ≥ 0`, i.e. the diagonal of `K C` at most 1
+//!   (Jategaonkar §5.5). A trial step that breaks it is rejected like a diverging one (the
+//!   damping grows), instead of Jategaonkar's linearised constraint in the update.
+//!
+//! The process noise is estimated as the variances `q_i = F_ii² ≥ 0` (reported as the nuisance
+//! kind `process_noise`; `F_ii = √q_i`): the cost is even in `F`, so at `F = 0` its gradient
+//! vanishes, whereas in `q` it does not and the bound `q ≥ 0` is an ordinary box constraint. A
+//! record without process noise keeps `q` on its bound, `K = 0`, and the filter is the output-error
+//! simulation: FEM gives the output-error answer.
+
+use faer::Mat;
+
+use super::integrate::{Stages, DIVERGED};
+use super::model::{SimError, StateModel};
+use super::record::Run;
+use super::riccati::care_filter;
+
+/// The steady-state gain of one record.
+#[derive(Clone, Debug)]
+pub(crate) struct Gain {
+    /// `K`, `[state][output]`.
+    pub k: Vec<Vec<f64>>,
+}
+
+/// `A = ∂f/∂x` (n×n) and `C = ∂h/∂x` (m×n) at `(x, u)` by central differences.
+pub(crate) fn linearise(
+    model: &dyn StateModel,
+    theta: &[f64],
+    x: &[f64],
+    u: &[f64],
+) -> (Mat<f64>, Mat<f64>) {
+    let sig = model.signature();
+    let (n, m) = (sig.states.len(), sig.outputs.len());
+    let mut a = Mat::<f64>::zeros(n, n);
+    let mut c = Mat::<f64>::zeros(m, n);
+    let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+    let (mut hp, mut hm) = (vec![0.0; m], vec![0.0; m]);
+    let mut xp = x.to_vec();
+    for j in 0..n {
+        let h = 1e-6 * x[j].abs().max(1e-3);
+        xp[j] = x[j] + h;
+        model.derivatives(theta, &xp, u, &mut fp);
+        model.outputs(theta, &xp, u, &mut hp);
+        xp[j] = x[j] - h;
+        model.derivatives(theta, &xp, u, &mut fm);
+        model.outputs(theta, &xp, u, &mut hm);
+        xp[j] = x[j];
+        for i in 0..n {
+            a[(i, j)] = (fp[i] - fm[i]) / (2.0 * h);
+        }
+        for i in 0..m {
+            c[(i, j)] = (hp[i] - hm[i]) / (2.0 * h);
+        }
+    }
+    (a, c)
+}
+
+/// The steady-state gain for process-noise variances `q` (per state), innovation variances `r`
+/// (per output) and sample interval `dt_s` (module doc). `Err` when no stabilising solution
+/// exists or the constraint `diag(K C) ≤ 1` fails.
+pub(crate) fn gain(
+    a: &Mat<f64>,
+    c: &Mat<f64>,
+    q: &[f64],
+    r: &[f64],
+    dt_s: f64,
+) -> Result<Gain, SimError> {
+    let (n, m) = (a.nrows(), c.nrows());
+    if q.iter().all(|v| *v == 0.0) {
+        return Ok(Gain {
+            k: vec![vec![0.0; m]; n],
+        });
+    }
+    let qm = Mat::<f64>::from_fn(n, n, |i, j| if i == j { q[i] } else { 0.0 });
+    let r_c = Mat::<f64>::from_fn(m, m, |i, j| if i == j { dt_s * r[i] } else { 0.0 });
+    let p = care_filter(a, c, &qm, &r_c).ok_or_else(|| {
+        SimError::Failed("the filter's Riccati equation has no stabilising solution".into())
+    })?;
+    let pct = &p * c.transpose();
+    let k: Vec<Vec<f64>> = (0..n)
+        .map(|i| (0..m).map(|o| pct[(i, o)] / r[o]).collect())
+        .collect();
+    for i in 0..n {
+        let kc: f64 = (0..m).map(|o| k[i][o] * c[(o, i)]).sum();
+        if !kc.is_finite() || kc > 1.0 {
+            return Err(SimError::Failed(format!(
+                "the filter gain breaks the constraint diag(KC) ≤ 1 (state {i}: {kc:.3})"
+            )));
+        }
+    }
+    Ok(Gain { k })
+}
+
+/// Rescales the process-noise variances after R moved from `r_old` to `r_new` (module doc:
+/// F–R compensation), with `c` the output matrix.
+pub(crate) fn compensate(q: &mut [f64], c: &Mat<f64>, r_old: &[f64], r_new: &[f64]) {
+    for (i, qi) in q.iter_mut().enumerate() {
+        let old: f64 = (0..c.nrows()).map(|o| c[(o, i)].powi(2) / r_old[o]).sum();
+        let new: f64 = (0..c.nrows()).map(|o| c[(o, i)].powi(2) / r_new[o]).sum();
+        if old > 0.0 && new > 0.0 && (old / new).is_finite() {
+            *qi *= old / new;
+        }
+    }
+}
+
+/// The sample interval of a uniform grid (to 1e-6 relative), `None` otherwise.
+fn uniform_step(time: &[f64]) -> Option<f64> {
+    let n = time.len();
+    let h = (time[n - 1] - time[0]) / (n - 1).max(1) as f64;
+    time.windows(2)
+        .all(|w| ((w[1] - w[0]) - h).abs() <= 1e-6 * h)
+        .then_some(h)
+}
+
+/// One-step-ahead predicted outputs `ỹ_k` (output biases included), `[output][k]`, of the
+/// steady-state filter with gain `gain` on measured outputs `z` (module doc).
+pub(crate) fn filter(
+    model: &dyn StateModel,
+    theta: &[f64],
+    x0: &[f64],
+    run: &Run<'_>,
+    output_bias: &[f64],
+    z: &[Vec<f64>],
+    gain: &Gain,
+) -> Result<Vec<Vec<f64>>, SimError> {
+    let sig = model.signature();
+    let (nx, nu, ny) = (sig.states.len(), sig.inputs.len(), sig.outputs.len());
+    let time = run.time_s;
+    let n = time.len();
+    let mut out = vec![vec![0.0; n]; ny];
+    let mut x = x0.to_vec();
+    let mut u = vec![0.0; nu];
+    let mut y = vec![0.0; ny];
+    let mut v = vec![0.0; ny];
+    let mut stage = Stages::new(nx, nu);
+    // a linear model on a uniform, unskewed record steps exactly (as its simulation does)
+    let exact = uniform_step(time).and_then(|h| {
+        let samples = run.input.aligned_samples()?;
+        Some((model.discrete(theta, h, run.input.hold())?, samples))
+    });
+    let mut next = vec![0.0; nx];
+    for k in 0..n {
+        if k > 0 {
+            match &exact {
+                Some((d, us)) => {
+                    for (i, ni) in next.iter_mut().enumerate() {
+                        let mut acc = 0.0;
+                        for (l, xl) in x.iter().enumerate() {
+                            acc += d.phi[i * nx + l] * xl;
+                        }
+                        for (j, uj) in us.iter().enumerate() {
+                            acc += d.gamma1[i * nu + j] * uj[k - 1]
+                                + d.gamma2[i * nu + j] * (uj[k] - uj[k - 1]);
+                        }
+                        *ni = acc;
+                    }
+                    x.copy_from_slice(&next);
+                }
+                None => stage.advance(model, theta, &mut x, run, time[k - 1], time[k], &mut u),
+            }
+            if let Some(i) = x.iter().position(|v| !v.is_finite() || v.abs() > DIVERGED) {
+                return Err(SimError::Diverged {
+                    time_s: time[k] - time[0],
+                    what: format!("state {}", sig.states[i]),
+                });
+            }
+        }
+        run.input.at(time[k], &mut u);
+        model.outputs(theta, &x, &u, &mut y);
+        for o in 0..ny {
+            let yo = y[o] + output_bias[o];
+            if !yo.is_finite() || yo.abs() > DIVERGED {
+                return Err(SimError::Diverged {
+                    time_s: time[k] - time[0],
+                    what: format!("output {}", sig.outputs[o]),
+                });
+            }
+            out[o][k] = yo;
+            v[o] = z[o][k] - yo;
+        }
+        for (xi, ki) in x.iter_mut().zip(&gain.k) {
+            *xi += ki.iter().zip(&v).map(|(a, b)| a * b).sum::<f64>();
+        }
+    }
+    Ok(out)
+}

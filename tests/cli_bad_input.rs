@@ -1,0 +1,298 @@
+//! Bad input and faults through the real binary: each class exits 2 (bad input) or 1 (failure) with a message
+//! that says what and what is allowed, no user file is ever lost, and no JSBSim scratch directory is left after
+//! SIGINT, SIGTERM or a killed bridge. Every child runs with its own TMPDIR, so leftovers are counted exactly.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn flightid(tmp: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_flightid"));
+    c.env("TMPDIR", tmp).current_dir(tmp);
+    c
+}
+
+fn run(tmp: &Path, args: &[&str]) -> Output {
+    flightid(tmp).args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// Asserts exit 2 and that stderr holds every `needle`, once for the first.
+fn assert_bad_input(o: &Output, needles: &[&str]) {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    for n in needles {
+        assert!(e.contains(n), "'{n}' not in: {e}");
+    }
+    assert_eq!(e.matches(needles[0]).count(), 1, "reason printed once: {e}");
+}
+
+fn scratch_dirs(tmp: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(tmp)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("flightid-jsbsim-"))
+        })
+        .collect()
+}
+
+#[test]
+fn a_report_never_replaces_a_directory_flightid_did_not_make() {
+    let tmp = tempfile::tempdir().unwrap();
+    let victim = tmp.path().join("victim");
+    std::fs::create_dir_all(victim.join("sub")).unwrap();
+    std::fs::write(victim.join("important.txt"), "keep").unwrap();
+    std::fs::write(victim.join("report.json"), "{}").unwrap(); // looks like a report, is not flightid's
+    let t0 = Instant::now();
+    for args in [
+        vec!["demo", "--report", "victim"],
+        vec!["compare", "--report", "victim"],
+        vec!["paper", "--report", "victim"],
+        vec!["derivatives", "--report", "victim"],
+        vec!["campaign", "report", "nowhere", "--report", "victim"],
+    ] {
+        let o = run(tmp.path(), &args);
+        assert_bad_input(&o, &["refusing to write victim", "not made by flightid"]);
+    }
+    // refused before any work: five commands, no JSBSim started
+    assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
+    assert!(victim.join("important.txt").exists() && victim.join("sub").is_dir());
+    // `.` is refused up front, once
+    let o = run(tmp.path(), &["demo", "--report", "."]);
+    assert_bad_input(&o, &["refusing to write .", "no directory of its own"]);
+    assert!(victim.join("important.txt").exists());
+}
+
+#[test]
+fn out_of_range_numbers_exit_2_naming_the_allowed_range() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = tmp.path().join("x.csv");
+    std::fs::write(&csv, "time_s,q_rad_s\n0,0\n0.01,0\n0.02,0\n").unwrap();
+    for (args, needles) in [
+        (
+            vec!["fly", "--duration-s", "1e9", "--out", "o.csv"],
+            vec!["--duration-s", "[0.01, 36000] s"],
+        ),
+        (
+            vec![
+                "fly",
+                "--start-s",
+                "1e308",
+                "--duration-s",
+                "inf",
+                "--out",
+                "o.csv",
+            ],
+            vec!["--start-s", "[0, 36000] s"],
+        ),
+        (
+            vec!["fly", "--pulse-s", "0", "--out", "o.csv"],
+            vec!["--pulse-s", "[0.005, 600] s"],
+        ),
+        (
+            vec![
+                "fly",
+                "--pulse-s",
+                "0.01",
+                "--rate-hz",
+                "60",
+                "--out",
+                "o.csv",
+            ],
+            vec!["shorter than two samples"],
+        ),
+        (
+            vec![
+                "fly",
+                "--duration-s",
+                "30000",
+                "--rate-hz",
+                "2000",
+                "--out",
+                "o.csv",
+            ],
+            vec!["exceed the limit of 1000000"],
+        ),
+        (
+            vec!["segments", "x.csv", "--resample-hz", "1e9"],
+            vec!["--resample-hz", "[0.1, 2000] Hz"],
+        ),
+        (
+            vec![
+                "identify",
+                "--data",
+                "x.csv",
+                "--input",
+                "elevator",
+                "--output",
+                "q_rad_s",
+                "--resample-hz",
+                "1e9",
+            ],
+            vec!["--resample-hz"],
+        ),
+        (
+            vec!["check", "x.csv", "--from-s", "30", "--to-s", "10"],
+            vec!["--from-s (30) must be below --to-s (10)"],
+        ),
+        (vec!["trim", "--speed-kts", "nan"], vec!["--speed-kts"]),
+    ] {
+        let o = run(tmp.path(), &args);
+        assert_bad_input(&o, &needles);
+    }
+    assert!(!tmp.path().join("o.csv").exists());
+}
+
+#[test]
+fn out_of_range_numbers_in_files_exit_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    let c172x =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("aircraft/c172x.toml"))
+            .unwrap();
+    // the elevator's limits swapped
+    let swapped = c172x.replacen("min_rad = -", "min_rad = 9", 1);
+    assert_ne!(swapped, c172x);
+    std::fs::write(tmp.path().join("swapped.toml"), swapped).unwrap();
+    let o = run(tmp.path(), &["trim", "--aircraft", "swapped.toml"]);
+    assert_bad_input(&o, &["swapped.toml", "min_rad"]);
+    let campaign = r#"
+name = "huge"
+rate_hz = 60.0
+duration_s = 1e9
+methods = ["ls"]
+[[configurations]]
+name = "c"
+aircraft = "c172x"
+conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
+[[maneuvers]]
+surface = "elevator"
+shape = "doublet"
+amplitudes_deg = [1.0]
+"#;
+    std::fs::write(tmp.path().join("huge.toml"), campaign).unwrap();
+    let o = run(
+        tmp.path(),
+        &["campaign", "run", "huge.toml", "--out", "camp"],
+    );
+    assert_bad_input(&o, &["duration_s", "36000"]);
+}
+
+#[test]
+fn control_characters_in_user_data_are_escaped_in_messages() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(
+        tmp.path().join("esc.csv"),
+        "time_s,\u{1b}[31mred\u{1b}[0m,\u{1b}[31mred\u{1b}[0m\n0,1,2\n",
+    )
+    .unwrap();
+    let o = run(tmp.path(), &["check", "esc.csv"]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        !e.contains('\u{1b}'),
+        "raw escape reached the terminal: {e:?}"
+    );
+    assert!(e.contains("\\u{1b}[31mred"), "{e}");
+}
+
+/// Starts a long `fly` (about a minute of JSBSim work) and waits until its bridge works in its scratch directory.
+fn long_fly(tmp: &Path) -> Child {
+    let child = flightid(tmp)
+        .args([
+            "fly",
+            "--duration-s",
+            "20000",
+            "--rate-hz",
+            "40",
+            "--sim-rate-hz",
+            "40",
+            "--out",
+            "long.csv",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while scratch_dirs(tmp).is_empty() || bridge_of(child.id()).is_none() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the bridge never started"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(1500)); // into `load`/`trim`/`fly`
+    child
+}
+
+/// The pid of a child process of `pid` (the bridge), from /proc.
+fn bridge_of(pid: u32) -> Option<u32> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children")).ok()?;
+    text.split_whitespace().next()?.parse().ok()
+}
+
+fn signal(pid: u32, sig: &str) {
+    let ok = Command::new("kill")
+        .args([sig, &pid.to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+}
+
+#[test]
+fn no_scratch_directory_is_left_after_sigint_sigterm_or_a_killed_bridge() {
+    for (sig, code) in [("-INT", 130), ("-TERM", 143)] {
+        let tmp = tempfile::tempdir().unwrap();
+        let mut child = long_fly(tmp.path());
+        let bridge = bridge_of(child.id()).unwrap();
+        signal(child.id(), sig);
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(code), "{sig}");
+        assert!(
+            scratch_dirs(tmp.path()).is_empty(),
+            "{sig}: {:?}",
+            scratch_dirs(tmp.path())
+        );
+        assert!(
+            !Path::new(&format!("/proc/{bridge}/cmdline")).exists() || {
+                std::thread::sleep(Duration::from_millis(200));
+                !Path::new(&format!("/proc/{bridge}/cmdline")).exists()
+            },
+            "{sig}: the bridge outlived flightid"
+        );
+        assert!(!tmp.path().join("long.csv").exists());
+    }
+    // the bridge killed under flightid: a crash (exit 1) named as such, and the directory removed
+    let tmp = tempfile::tempdir().unwrap();
+    let child = long_fly(tmp.path());
+    signal(bridge_of(child.id()).unwrap(), "-KILL");
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("bridge process died"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(scratch_dirs(tmp.path()).is_empty());
+    // flightid itself killed: its directory stays, and the next start removes it (its pid is gone)
+    let mut child = long_fly(tmp.path());
+    signal(child.id(), "-KILL");
+    child.wait().unwrap();
+    assert_eq!(scratch_dirs(tmp.path()).len(), 1);
+    let o = run(
+        tmp.path(),
+        &["fly", "--duration-s", "2", "--out", "short.csv"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        scratch_dirs(tmp.path()).is_empty(),
+        "{:?}",
+        scratch_dirs(tmp.path())
+    );
+}

@@ -1,0 +1,195 @@
+//! Specification of `flightid estimate`: a short-period model written in a TOML file, fitted to
+//! two records that the test generates itself (a fine-step RK4 of the same equations with its own
+//! noise, biases and initial states), and bad model files answered with exit 2 naming file, line
+//! and name.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+
+const TRUTH: [(&str, f64); 5] = [
+    ("Z_alpha", -1.2),
+    ("Z_de", -0.15),
+    ("M_alpha", -8.0),
+    ("M_q", -2.5),
+    ("M_de", -12.0),
+];
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_flightid"))
+}
+
+fn model_file() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("models/short_period.toml")
+}
+
+/// 12 s at 25 Hz: a 3-2-1-1 elevator of 2°, RK4 at 1 ms with linear interpolation of the input,
+/// noise σ = 0.002 rad on α and 0.005 rad/s on q, output biases, nonzero initial state.
+fn write_record(path: &Path, x0: [f64; 2], bias: [f64; 2], seed: u64) {
+    let [za, zde, ma, mq, mde] = TRUTH.map(|t| t.1);
+    let de = |t: f64| {
+        let a = 2f64.to_radians();
+        let step = |t0: f64, t1: f64| if t >= t0 && t < t1 { 1.0 } else { 0.0 };
+        a * (step(1.0, 1.9) - step(1.9, 2.5) + step(2.5, 2.8) - step(2.8, 3.1))
+    };
+    let dt = 0.04;
+    let n = 300;
+    // the sampled input, linearly interpolated as the fit assumes
+    let samples: Vec<f64> = (0..n).map(|k| de(k as f64 * dt)).collect();
+    let u = |t: f64| {
+        let k = ((t / dt).floor() as usize).min(n - 2);
+        let f = t / dt - k as f64;
+        samples[k] + f * (samples[k + 1] - samples[k])
+    };
+    let f = |x: [f64; 2], t: f64| {
+        [
+            za * x[0] + x[1] + zde * u(t),
+            ma * x[0] + mq * x[1] + mde * u(t),
+        ]
+    };
+    let mut x = x0;
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let (na, nq) = (
+        Normal::new(0.0, 0.002).unwrap(),
+        Normal::new(0.0, 0.005).unwrap(),
+    );
+    let mut csv = String::from("time_s,elevator_rad,alpha_rad,q_rad_s\n");
+    let h = 0.001;
+    for (k, &sample) in samples.iter().enumerate() {
+        let t = k as f64 * dt;
+        csv += &format!(
+            "{t},{},{},{}\n",
+            sample,
+            x[0] + bias[0] + na.sample(&mut rng),
+            x[1] + bias[1] + nq.sample(&mut rng)
+        );
+        for s in 0..40 {
+            let tt = t + s as f64 * h;
+            let k1 = f(x, tt);
+            let k2 = f(
+                [x[0] + 0.5 * h * k1[0], x[1] + 0.5 * h * k1[1]],
+                tt + 0.5 * h,
+            );
+            let k3 = f(
+                [x[0] + 0.5 * h * k2[0], x[1] + 0.5 * h * k2[1]],
+                tt + 0.5 * h,
+            );
+            let k4 = f([x[0] + h * k3[0], x[1] + h * k3[1]], tt + h);
+            for i in 0..2 {
+                x[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+            }
+        }
+    }
+    std::fs::write(path, csv).unwrap();
+}
+
+#[test]
+fn two_records_give_every_parameter_within_3_sigma_of_the_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b, json) = (
+        dir.path().join("a.csv"),
+        dir.path().join("b.csv"),
+        dir.path().join("est.json"),
+    );
+    write_record(&a, [0.02, -0.05], [0.01, -0.003], 1);
+    write_record(&b, [-0.03, 0.04], [-0.02, 0.004], 2);
+    let out = common::run_ok(
+        bin()
+            .arg("estimate")
+            .arg("--model")
+            .arg(model_file())
+            .arg("--data")
+            .arg(&a)
+            .arg("--data")
+            .arg(&b)
+            .arg("--json")
+            .arg(&json),
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        table.contains("M_alpha") && table.contains("converged"),
+        "{table}"
+    );
+    let v = common::read_json(&json);
+    assert_eq!(v["converged"], true, "{v}");
+    for (name, truth) in TRUTH {
+        let p = &v["parameters"][name];
+        let (value, sigma) = (
+            p["value"].as_f64().unwrap(),
+            p["std_error"].as_f64().unwrap(),
+        );
+        // 3σ: a 0.3 % chance per parameter of a false failure for a correct estimator
+        assert!(
+            (value - truth).abs() < 3.0 * sigma,
+            "{name}: {value} ± {sigma} vs {truth}"
+        );
+        assert!(
+            sigma > 0.0 && sigma < 0.2 * truth.abs(),
+            "{name}: σ {sigma}"
+        );
+    }
+    // the q noise (σ 0.005 rad/s) is a sizeable share of the response: fit % is noise-limited
+    assert!(v["fit_percent"]["q_rad_s"].as_f64().unwrap() > 50.0);
+}
+
+/// Runs `estimate` on a model text and returns (exit code, stderr).
+fn bad_model(text: &str, csv: &Path) -> (i32, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("bad.toml");
+    std::fs::write(&model, text).unwrap();
+    let out = bin()
+        .arg("estimate")
+        .arg("--model")
+        .arg(&model)
+        .arg("--data")
+        .arg(csv)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn bad_model_files_exit_2_with_file_line_and_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("a.csv");
+    write_record(&csv, [0.0, 0.0], [0.0, 0.0], 3);
+    let good = std::fs::read_to_string(model_file()).unwrap();
+    let cases = [
+        // an unknown name in an equation (line 16 of the file holds q_rad_s's equation)
+        (
+            good.replace("M_q*q_rad_s", "M_qq*q_rad_s"),
+            "bad.toml:16",
+            "M_qq",
+        ),
+        // wrong arity
+        (
+            good.replace("Z_de*elevator_rad\"", "Z_de*sin(elevator_rad, q_rad_s)\""),
+            "bad.toml:15",
+            "sin",
+        ),
+        // a column the record does not have
+        (
+            good.replace(
+                "inputs  = [\"elevator_rad\"]",
+                "inputs  = [\"elevator_rad\", \"thrust_n\"]",
+            ),
+            "bad.toml:4",
+            "thrust_n",
+        ),
+    ];
+    for (text, at, name) in cases {
+        let (code, err) = bad_model(&text, &csv);
+        assert_eq!(code, 2, "{err}");
+        assert!(
+            err.contains(at) && err.contains(name),
+            "expected {at} and {name} in: {err}"
+        );
+    }
+}
