@@ -96,7 +96,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         return Err(not_converged());
     }
     println!(
-        "flight-path reconstruction of {} ({} samples, {}): {} iterations{}",
+        "flight-path reconstruction of {} ({} samples, {}): {} iterations",
         args.file.display(),
         rec.len(),
         if report.translational {
@@ -105,13 +105,12 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
             "attitude only"
         },
         report.iterations,
-        ""
     );
     println!(
         "significant = |value| > 3 standard errors (Cramér–Rao, corrected for coloured residuals) and \
          above the practical floor\n(gyro bias 0.05 °/s, accelerometer bias 0.02 m/s², airspeed bias 0.1 m/s, \
          angle bias 0.1°, scale factor 1 %, skew 0.01 s);\nscale factors and skews only on signals the \
-         maneuver moves (V ≥ 1 m/s, α/β ≥ 0.5° rms)"
+         maneuver moves clearly beyond their noise"
     );
     println!(
         "{:<22} {:>14} {:>14}  significant",

@@ -86,15 +86,21 @@ pub struct CheckReport {
     pub not_excited: Vec<String>,
 }
 
-/// How much an air-data signal must move (rms about its mean) before a scale factor or a time
-/// skew on it is estimated: 1 m/s for V, 0.5° for α and β. Below that the product of the factor
-/// and the signal is indistinguishable from a bias plus noise, and a "significant" scale factor
-/// on an unexcited axis is an artefact.
+/// How clearly an air-data signal must move beyond its own noise before a scale factor or a time skew on it
+/// is estimated: its variance about the mean must exceed the noise variance (from
+/// [`crate::signal::noise_std`]) by this many standard errors of a variance estimate over n samples
+/// (σ²·√(2/n)). Below that, the factor times the signal is indistinguishable from a bias plus noise, and a
+/// "significant" scale factor on an axis the maneuver does not move is an artefact (Klein & Morelli §10.3: a
+/// parameter is identified only through the excitation of the signal it multiplies).
+const EXCITATION_Z: f64 = 5.0;
+
+/// Smallest movement that counts at all, rms in the signal's unit (noise-free records): 0.05 m/s for V,
+/// 0.05° for α and β.
 fn excitation_floor(output: usize) -> f64 {
     if output == 0 {
-        1.0
+        0.05
     } else {
-        0.5_f64.to_radians()
+        0.05_f64.to_radians()
     }
 }
 
@@ -245,22 +251,25 @@ pub fn check_compatibility(
             let (Param::OutSkew(j) | Param::OutScale(j)) = p else {
                 continue;
             };
-            let moved = data.out[j].as_deref().map_or(0.0, rms_about_mean);
-            let floor = excitation_floor(j);
-            if moved >= floor {
+            let signal = data.out[j].as_deref().unwrap_or(&[]);
+            let moved = rms_about_mean(signal);
+            let noise = crate::signal::noise_std(signal);
+            let n = signal.len().max(1) as f64;
+            let z =
+                (moved * moved - noise * noise) / (noise * noise * (2.0 / n).sqrt()).max(1e-300);
+            if moved >= excitation_floor(j) && z > EXCITATION_Z {
                 params.push(p);
             } else {
-                let (shown, unit, floor_shown) = if j == 0 {
-                    (moved, "m/s", floor)
-                } else {
-                    (moved.to_degrees(), "°", floor.to_degrees())
-                };
+                let k = if j == 0 { 1.0 } else { 1f64.to_degrees() };
+                let unit = if j == 0 { "m/s" } else { "°" };
                 not_excited.push(format!(
-                    "{}: {} moves only {shown:.3} {unit} rms in this record (a scale factor or time \
-                     skew needs at least {floor_shown} {unit})",
+                    "{}: {} moves {:.3} {unit} rms against a noise of {:.3} {unit}, not clearly beyond it \
+                     (variance excess z = {z:.1}, needs more than {EXCITATION_Z} and at least {:.2} {unit} rms)",
                     p.name().0,
-                    OUT_NAMES[j]
-                ));
+                    OUT_NAMES[j],
+                    moved * k,
+                    noise * k,
+                    excitation_floor(j) * k                ));
             }
         }
         params.extend((0..3).map(Param::Init));
