@@ -385,7 +385,7 @@ fn parameters(
         .collect();
     if !held_still.is_empty() {
         notes.push(format!(
-            "held at 0 (no record moves the surface): {}",
+            "held at 0 (a surface no record moves, or a vane the records lack): {}",
             held_still.join(", ")
         ));
     }
@@ -442,14 +442,34 @@ fn fit_longitudinal(
         .into_iter()
         .filter(|o| records.iter().all(|(_, r)| r.column(o.column()).is_some()))
         .collect();
+    if outputs.is_empty() {
+        return Err(MeasuredError::Record {
+            file: records.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", "),
+            message: "no longitudinal output column (airspeed_m_s, alpha_rad, theta_rad, q_rad_s, ax_m_s2, \
+                      az_m_s2, qdot_rad_s2) in every record"
+                .into(),
+        });
+    }
     let mut recs = Vec::new();
     for (name, raw) in records {
         let why = "the longitudinal model's states";
         let cg = moved_to_cg(raw, &airframe.sensors).map_err(MeasuredError::Aero)?;
-        let x0 = LONGITUDINAL_STATES
-            .iter()
-            .map(|s| need(name, &cg, s, why).map(|c| c[0]))
-            .collect::<Result<Vec<f64>, _>>()?;
+        // A state the record lacks starts from the others (α = θ, θ = α: γ ≈ 0; q = 0) and is estimated.
+        let first = |c: &str| cg.column(c).map(|v| v[0]);
+        let v0 = need(name, &cg, "airspeed_m_s", why)?[0];
+        let (alpha0, theta0) =
+            match (first("alpha_rad"), first("theta_rad")) {
+                (Some(a), Some(t)) => (a, t),
+                (Some(a), None) => (a, a),
+                (None, Some(t)) => (t, t),
+                (None, None) => return Err(MeasuredError::Record {
+                    file: name.clone(),
+                    message:
+                        "neither alpha_rad nor theta_rad: the longitudinal model needs one of them"
+                            .into(),
+                }),
+            };
+        let x0 = vec![v0, alpha0, theta0, first("q_rad_s").unwrap_or(0.0)];
         let n = raw.len();
         let mut inputs =
             vec![need(name, raw, "elevator_rad", "the longitudinal model's input")?.to_vec()];
@@ -557,14 +577,23 @@ fn fit_lateral(
         .into_iter()
         .filter(|o| records.iter().all(|(_, r)| r.column(o.column()).is_some()))
         .collect();
+    if outputs.is_empty() {
+        return Err(MeasuredError::Record {
+            file: records.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", "),
+            message: "no lateral output column (beta_rad, p_rad_s, r_rad_s, phi_rad, ay_m_s2, pdot_rad_s2, \
+                      rdot_rad_s2) in every record"
+                .into(),
+        });
+    }
     let mut recs = Vec::new();
     let mut zero_filled = BTreeSet::new();
     for (name, raw) in records {
         let cg = moved_to_cg(raw, &airframe.sensors).map_err(MeasuredError::Aero)?;
-        let x0 = LATERAL_STATES
+        // A state the record lacks starts at 0 (wings level, no sideslip) and is estimated.
+        let x0: Vec<f64> = LATERAL_STATES
             .iter()
-            .map(|s| need(name, &cg, s, "the lateral model's states").map(|c| c[0]))
-            .collect::<Result<Vec<f64>, _>>()?;
+            .map(|s| cg.column(s).map_or(0.0, |c| c[0]))
+            .collect();
         need(name, raw, "airspeed_m_s", "the lateral model's input")?;
         let n = raw.len();
         let inputs = LATERAL_INPUTS
@@ -684,6 +713,50 @@ fn fit_model(
     })
 }
 
+/// When the α̇ terms were held: the same fit with C_Lα̇, C_mα̇ and C_Lq free, as a note for the engineer
+/// (not applied). C_Lq and C_Lα̇ are nearly collinear in a short-period response, so they are freed together.
+/// Downwash lag at a tail behind the wing makes C_mα̇ negative (Etkin & Reid §5.4; Klein & Morelli §3.5); a
+/// significant negative value with a lower cost suggests `--free alphadot,CL_q`, a positive one is another
+/// unmodelled effect taking the α̇ shape.
+fn alphadot_check(
+    records: &[&(String, data::FlightRecord)],
+    air: &BTreeMap<String, AirData>,
+    airframe: &Airframe,
+    cond: &ReferenceCondition,
+    options: &OutputErrorOptions,
+    held: &AxisFit,
+) -> Option<String> {
+    if options.method != Method::Oe
+        || !held
+            .estimate
+            .parameter("Cm_alphadot")
+            .is_some_and(|p| p.fixed)
+    {
+        return None;
+    }
+    let mut wider = options.clone();
+    wider.free.push(FreeChoice {
+        names: vec!["CL_alphadot", "Cm_alphadot", "CL_q"],
+        free: true,
+    });
+    let f = fit_longitudinal(records, air, airframe, cond, &wider, &mut Vec::new()).ok()?;
+    let p = f.estimate.parameter("Cm_alphadot")?;
+    let drop = held.estimate.cost - f.estimate.cost;
+    let t = p.value / p.std_error.max(f64::MIN_POSITIVE);
+    let verdict = if p.value < 0.0 && t.abs() > 3.0 && drop > 0.0 {
+        "negative, as downwash lag at a tail behind the wing makes it: consider --free alphadot,CL_q"
+    } else if p.value > 0.0 {
+        "positive, which downwash lag does not produce: another unmodelled effect takes the α̇ shape; the \
+         α̇ terms stay held"
+    } else {
+        "not significant: the α̇ terms stay held"
+    };
+    Some(format!(
+        "longitudinal: with C_Lα̇, C_mα̇, C_Lq free the cost falls by {drop:.1} and C_mα̇ = {:.2} ± {:.2}: {verdict}",
+        p.value, p.std_error
+    ))
+}
+
 /// Indices (in θ order) of the free parameters and their covariance block.
 fn free_block(est: &estimate::Estimate) -> (Vec<usize>, Vec<Vec<f64>>) {
     let free: Vec<usize> = (0..est.parameters.len())
@@ -722,6 +795,9 @@ pub fn output_error_report(
     if axis.longitudinal() {
         let recs = records_for(records, true);
         let f = fit_longitudinal(&recs, &air, airframe, &cond, options, &mut notes)?;
+        if let Some(note) = alphadot_check(&recs, &air, airframe, &cond, options, &f) {
+            notes.push(note);
+        }
         let (free, cov) = free_block(&f.estimate);
         modes.extend(modes_with_uncertainty(&f.theta, &free, &cov, |t| {
             longitudinal_modes_at(&f.constants, &cond, t, false)
