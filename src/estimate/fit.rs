@@ -393,16 +393,7 @@ impl Problem<'_> {
             .state_model()
             .ok_or_else(|| SimError::Failed("no state-space form".into()))?;
         let rec = &self.records[run.record];
-        let mut u = vec![0.0; rec.inputs.len()];
-        run.input.at(rec.time_s[0], &mut u);
-        let (a, c) = fem::linearise(sm, theta, &terms.x0, &u);
-        let q = self.layout.process_noise(phi, a.nrows());
-        let r = self
-            .gain_noise
-            .read()
-            .map_err(|_| SimError::Failed("the filter's noise estimate is unavailable".into()))?
-            .clone();
-        let gain = fem::gain(&a, &c, &q, &r, rec.median_dt_s())?;
+        let gain = self.gain(phi, run.record)?;
         fem::filter(
             sm,
             theta,
@@ -412,6 +403,37 @@ impl Problem<'_> {
             &rec.outputs,
             &gain,
         )
+    }
+
+    /// Filter error: whether the gains at φ keep `diag(K C) ≤ 1` on every record (see [`fem`]);
+    /// always true for output error.
+    fn constraint_holds(&self, phi: &[f64]) -> bool {
+        if self.method != Method::Fem {
+            return true;
+        }
+        (0..self.records.len()).all(|r| self.gain(phi, r).is_ok_and(|g| g.kc_max <= 1.0))
+    }
+
+    /// Filter error: the steady-state gain of record `r` at φ.
+    fn gain(&self, phi: &[f64], r: usize) -> Result<fem::Gain, SimError> {
+        let sm = self
+            .model
+            .state_model()
+            .ok_or_else(|| SimError::Failed("no state-space form".into()))?;
+        let theta = self.layout.theta(phi);
+        let terms = self.layout.record_terms(phi, r);
+        let run = self.run(r, &terms);
+        let rec = &self.records[r];
+        let mut u = vec![0.0; rec.inputs.len()];
+        run.input.at(rec.time_s[0], &mut u);
+        let (a, c) = fem::linearise(sm, &theta, &terms.x0, &u);
+        let q = self.layout.process_noise(phi, a.nrows());
+        let noise = self
+            .gain_noise
+            .read()
+            .map_err(|_| SimError::Failed("the filter's noise estimate is unavailable".into()))?
+            .clone();
+        fem::gain(&a, &c, &q, &noise, rec.median_dt_s())
     }
 
     /// Filter error: F–R compensation of φ's process-noise variances for R moving from `old` to
@@ -705,6 +727,19 @@ impl Problem<'_> {
                 first_decrement.get_or_insert(decrement);
                 let mut trial: Vec<f64> = phi.iter().zip(&step).map(|(a, b)| a + b).collect();
                 layout.clamp(&mut trial);
+                // filter error: a step whose gain breaks diag(KC) ≤ 1 is shortened towards φ
+                // (the constraint is a boundary in q; halving keeps the direction)
+                let mut shrink = 0;
+                while shrink < 8 && !self.constraint_holds(&trial) {
+                    for (t, p) in trial.iter_mut().zip(&phi) {
+                        *t = p + 0.5 * (*t - p);
+                    }
+                    shrink += 1;
+                }
+                if shrink == 8 {
+                    mu *= 10.0;
+                    continue;
+                }
                 if let Ok(tp) = self.predict_all(&trial) {
                     let tr = self.residuals(&tp);
                     let tq = Self::weighted_sse(&tr, &noise);
@@ -739,6 +774,14 @@ impl Problem<'_> {
                 let mut compensated = phi.clone();
                 self.compensate(&mut compensated, &noise, &new_noise);
                 self.set_gain_noise(&new_noise);
+                // with the new R the gain may break diag(KC) ≤ 1: reduce the process noise
+                let entries = self.layout.process_noise_entries();
+                for _ in 0..30 {
+                    if self.constraint_holds(&compensated) {
+                        break;
+                    }
+                    entries.iter().for_each(|&j| compensated[j] *= 0.5);
+                }
                 match self.predict_all(&compensated) {
                     Ok(p) => {
                         phi = compensated;
