@@ -287,3 +287,70 @@ fn jsbsim_flight_with_q_bias_and_alpha_skew_is_diagnosed_and_clean_flight_is_not
         }
     }
 }
+
+/// Specification: a longitudinal-only record (the JSBSim flight up to its aileron doublet: an
+/// elevator doublet, β never moves) gets no β scale factor or skew at all, and says why; nothing
+/// on it is flagged significant.
+#[test]
+fn a_longitudinal_only_record_gets_no_beta_scale_factor_and_says_why() {
+    let flight = jsbsim_flight();
+    let end = flight.time_s.partition_point(|&t| t < 9.5);
+    let mut longitudinal = flight.slice(0, end);
+    // A vane on a wings-level flight: β is its trim value plus sensor noise of 0.1° (JSBSim's noise-free β
+    // still swings 0.55° here, which is excitation).
+    let beta = longitudinal.column("beta_rad").unwrap().to_vec();
+    let mean = beta.iter().sum::<f64>() / beta.len() as f64;
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+    let vane = Normal::new(0.0, 0.1_f64.to_radians()).unwrap();
+    let noisy: Vec<f64> = beta.iter().map(|_| mean + vane.sample(&mut rng)).collect();
+    longitudinal.push_column("beta_rad", noisy);
+    let rep = check_compatibility(&longitudinal, &CheckOptions::default()).unwrap();
+    assert!(rep.converged);
+    for name in ["scale_beta", "skew_beta_s"] {
+        assert!(
+            rep.instrument.iter().all(|e| e.name != name),
+            "{name} estimated: {rep:?}"
+        );
+        assert!(
+            rep.not_excited.iter().any(|w| w.starts_with(name)
+                && w.contains("beta_rad moves")
+                && w.contains("not clearly beyond")),
+            "{name}: {:?}",
+            rep.not_excited
+        );
+    }
+    // α is excited by the doublet: its scale factor and skew are estimated.
+    assert!(
+        rep.instrument.iter().any(|e| e.name == "scale_alpha"),
+        "{rep:?}"
+    );
+    for e in &rep.instrument {
+        assert!(!e.significant, "longitudinal JSBSim flight: spurious {e:?}");
+    }
+}
+
+/// Specification: a reconstruction stopped before it converges is an error (exit 1) with no table.
+#[test]
+fn an_unconverged_check_exits_1_without_a_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("f.csv");
+    flightid::data::write_csv_atomic(&csv, &consistent_flight(0.5_f64.to_radians(), 0.0, true))
+        .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
+        .args(["check", csv.to_str().unwrap(), "--max-iterations", "1"])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert_eq!(out.status.code(), Some(1), "{stdout}\n{stderr}");
+    assert!(
+        stderr.contains("did not converge in 1 iterations"),
+        "{stderr}"
+    );
+    assert!(
+        !stdout.contains("instrument error"),
+        "a table was printed: {stdout}"
+    );
+}

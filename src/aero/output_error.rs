@@ -41,7 +41,7 @@ use super::flight_models::{
 use super::measured::{
     air_data, dimensional, equation_error_measured, lateral_modes_at, longitudinal_modes_at,
     model_constants, modes_with_uncertainty, moved_to_cg, records_exciting, reference_condition,
-    AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport, ReferenceCondition,
+    AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, ReferenceCondition,
 };
 use crate::data::{self, G0_M_S2};
 use crate::estimate::{
@@ -792,6 +792,25 @@ pub fn output_error_report(
     let mut fit_percent = BTreeMap::new();
     let mut converged = true;
     let mut fits = Vec::new();
+    // A fit whose covariance could not be computed reports σ = 0 for its free parameters: say unknown (NaN,
+    // null in JSON) rather than exact.
+    let no_sigma = |f: &AxisFit| {
+        f.estimate
+            .parameters
+            .iter()
+            .filter(|p| !p.fixed)
+            .all(|p| p.std_error == 0.0)
+    };
+    let unknown_sigma = |m: Vec<ModeEstimate>| -> Vec<ModeEstimate> {
+        m.into_iter()
+            .map(|m| ModeEstimate {
+                omega_n_std: m.omega_n_std.map(|_| f64::NAN),
+                zeta_std: m.zeta_std.map(|_| f64::NAN),
+                pole_std: m.pole_std.map(|_| f64::NAN),
+                ..m
+            })
+            .collect()
+    };
     if axis.longitudinal() {
         let recs = records_for(records, true);
         let f = fit_longitudinal(&recs, &air, airframe, &cond, options, &mut notes)?;
@@ -799,22 +818,25 @@ pub fn output_error_report(
             notes.push(note);
         }
         let (free, cov) = free_block(&f.estimate);
-        modes.extend(modes_with_uncertainty(&f.theta, &free, &cov, |t| {
+        let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| {
             longitudinal_modes_at(&f.constants, &cond, t, false)
-        }));
+        });
+        modes.extend(if no_sigma(&f) { unknown_sigma(m) } else { m });
         fits.push(("longitudinal", f, recs.len()));
     }
     if axis.lateral() {
         let recs = records_for(records, false);
         let f = fit_lateral(&recs, &air, airframe, &cond, options, &mut notes)?;
         let (free, cov) = free_block(&f.estimate);
-        modes.extend(modes_with_uncertainty(&f.theta, &free, &cov, |t| {
+        let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| {
             lateral_modes_at(&f.constants, &cond, t)
-        }));
+        });
+        modes.extend(if no_sigma(&f) { unknown_sigma(m) } else { m });
         fits.push(("lateral", f, recs.len()));
     }
     for (name, f, n_records) in &fits {
         let est = &f.estimate;
+        let sigma_known = !no_sigma(f);
         let mut held = Vec::new();
         for p in &est.parameters {
             if p.name.starts_with("tau_") {
@@ -836,7 +858,7 @@ pub fn output_error_report(
                 p.name.clone(),
                 Estimate {
                     value: p.value,
-                    std_error: p.std_error,
+                    std_error: if sigma_known { p.std_error } else { f64::NAN },
                 },
             );
         }
@@ -867,7 +889,9 @@ pub fn output_error_report(
          accelerometer biases",
         match options.method {
             Method::Oe => "output error",
-            Method::Fem => "filter error",
+            Method::Fem =>
+                "filter error (a steady-state Kalman filter in the loop, process noise on every \
+                           state estimated)",
         },
         fits.first()
             .map_or("Cramér-Rao bounds", |f| f.1.estimate.covariance_method)

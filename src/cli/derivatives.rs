@@ -229,9 +229,6 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Whether the estimation core's filter error method can be used (`--method fem`).
-const FILTER_ERROR_AVAILABLE: bool = false;
-
 /// The measured-data route: `--data … --airframe …`.
 fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()> {
     use crate::aero::measured::{self, AxisChoice, MeasuredError};
@@ -295,14 +292,6 @@ fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()>
         }
         "oe" | "fem" => {
             let method = if args.method.as_deref() == Some("fem") {
-                if !FILTER_ERROR_AVAILABLE {
-                    return Err(UsageError(
-                        "--method fem: the filter error method is not available in the estimation core \
-                         yet; use --method oe (output error) or ee (equation error)"
-                            .into(),
-                    )
-                    .into());
-                }
                 crate::estimate::Method::Fem
             } else {
                 crate::estimate::Method::Oe

@@ -81,6 +81,34 @@ pub struct CheckReport {
     pub translational: bool,
     /// Parameters dropped because the data cannot determine them (e.g. a β scale with β ≈ 0).
     pub not_identifiable: Vec<String>,
+    /// Scale factors and time skews not estimated because the maneuver does not move their signal
+    /// (e.g. β on a longitudinal-only record), each with the evidence.
+    pub not_excited: Vec<String>,
+}
+
+/// How clearly an air-data signal must move beyond its own noise before a scale factor or a time skew on it
+/// is estimated: its variance about the mean must exceed the noise variance (from
+/// [`crate::signal::noise_std`]) by this many standard errors of a variance estimate over n samples
+/// (σ²·√(2/n)). Below that, the factor times the signal is indistinguishable from a bias plus noise, and a
+/// "significant" scale factor on an axis the maneuver does not move is an artefact (Klein & Morelli §10.3: a
+/// parameter is identified only through the excitation of the signal it multiplies).
+const EXCITATION_Z: f64 = 5.0;
+
+/// Smallest movement that counts at all, rms in the signal's unit (noise-free records): 0.05 m/s for V,
+/// 0.05° for α and β.
+fn excitation_floor(output: usize) -> f64 {
+    if output == 0 {
+        0.05
+    } else {
+        0.05_f64.to_radians()
+    }
+}
+
+/// Root-mean-square deviation from the mean.
+fn rms_about_mean(x: &[f64]) -> f64 {
+    let n = x.len().max(1) as f64;
+    let m = x.iter().sum::<f64>() / n;
+    (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n).sqrt()
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -207,15 +235,42 @@ pub fn check_compatibility(
 
     // Parameter set.
     let mut params: Vec<Param> = (0..3).map(Param::GyroBias).collect();
-    let _ = opts.max_iterations;
+    let mut not_excited = Vec::new();
     if translational {
         params.extend((0..3).map(Param::AccelBias));
         params.extend([Param::OutBias(1), Param::OutBias(2)]);
+        // Scale factors and skews only on what the maneuver moves.
+        let mut wanted = Vec::new();
         if opts.time_skews {
-            params.extend([Param::OutSkew(1), Param::OutSkew(2)]);
+            wanted.extend([Param::OutSkew(1), Param::OutSkew(2)]);
         }
         if opts.scale_factors {
-            params.extend([Param::OutScale(0), Param::OutScale(1), Param::OutScale(2)]);
+            wanted.extend([Param::OutScale(0), Param::OutScale(1), Param::OutScale(2)]);
+        }
+        for p in wanted {
+            let (Param::OutSkew(j) | Param::OutScale(j)) = p else {
+                continue;
+            };
+            let signal = data.out[j].as_deref().unwrap_or(&[]);
+            let moved = rms_about_mean(signal);
+            let noise = crate::signal::noise_std(signal);
+            let n = signal.len().max(1) as f64;
+            let z =
+                (moved * moved - noise * noise) / (noise * noise * (2.0 / n).sqrt()).max(1e-300);
+            if moved >= excitation_floor(j) && z > EXCITATION_Z {
+                params.push(p);
+            } else {
+                let k = if j == 0 { 1.0 } else { 1f64.to_degrees() };
+                let unit = if j == 0 { "m/s" } else { "°" };
+                not_excited.push(format!(
+                    "{}: {} moves {:.3} {unit} rms against a noise of {:.3} {unit}, not clearly beyond it \
+                     (variance excess z = {z:.1}, needs more than {EXCITATION_Z} and at least {:.2} {unit} rms)",
+                    p.name().0,
+                    OUT_NAMES[j],
+                    moved * k,
+                    noise * k,
+                    excitation_floor(j) * k                ));
+            }
         }
         params.extend((0..3).map(Param::Init));
     }
@@ -357,6 +412,7 @@ pub fn check_compatibility(
         converged,
         translational,
         not_identifiable,
+        not_excited,
     })
 }
 

@@ -48,6 +48,18 @@ pub fn resample_linear(t: &[f64], x: &[f64], t_new: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Measurement-noise standard deviation from the second difference: for white noise of variance σ²,
+/// var(Δ²y) = 6σ², while a smooth signal sampled fast contributes little (Morelli & Klein, §11.2 idea).
+pub fn noise_std(y: &[f64]) -> f64 {
+    if y.len() < 4 {
+        return 0.0;
+    }
+    let d2: Vec<f64> = y.windows(3).map(|w| w[2] - 2.0 * w[1] + w[0]).collect();
+    let m = d2.iter().sum::<f64>() / d2.len() as f64;
+    let v = d2.iter().map(|x| (x - m).powi(2)).sum::<f64>() / d2.len() as f64;
+    (v / 6.0).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
