@@ -99,6 +99,7 @@ pub fn main() -> i32 {
         Command::Paper(a) => paper::run(a),
         Command::Derivatives(a) => derivatives::run(a),
     };
+    crate::sim::scratch::wait_if_terminating();
     match result {
         Ok(()) => 0,
         Err(e) => report_error(&e),

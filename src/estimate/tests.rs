@@ -262,7 +262,7 @@ fn without_process_noise_the_filter_error_method_gives_the_output_error_answer()
     let oe = fit(
         &short_period(),
         &start(),
-        &[rec.clone()],
+        std::slice::from_ref(&rec),
         &nuisance,
         &Options::default(),
     )

@@ -11,7 +11,7 @@
 //!   longer names a running process (`/proc/<pid>`) is stale and removed ([`remove_stale`]).
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicI32, AtomicU64, Ordering};
 use std::sync::{Mutex, Once};
 
 /// Name prefix of every scratch directory.
@@ -21,6 +21,19 @@ pub const PREFIX: &str = "flightid-jsbsim-";
 static LIVE: Mutex<Vec<(PathBuf, Option<u32>)>> = Mutex::new(Vec::new());
 static NEXT: AtomicU64 = AtomicU64::new(0);
 static SETUP: Once = Once::new();
+/// The termination signal being handled, 0 when none.
+static SIGNALLED: AtomicI32 = AtomicI32::new(0);
+
+/// Blocks for good while a termination signal is being handled. The handler ends the process with 128 + the
+/// signal once the bridges are dead and the directories gone; meanwhile the command, whose bridge was just
+/// killed, fails with "bridge process died", and must not end the process first with that message and exit 1.
+pub fn wait_if_terminating() {
+    if SIGNALLED.load(Ordering::SeqCst) != 0 {
+        loop {
+            std::thread::park();
+        }
+    }
+}
 
 /// A scratch directory removed when dropped.
 #[derive(Debug)]
@@ -109,6 +122,7 @@ fn install_signal_handler() {
     };
     std::thread::spawn(move || {
         if let Some(sig) = signals.forever().next() {
+            SIGNALLED.store(sig, Ordering::SeqCst);
             let entries: Vec<_> = live().clone();
             for (_, pid) in &entries {
                 if let Some(pid) = pid {
