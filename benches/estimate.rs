@@ -103,10 +103,23 @@ impl Model for Rk4 {
         x0: &[f64],
         run: &Run<'_>,
     ) -> Result<Vec<Vec<f64>>, SimError> {
-        simulate_states(&self.0, theta, x0, run)
+        simulate_states(self, theta, x0, run)
     }
     fn state_model(&self) -> Option<&dyn StateModel> {
-        Some(&self.0)
+        Some(self)
+    }
+}
+
+/// Only `f` and `h`, no exact transition: the filter error method's filter integrates too.
+impl StateModel for Rk4 {
+    fn signature(&self) -> &Signature {
+        StateModel::signature(&self.0)
+    }
+    fn derivatives(&self, theta: &[f64], x: &[f64], u: &[f64], dx: &mut [f64]) {
+        self.0.derivatives(theta, x, u, dx)
+    }
+    fn outputs(&self, theta: &[f64], x: &[f64], u: &[f64], y: &mut [f64]) {
+        self.0.outputs(theta, x, u, y)
     }
 }
 
