@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use flightid::estimate::{
     fit, simulate_states, Entry, Estimate, InputHold, InputSignal, LinearModel, Method, Model,
-    Nuisance, Options, Parameter, Record, Run, Signature, SimError, StateModel, UserModel,
+    Nuisance, Options, Parameter, Record, Run, Signature, StateModel, UserModel,
 };
 use rand::{rngs::StdRng, Rng, SeedableRng};
 use rand_distr::StandardNormal;
@@ -93,22 +93,7 @@ fn model() -> LinearModel {
 /// discretisation `LinearModel` uses on uniform records.
 struct Rk4(LinearModel);
 
-impl Model for Rk4 {
-    fn signature(&self) -> &Signature {
-        Model::signature(&self.0)
-    }
-    fn simulate(
-        &self,
-        theta: &[f64],
-        x0: &[f64],
-        run: &Run<'_>,
-    ) -> Result<Vec<Vec<f64>>, SimError> {
-        simulate_states(self, theta, x0, run)
-    }
-    fn state_model(&self) -> Option<&dyn StateModel> {
-        Some(self)
-    }
-}
+flightid::model_from_state_model!(Rk4);
 
 /// Only `f` and `h`, no exact transition: the filter error method's filter integrates too.
 impl StateModel for Rk4 {

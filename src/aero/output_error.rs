@@ -44,10 +44,7 @@ use super::measured::{
     AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, ReferenceCondition,
 };
 use crate::data::{self, G0_M_S2};
-use crate::estimate::{
-    self, simulate_states, Method, Model, Nuisance, Parameter, Record, Run, Signature, SimError,
-    StateModel,
-};
+use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signature, StateModel};
 
 /// Column of the air density input (a constant per record).
 const DENSITY: &str = "density_kg_m3";
@@ -109,24 +106,7 @@ impl StateModel for LongitudinalModel {
     }
 }
 
-impl Model for LongitudinalModel {
-    fn signature(&self) -> &Signature {
-        &self.signature
-    }
-
-    fn simulate(
-        &self,
-        theta: &[f64],
-        x0: &[f64],
-        run: &Run<'_>,
-    ) -> Result<Vec<Vec<f64>>, SimError> {
-        simulate_states(self, theta, x0, run)
-    }
-
-    fn state_model(&self) -> Option<&dyn StateModel> {
-        Some(self)
-    }
-}
+crate::model_from_state_model!(LongitudinalModel);
 
 /// Inputs of the lateral-directional model, in order.
 pub const LATERAL_INPUTS: [&str; 7] = [
@@ -193,24 +173,7 @@ impl StateModel for LateralModel {
     }
 }
 
-impl Model for LateralModel {
-    fn signature(&self) -> &Signature {
-        &self.signature
-    }
-
-    fn simulate(
-        &self,
-        theta: &[f64],
-        x0: &[f64],
-        run: &Run<'_>,
-    ) -> Result<Vec<Vec<f64>>, SimError> {
-        simulate_states(self, theta, x0, run)
-    }
-
-    fn state_model(&self) -> Option<&dyn StateModel> {
-        Some(self)
-    }
-}
+crate::model_from_state_model!(LateralModel);
 
 /// One entry of `--free`: a parameter or a group, freed (`NAME`) or held (`-NAME`).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -921,7 +884,7 @@ mod tests {
     use super::*;
     use crate::aero::airframe::SensorPositions;
     use crate::aero::params::{Geometry, MassProperties};
-    use crate::estimate::{InputHold, InputSignal};
+    use crate::estimate::{simulate_states, InputHold, InputSignal, Run};
 
     fn constants() -> Constants {
         Constants {

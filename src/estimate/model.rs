@@ -125,8 +125,8 @@ pub trait Model: Sync {
 
 /// A continuous-time model `ẋ = f(x, u, θ)`, `y = h(x, u, θ)`.
 ///
-/// Implement this, then [`Model`] with `simulate` calling [`super::simulate_states`] and
-/// `state_model` returning `Some(self)`.
+/// Implement this, then [`Model`] with [`model_from_state_model!`](crate::model_from_state_model) (or by hand
+/// when the model simulates itself another way, as [`super::LinearModel`] does).
 pub trait StateModel: Sync {
     /// Parameter, state, input and output names.
     fn signature(&self) -> &Signature;
@@ -153,4 +153,29 @@ pub struct Discrete {
     pub gamma1: Vec<f64>,
     /// Γ₂ (linear interpolation's ramp term; zeros for a zero-order hold).
     pub gamma2: Vec<f64>,
+}
+
+/// Implements [`Model`] for types that implement [`StateModel`]: the signature is the state model's,
+/// `simulate` integrates `f` with the core's [`simulate_states`](crate::estimate::simulate_states), and
+/// `state_model` hands the state-space form to the filter error method.
+#[macro_export]
+macro_rules! model_from_state_model {
+    ($($t:ty),+ $(,)?) => {$(
+        impl $crate::estimate::Model for $t {
+            fn signature(&self) -> &$crate::estimate::Signature {
+                $crate::estimate::StateModel::signature(self)
+            }
+            fn simulate(
+                &self,
+                theta: &[f64],
+                x0: &[f64],
+                run: &$crate::estimate::Run<'_>,
+            ) -> Result<Vec<Vec<f64>>, $crate::estimate::SimError> {
+                $crate::estimate::simulate_states(self, theta, x0, run)
+            }
+            fn state_model(&self) -> Option<&dyn $crate::estimate::StateModel> {
+                Some(self)
+            }
+        }
+    )+};
 }

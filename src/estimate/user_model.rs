@@ -6,10 +6,9 @@
 use std::path::Path;
 
 use super::expr::{Expr, ExprError, Program, Slot};
-use super::integrate::simulate_states;
 use super::layout::Nuisance;
-use super::model::{Model, Parameter, Signature, SimError, StateModel};
-use super::record::{Record, Run};
+use super::model::{Parameter, Signature, StateModel};
+use super::record::Record;
 use crate::data::FlightRecord;
 
 /// A problem in a model file (or between a model file and a record), with the file, line and name.
@@ -443,21 +442,4 @@ impl StateModel for UserModel {
     }
 }
 
-impl Model for UserModel {
-    fn signature(&self) -> &Signature {
-        &self.signature
-    }
-
-    fn simulate(
-        &self,
-        theta: &[f64],
-        x0: &[f64],
-        run: &Run<'_>,
-    ) -> Result<Vec<Vec<f64>>, SimError> {
-        simulate_states(self, theta, x0, run)
-    }
-
-    fn state_model(&self) -> Option<&dyn StateModel> {
-        Some(self)
-    }
-}
+crate::model_from_state_model!(UserModel);
