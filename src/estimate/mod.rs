@@ -29,6 +29,7 @@ mod model;
 mod record;
 mod report;
 pub mod riccati;
+mod subspace;
 mod summary;
 mod user_model;
 
@@ -38,6 +39,7 @@ pub use layout::{Nuisance, NuisanceKind};
 pub use linear::{Entry, LinearModel};
 pub use model::{Discrete, Model, Parameter, Signature, SimError, StateModel};
 pub use record::{InputHold, InputSignal, Record, Run};
+pub use subspace::{subspace, SubspaceModel, SubspaceOptions, SubspaceRecord};
 pub use summary::HIGH_CORRELATION;
 pub use user_model::{ModelFileError, UserModel};
 
