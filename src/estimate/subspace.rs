@@ -88,20 +88,31 @@ pub struct SubspaceModel {
     pub continuous: StateSpace,
     /// Names of the states when the model is in the basis of measured outputs.
     pub state_names: Option<Vec<String>>,
+    /// Input names.
+    pub inputs: Vec<String>,
+    /// Output names.
+    pub outputs: Vec<String>,
     /// Modes of the continuous model.
     pub modes: Vec<Mode>,
     /// Per record: the model's outputs and fit.
     pub records: Vec<SubspaceRecord>,
+    /// Fit percent per output over all records together.
+    pub fit_percent: Vec<f64>,
+    /// The order was chosen from the singular values (not given).
+    pub order_from_data: bool,
+    /// The input hold the continuous model assumes.
+    pub hold: InputHold,
     /// Wall time, s.
     pub wall_s: f64,
 }
 
 /// Identifies a linear model from `records` (inputs and outputs in the same order in each).
 ///
-/// `output_names` name the outputs; `basis`, when given, lists `order` outputs whose values are the
+/// `input_names` and `output_names` name the channels; `basis`, when given, lists `order` outputs whose values are the
 /// states, and the model is returned in that basis.
 pub fn subspace(
     records: &[Record],
+    input_names: &[String],
     output_names: &[String],
     basis: Option<&[usize]>,
     options: &SubspaceOptions,
@@ -123,7 +134,10 @@ pub fn subspace(
             "horizon of {s} block rows is too short for order {order_cap}"
         )));
     }
-    let columns: usize = records.iter().map(|r| r.len().saturating_sub(2 * s - 1)).sum();
+    let columns: usize = records
+        .iter()
+        .map(|r| r.len().saturating_sub(2 * s - 1))
+        .sum();
     if shortest < 2 * s || columns < 2 * s * (m + p) + records.len() {
         return Err(EstimateError::Invalid(format!(
             "the records are too short for a subspace fit with {s} block rows: {columns} Hankel \
@@ -189,7 +203,7 @@ pub fn subspace(
         _ => None,
     };
     let poles = cont.a.eigenvalues().unwrap_or_default();
-    let records_out = records
+    let records_out: Vec<SubspaceRecord> = records
         .iter()
         .zip(&fitted.predicted)
         .enumerate()
@@ -212,30 +226,32 @@ pub fn subspace(
             }
         })
         .collect();
+    let fit_percent = (0..p)
+        .map(|o| {
+            let z: Vec<f64> = records.iter().flat_map(|r| r.outputs[o].clone()).collect();
+            let y: Vec<f64> = records_out
+                .iter()
+                .flat_map(|r| r.predicted[o].clone())
+                .collect();
+            nrmse_fit(&z, &y)
+        })
+        .collect();
     Ok(SubspaceModel {
+        fit_percent,
+        order_from_data: options.order.is_none(),
+        hold: options.hold,
         order: n,
         horizon: s,
         singular_values: sv,
         discrete: disc,
         continuous: cont,
         state_names,
+        inputs: input_names.to_vec(),
+        outputs: output_names.to_vec(),
         modes: modes(&poles),
         records: records_out,
         wall_s: start.elapsed().as_secs_f64(),
     })
-}
-
-impl SubspaceModel {
-    /// Fit percent of output `o` over all records together.
-    pub fn fit_percent(&self, records: &[Record], o: usize) -> f64 {
-        let z: Vec<f64> = records.iter().flat_map(|r| r.outputs[o].clone()).collect();
-        let y: Vec<f64> = self
-            .records
-            .iter()
-            .flat_map(|r| r.predicted[o].clone())
-            .collect();
-        nrmse_fit(&z, &y)
-    }
 }
 
 /// The order at the largest drop (ratio) between consecutive singular values, 1..=max_order.
@@ -291,14 +307,19 @@ impl Prepared {
                 reason,
             };
             if rec.inputs.len() != m || rec.outputs.len() != p {
-                return Err(bad("its inputs and outputs differ from the first record's".into()));
+                return Err(bad(
+                    "its inputs and outputs differ from the first record's".into()
+                ));
             }
             let t = &rec.time_s;
             if t.len() < 3 {
                 return Err(bad(format!("{} samples are too few", t.len())));
             }
             let h = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
-            if let Some(k) = t.windows(2).position(|w| ((w[1] - w[0]) - h).abs() > 1e-3 * h) {
+            if let Some(k) = t
+                .windows(2)
+                .position(|w| ((w[1] - w[0]) - h).abs() > 1e-3 * h)
+            {
                 return Err(bad(format!(
                     "not uniformly sampled (the interval at t = {:.3} s is {:.4} s, the mean {h:.4} s); \
                      a subspace fit needs one sample interval",
@@ -320,24 +341,30 @@ impl Prepared {
                 return Err(bad("holds a NaN or infinite value".into()));
             }
         }
-        let centred = |pick: &dyn Fn(&Record) -> &Vec<Vec<f64>>| -> (Vec<Vec<Vec<f64>>>, Vec<Vec<f64>>) {
-            let means: Vec<Vec<f64>> = records
-                .iter()
-                .map(|r| pick(r).iter().map(|c| c.iter().sum::<f64>() / c.len() as f64).collect())
-                .collect();
-            let data = records
-                .iter()
-                .zip(&means)
-                .map(|(r, mu)| {
-                    pick(r)
-                        .iter()
-                        .zip(mu)
-                        .map(|(c, m)| c.iter().map(|v| v - m).collect())
-                        .collect()
-                })
-                .collect();
-            (data, means)
-        };
+        let centred =
+            |pick: &dyn Fn(&Record) -> &Vec<Vec<f64>>| -> (Vec<Vec<Vec<f64>>>, Vec<Vec<f64>>) {
+                let means: Vec<Vec<f64>> = records
+                    .iter()
+                    .map(|r| {
+                        pick(r)
+                            .iter()
+                            .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+                            .collect()
+                    })
+                    .collect();
+                let data = records
+                    .iter()
+                    .zip(&means)
+                    .map(|(r, mu)| {
+                        pick(r)
+                            .iter()
+                            .zip(mu)
+                            .map(|(c, m)| c.iter().map(|v| v - m).collect())
+                            .collect()
+                    })
+                    .collect();
+                (data, means)
+            };
         let (mut u, _) = centred(&|r| &r.inputs);
         let (mut y, y_mean) = centred(&|r| &r.outputs);
         let scale = |data: &mut Vec<Vec<Vec<f64>>>, channels: usize, what: &str| {
@@ -566,7 +593,9 @@ mod tests {
         let disc = c2d(&truth, dt, Discretization::Zoh);
         let mut seed = 7_u64;
         let mut rand = move || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
         let mut recs = Vec::new();
@@ -611,19 +640,36 @@ mod tests {
             hold: InputHold::Zoh,
             ..SubspaceOptions::default()
         };
-        let est = subspace(&recs, &names, Some(&[0, 1]), &opts).unwrap();
+        let est = subspace(
+            &recs,
+            &["elevator_rad".to_string()],
+            &names,
+            Some(&[0, 1]),
+            &opts,
+        )
+        .unwrap();
         assert_eq!(est.order, 2, "singular values {:?}", est.singular_values);
         assert_eq!(est.state_names.as_deref(), Some(&names[..]));
         for i in 0..2 {
             for j in 0..2 {
                 let (got, want) = (est.continuous.a[(i, j)], truth.a[(i, j)]);
-                assert!((got - want).abs() < 1e-6 * (1.0 + want.abs()), "A[{i},{j}] {got} vs {want}");
+                assert!(
+                    (got - want).abs() < 1e-6 * (1.0 + want.abs()),
+                    "A[{i},{j}] {got} vs {want}"
+                );
             }
             let (got, want) = (est.continuous.b[(i, 0)], truth.b[(i, 0)]);
-            assert!((got - want).abs() < 1e-6 * (1.0 + want.abs()), "B[{i}] {got} vs {want}");
+            assert!(
+                (got - want).abs() < 1e-6 * (1.0 + want.abs()),
+                "B[{i}] {got} vs {want}"
+            );
         }
         for r in &est.records {
-            assert!(r.fit_percent.iter().all(|f| *f > 99.99), "{:?}", r.fit_percent);
+            assert!(
+                r.fit_percent.iter().all(|f| *f > 99.99),
+                "{:?}",
+                r.fit_percent
+            );
         }
     }
 
@@ -636,11 +682,21 @@ mod tests {
             hold: InputHold::Linear,
             ..SubspaceOptions::default()
         };
-        let est = subspace(&recs, &names, Some(&[0, 1]), &opts).unwrap();
+        let est = subspace(
+            &recs,
+            &["elevator_rad".to_string()],
+            &names,
+            Some(&[0, 1]),
+            &opts,
+        )
+        .unwrap();
         let a_err = (est.continuous.a[(1, 0)] - truth.a[(1, 0)]).abs();
         let b_err = (est.continuous.b[(1, 0)] - truth.b[(1, 0)]).abs();
         assert!(a_err < 1e-5, "A is the same under any hold: {a_err}");
-        assert!(b_err > 1e-3 * 12.0, "a ZOH record read as linear moves B: {b_err}");
+        assert!(
+            b_err > 1e-3 * 12.0,
+            "a ZOH record read as linear moves B: {b_err}"
+        );
     }
 
     #[test]
@@ -652,10 +708,20 @@ mod tests {
             hold: InputHold::Zoh,
             ..SubspaceOptions::default()
         };
-        let est = subspace(&recs, &names, Some(&[0, 1]), &opts).unwrap();
+        let est = subspace(
+            &recs,
+            &["elevator_rad".to_string()],
+            &names,
+            Some(&[0, 1]),
+            &opts,
+        )
+        .unwrap();
         for (i, j) in [(1, 0), (1, 1)] {
             let (got, want) = (est.continuous.a[(i, j)], truth.a[(i, j)]);
-            assert!(((got - want) / want).abs() < 0.1, "A[{i},{j}] {got} vs {want}");
+            assert!(
+                ((got - want) / want).abs() < 0.1,
+                "A[{i},{j}] {got} vs {want}"
+            );
         }
     }
 
@@ -665,7 +731,7 @@ mod tests {
         for r in &mut recs {
             r.inputs[0].iter_mut().for_each(|v| *v = 0.1);
         }
-        let err = subspace(&recs, &[], None, &SubspaceOptions::default()).unwrap_err();
+        let err = subspace(&recs, &[], &[], None, &SubspaceOptions::default()).unwrap_err();
         assert!(err.to_string().contains("never moves"), "{err}");
     }
 }
