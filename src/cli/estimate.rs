@@ -103,7 +103,8 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
             &state_records,
             &records,
             hold,
-        )?;
+        )
+        .map_err(|e| usage(&e))?;
         let shown: Vec<String> = model
             .auto_start
             .iter()
