@@ -73,12 +73,8 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
     let flights = args
         .data
         .iter()
-        .map(|path| {
-            data::read_csv(path)
-                .map(|rec| (path.display().to_string(), rec))
-                .map_err(|e| UsageError(e.to_string()))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|path| Ok((path.display().to_string(), data::read_csv(path)?)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let usage = |e: &dyn std::fmt::Display| UsageError(e.to_string());
     let Some(method) = method else {
         return subspace(args, model.as_ref(), &flights, hold);

@@ -33,6 +33,9 @@ pub struct StartValues {
     pub equations: Vec<String>,
 }
 
+/// One regression row: the target less the model at θ₀, and the regressors of the auto parameters.
+type Row = (f64, Vec<f64>);
+
 /// At most this many samples per record enter the regression (evenly spaced).
 const MAX_ROWS_PER_RECORD: usize = 2000;
 
@@ -76,7 +79,7 @@ pub fn start_values(
     }
     // per equation (n state equations, then p outputs): rows per record of (target − base, regressors)
     let neq = n + p;
-    let mut blocks: Vec<Vec<Vec<(f64, Vec<f64>)>>> = vec![vec![Vec::new(); records.len()]; neq];
+    let mut blocks: Vec<Vec<Vec<Row>>> = vec![vec![Vec::new(); records.len()]; neq];
     let eval = |theta: &[f64], x: &[f64], u: &[f64]| {
         let mut out = vec![0.0; neq];
         let (dx, y) = out.split_at_mut(n);
