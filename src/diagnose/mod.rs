@@ -233,13 +233,15 @@ pub fn diagnose(
     let Some(first) = workers.first_mut() else {
         return Err(DiagnoseError::BadData("no simulation worker".into()));
     };
+    // The progress line is cleared when `progress` is dropped, also on an early error return.
+    let progress = progress::Progress::new(opts.progress);
+    progress.stage("trim, baseline replay", 0);
     let p = prepare::prepare(first, train, valid)?;
     let base = baseline::baseline(first, &p)?;
-    let progress = progress::Progress::new(opts.progress);
-    let sel = select::select(workers, &p, &base, opts, &progress);
-    progress.finish();
-    let sel = sel?;
+    let sel = select::select(workers, &p, &base, opts, &progress)?;
+    progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
+    progress.finish();
     Ok(Diagnosis {
         named_cause: sel.named,
         candidates: sel.candidates,

@@ -276,7 +276,7 @@ fn identifiable<'e>(
 ) -> Result<Identifiable<'e>, DiagnoseError> {
     let entries = p.entries();
     let r0 = residuals(&mut workers[0], w, &[]).map_err(sim_err("replay"))?;
-    progress.round(0, entries.len());
+    progress.stage("identifiability", entries.len());
     let sens = par_map(workers, &entries, |wk, e| {
         let out = null_sensitivity(wk, w, &[], *e, &r0);
         progress.fitted(1);
