@@ -11,6 +11,7 @@ pub mod compare;
 pub mod data;
 pub mod diagnose;
 pub mod estimate;
+pub mod exit;
 pub mod ident;
 pub mod limits;
 pub mod lti;

@@ -4,7 +4,7 @@
 use super::common::emit_json;
 use crate::campaign::slurm::{self, SubmitOptions};
 use crate::campaign::store::{self, StoreStatus};
-use crate::campaign::{self, CampaignError, CampaignSpec, RunOptions, RunSummary, StorePolicy};
+use crate::campaign::{self, CampaignSpec, RunOptions, RunSummary, StorePolicy};
 use crate::cli::UsageError;
 use std::path::{Path, PathBuf};
 
@@ -135,22 +135,9 @@ pub enum CampaignAction {
     },
 }
 
-/// Campaign errors caused by the user's files are usage errors (exit 2).
-pub fn classify(e: CampaignError) -> anyhow::Error {
-    match e {
-        CampaignError::Parse { .. } | CampaignError::Invalid { .. } => {
-            anyhow::Error::new(UsageError(e.to_string()))
-        }
-        CampaignError::Io { ref path, .. } if !path.exists() => {
-            anyhow::Error::new(UsageError(e.to_string()))
-        }
-        other => anyhow::Error::new(other),
-    }
-}
-
 /// Loads a campaign file (errors are usage errors).
 pub fn load_spec(file: &Path) -> anyhow::Result<CampaignSpec> {
-    CampaignSpec::load(file).map_err(classify)
+    Ok(CampaignSpec::load(file)?)
 }
 
 /// Exit 1 naming the failed cases.
@@ -227,8 +214,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
                     policy: policy.policy(),
                     queue: None,
                 },
-            )
-            .map_err(classify)?;
+            )?;
             match json {
                 Some(t) => emit_json(t, &summary)?,
                 None => print_run_summary(&format!("campaign '{}'", spec.name), &summary, out),
@@ -246,7 +232,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
         } => {
             let (k, n) = slurm::parse_shard(shard).map_err(UsageError)?;
             let spec = load_spec(&store::spec_path(dir))?;
-            let ids = slurm::read_queue(queue).map_err(classify)?;
+            let ids = slurm::read_queue(queue)?;
             let mine = slurm::shard(&ids, k, n).to_vec();
             let summary = campaign::run_campaign(
                 &spec,
@@ -257,8 +243,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
                     policy: StorePolicy::default(),
                     queue: Some(mine),
                 },
-            )
-            .map_err(classify)?;
+            )?;
             print_run_summary(&format!("shard {k}/{n}"), &summary, dir);
             if summary.failed > 0 {
                 return Err(failed_cases(&summary.failed_ids, summary.total));
@@ -289,7 +274,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
                 binary: std::env::current_exe()?,
                 policy: policy.policy(),
             };
-            let submitted = slurm::submit(&spec, out, &opts).map_err(classify)?;
+            let submitted = slurm::submit(&spec, out, &opts)?;
             let Some(job_id) = submitted.job_id.clone() else {
                 eprintln!(
                     "campaign '{}': every case already has a result in {}; nothing submitted",
@@ -327,16 +312,15 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
                     bar.set_length(s.total as u64);
                     bar.set_position((s.counts.done + s.counts.failed) as u64);
                 }
-            })
-            .map_err(classify)?;
+            })?;
             bar.finish_and_clear();
             if let Some(t) = json {
-                emit_json(t, &store::status(out).map_err(classify)?)?;
+                emit_json(t, &store::status(out)?)?;
             }
             finish_status(out, Some(&job_id))
         }
         CampaignAction::Status { dir, json } => {
-            let status = store::status(dir).map_err(classify)?;
+            let status = store::status(dir)?;
             let jobs: Vec<JobStatus> = slurm::submitted_jobs(dir)
                 .into_iter()
                 .map(|id| {
@@ -368,7 +352,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
         CampaignAction::Report { dir, report, json } => {
             let target = report.clone().unwrap_or_else(|| dir.join("report"));
             crate::report::check_output_dir(&target)?;
-            let (rep, value) = campaign::campaign_report(dir).map_err(classify)?;
+            let (rep, value) = campaign::campaign_report(dir)?;
             let index = crate::report::write_report_dir(&target, &rep, &value)?;
             if let Some(t) = json {
                 emit_json(t, &value)?;
@@ -429,7 +413,7 @@ fn print_status(dir: &Path, s: &StoreStatus) {
 /// After a job (or when nothing was left to submit): the store's verdict; exit 1 when a case failed or is still
 /// pending.
 fn finish_status(out: &Path, job_id: Option<&str>) -> anyhow::Result<()> {
-    let s = store::status(out).map_err(classify)?;
+    let s = store::status(out)?;
     print_status(out, &s);
     if let Some(id) = job_id {
         if let Some(tasks) = slurm::job_tasks(id) {

@@ -111,14 +111,8 @@ impl ColumnsArg {
     /// Reads a flight-data CSV through the map, printing the record's unit-sanity and sampling
     /// warnings on stderr. A bad map or file is a usage error (exit 2).
     pub fn read(&self, path: &Path) -> anyhow::Result<FlightRecord> {
-        let map = self
-            .columns
-            .as_deref()
-            .map(ColumnMap::load)
-            .transpose()
-            .map_err(|e| UsageError(e.to_string()))?;
-        let rec =
-            data::read_csv_mapped(path, map.as_ref()).map_err(|e| UsageError(e.to_string()))?;
+        let map = self.columns.as_deref().map(ColumnMap::load).transpose()?;
+        let rec = data::read_csv_mapped(path, map.as_ref())?;
         for w in rec.warnings() {
             eprintln!("warning: {}: {w}", path.display());
         }

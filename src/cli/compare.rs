@@ -125,7 +125,7 @@ fn kink_share(
         sweep_amplitudes_deg: vec![opts.amplitude_deg],
         ..opts.clone()
     };
-    let outcome = compare::run_compare(sim, &quick).map_err(classify);
+    let outcome = compare::run_compare(sim, &quick);
     sim.set_coefficient_scale(coefficient, restore)?;
     let (outcome, _) =
         outcome.with_context(|| format!("comparing without {coefficient} to measure its share"))?;
@@ -161,14 +161,6 @@ fn parse_scale(s: &str) -> Result<(String, f64), String> {
     Ok((name.trim().to_string(), factor))
 }
 
-/// Bad comparison options are usage errors (exit 2); simulator failures are failures (exit 1).
-pub fn classify(e: compare::CompareError) -> anyhow::Error {
-    match e {
-        compare::CompareError::Options(m) => anyhow::Error::new(UsageError(m)),
-        other => anyhow::Error::new(other),
-    }
-}
-
 /// Runs `flightid compare`.
 pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
     if let Some(dir) = &args.report {
@@ -198,7 +190,7 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
     }
     let progress =
         super::common::spinner("trim, linearize, fly doublets, identify, amplitude sweep");
-    let result = compare::run_compare(&mut sim, &opts).map_err(classify);
+    let result = compare::run_compare(&mut sim, &opts);
     progress.finish_and_clear();
     let (outcome, mut report) = result?;
     let mut json = compare::outcome_json(&outcome);

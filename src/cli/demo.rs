@@ -52,7 +52,7 @@ pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
         .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
     let progress =
         super::common::spinner("trim, linearize, fly doublets, identify, amplitude sweep");
-    let result = compare::run_compare(&mut sim, &opts).map_err(super::compare::classify);
+    let result = compare::run_compare(&mut sim, &opts);
     progress.finish_and_clear();
     let (outcome, mut report) = result?;
     let mut json = compare::outcome_json(&outcome);

@@ -3,7 +3,6 @@
 
 use super::common::{emit_json, ColumnsArg, TrimArgs};
 use super::paper::text_table;
-use crate::aero::AeroError;
 use crate::cli::UsageError;
 use crate::ident::Method;
 use crate::report;
@@ -102,20 +101,6 @@ pub struct DerivativesCmd {
     pub report: Option<PathBuf>,
 }
 
-/// Bad input (exit 2) vs failure (exit 1).
-fn classify(e: AeroError) -> anyhow::Error {
-    match e {
-        AeroError::BadParameter { .. }
-        | AeroError::UnknownDerivative(_)
-        | AeroError::WrongTfOrder { .. }
-        | AeroError::BadCovariance { .. }
-        | AeroError::NothingToFit(_)
-        | AeroError::BadRecord(_)
-        | AeroError::BadInput(_) => UsageError(e.to_string()).into(),
-        other => other.into(),
-    }
-}
-
 /// Runs `flightid derivatives`.
 pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     if let Some(dir) = &args.report {
@@ -141,7 +126,7 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
         return Err(UsageError("several --data records need --airframe".into()).into());
     }
     let free = match &args.free {
-        Some(names) => Some(parse_derivatives(names).map_err(classify)?),
+        Some(names) => Some(parse_derivatives(names)?),
         None => None,
     };
     let method: Method = args
@@ -188,7 +173,7 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
     let point = args.trim.point(&cfg)?;
     let progress = super::common::spinner("derivatives: trim, model check, flights, estimates");
     let mut sim = crate::sim::JsbsimSim::start(&cfg, args.trim.rate_hz)?;
-    let result = study::run(&mut sim, &point, &opts).map_err(classify);
+    let result = study::run(&mut sim, &point, &opts);
     progress.finish_and_clear();
     let result = result?;
     let quiet = args.json.as_deref() == Some("-");
@@ -231,7 +216,7 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
 
 /// The measured-data route: `--data … --airframe …`.
 fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()> {
-    use crate::aero::measured::{self, AxisChoice, MeasuredError};
+    use crate::aero::measured::{self, AxisChoice};
     use crate::aero::output_error;
     let airframe = load_airframe(args, airframe_arg)?;
     let mut records = Vec::new();
@@ -265,18 +250,6 @@ fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()>
             }
         }
     };
-    let classify = |e: MeasuredError| -> anyhow::Error {
-        match e {
-            MeasuredError::Airframe(_) | MeasuredError::Record { .. } => {
-                UsageError(e.to_string()).into()
-            }
-            MeasuredError::Aero(a) => classify(a),
-            MeasuredError::Estimate(crate::estimate::EstimateError::Record { .. }) => {
-                UsageError(e.to_string()).into()
-            }
-            MeasuredError::Estimate(_) => e.into(),
-        }
-    };
     let report = match args.method.as_deref().unwrap_or("ee") {
         "ee" => {
             if args.free.is_some() {
@@ -287,8 +260,7 @@ fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()>
                 )
                 .into());
             }
-            measured::equation_error_report(&records, &airframe, axis, args.alphadot)
-                .map_err(classify)?
+            measured::equation_error_report(&records, &airframe, axis, args.alphadot)?
         }
         "oe" | "fem" => {
             let method = if args.method.as_deref() == Some("fem") {
@@ -303,8 +275,7 @@ fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()>
                 free,
                 alphadot: args.alphadot,
             };
-            output_error::output_error_report(&records, &airframe, axis, &options)
-                .map_err(classify)?
+            output_error::output_error_report(&records, &airframe, axis, &options)?
         }
         other => {
             return Err(UsageError(format!(

@@ -12,7 +12,7 @@ use crate::data::FlightRecord;
 use crate::diagnose::model::{write_model, ExtendedModel};
 use crate::diagnose::replay::{LinearReplay, ReplayCase};
 use crate::diagnose::search::Worker;
-use crate::diagnose::{diagnose, report, DiagnoseError, DiagnoseOptions, Diagnosis};
+use crate::diagnose::{diagnose, report, DiagnoseOptions, Diagnosis};
 use crate::sim::JsbsimSim;
 
 /// Replay measured data on the aircraft's simulation, fit the catalogue of model extensions (signal path,
@@ -61,15 +61,6 @@ pub struct DiagnoseCmd {
     pub columns: ColumnsArg,
 }
 
-/// Maps diagnose errors on the user's input to exit code 2.
-pub fn classify(e: DiagnoseError) -> anyhow::Error {
-    match e {
-        DiagnoseError::Sim { .. } => e.into(),
-        DiagnoseError::Report(r) => r.into(),
-        other => UsageError(other.to_string()).into(),
-    }
-}
-
 /// Where the simulation comes from: the aircraft's JSBSim model, an exported extended model, or a linear model.
 pub enum SimSource<'a> {
     /// JSBSim's stock aircraft of the configuration.
@@ -86,22 +77,19 @@ pub fn start_workers(source: &SimSource, rate_hz: f64, n: usize) -> anyhow::Resu
         .map(|_| -> anyhow::Result<Worker> {
             Ok(match source {
                 SimSource::Aircraft(name) => {
-                    let cfg = aircraft::load(name).map_err(|e| UsageError(e.to_string()))?;
+                    let cfg = aircraft::load(name)?;
                     let sim = JsbsimSim::start(&cfg, rate_hz)
                         .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
                     Worker::new(Box::new(sim))
                 }
                 SimSource::Model(m) => {
-                    let cfg = aircraft::load(&m.extension.aircraft)
-                        .map_err(|e| UsageError(e.to_string()))?;
+                    let cfg = aircraft::load(&m.extension.aircraft)?;
                     let sim = m.start(&cfg, rate_hz).with_context(|| {
                         format!("starting JSBSim on the model in {}", m.dir.display())
                     })?;
                     Worker::new(Box::new(sim))
                 }
-                SimSource::Linear(p) => {
-                    Worker::new(Box::new(LinearReplay::from_json(p).map_err(classify)?))
-                }
+                SimSource::Linear(p) => Worker::new(Box::new(LinearReplay::from_json(p)?)),
             })
         })
         .collect()
@@ -109,7 +97,7 @@ pub fn start_workers(source: &SimSource, rate_hz: f64, n: usize) -> anyhow::Resu
 
 /// The rate the simulation integrates a replay of `rec` at (a whole multiple of the record's rate).
 fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
-    Ok(ReplayCase::new(rec).map_err(classify)?.sim_rate_hz())
+    Ok(ReplayCase::new(rec)?.sim_rate_hz())
 }
 
 /// Runs `flightid diagnose`.
@@ -145,8 +133,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         &train,
         valid.as_ref(),
         &DiagnoseOptions::default(),
-    )
-    .map_err(classify)?;
+    )?;
     // With `--json -` stdout carries only the JSON; the summary goes to stderr.
     let mut out: Box<dyn Write> = if args.json.as_deref() == Some("-") {
         Box::new(std::io::stderr())
@@ -170,7 +157,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
             )
             .into());
         }
-        let m = write_model(workers[0].sim.as_mut(), &ext, dir).map_err(classify)?;
+        let m = write_model(workers[0].sim.as_mut(), &ext, dir)?;
         writeln!(
             out,
             "extended model written to {} (load with `flightid fly --model {0}` or `flightid replay --model {0}`)",
@@ -178,8 +165,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         )?;
     }
     if let Some(dir) = &args.report {
-        let index = report::write_report(&d, &args.aircraft, &train, valid.as_ref(), dir)
-            .map_err(classify)?;
+        let index = report::write_report(&d, &args.aircraft, &train, valid.as_ref(), dir)?;
         eprintln!("report written to {}", index.display());
     }
     Ok(())

@@ -46,7 +46,7 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
     let model = UserModel::load(&args.model).map_err(|e| UsageError(e.to_string()))?;
     let mut records = Vec::new();
     for path in &args.data {
-        let rec = data::read_csv(path).map_err(|e| UsageError(e.to_string()))?;
+        let rec = data::read_csv(path)?;
         let name = path.display().to_string();
         records.push(
             model

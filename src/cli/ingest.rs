@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 
-use super::UsageError;
 use crate::data::{self, ServoMap, TlogOptions};
 
 /// Convert a MAVLink `.tlog` into a flight-data CSV (docs/data.md).
@@ -43,7 +42,7 @@ pub struct IngestArgs {
 /// Runs `flightid ingest`.
 pub fn run(args: &IngestArgs) -> anyhow::Result<()> {
     let servo_map = match &args.servo_map {
-        Some(name) => Some(ServoMap::resolve(name).map_err(|e| UsageError(e.to_string()))?),
+        Some(name) => Some(ServoMap::resolve(name)?),
         None => None,
     };
     let options = TlogOptions {
@@ -51,8 +50,7 @@ pub fn run(args: &IngestArgs) -> anyhow::Result<()> {
         rate_hz: args.resample_hz,
         stretch: args.stretch,
     };
-    let report = data::read_tlog(&args.tlog, servo_map.as_ref(), &options)
-        .map_err(|e| UsageError(e.to_string()))?;
+    let report = data::read_tlog(&args.tlog, servo_map.as_ref(), &options)?;
     let unit_warnings = report.record.warnings();
     data::write_csv_atomic(&args.out, &report.record)
         .with_context(|| format!("writing {}", args.out.display()))?;

@@ -1,9 +1,11 @@
 //! Command-line interface: argument parsing only; every command is a thin call into the library.
 //!
 //! Each command lives in its own file with a `clap::Args` struct and a `run` function returning
-//! `anyhow::Result<()>`. Exit codes: 0 ok, 1 failure, 2 bad usage or bad input (see [`UsageError`]).
+//! `anyhow::Result<()>`. Exit codes: 0 ok, 1 failure, 2 bad usage or bad input (see [`crate::exit`]).
 
 use clap::{Parser, Subcommand};
+
+use crate::exit::{self, ExitCode};
 
 pub mod campaign;
 pub mod check;
@@ -114,23 +116,60 @@ pub fn warn(message: &dyn std::fmt::Display) {
     );
 }
 
-/// Prints an error chain on one line and picks the exit code.
+/// Prints an error chain on one line and returns its exit code ([`exit_code`]).
 pub fn report_error(e: &anyhow::Error) -> i32 {
-    let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-    // messages echo user data (column names, cells, paths): no control character reaches the terminal
-    eprintln!("error: {}", crate::text::escape_control(&chain.join(": ")));
-    if e.chain().any(|c| {
-        c.downcast_ref::<UsageError>().is_some()
-            || c.downcast_ref::<crate::data::DataError>().is_some()
-            || c.downcast_ref::<crate::aircraft::AircraftError>().is_some()
-            || c.downcast_ref::<crate::limits::LimitError>().is_some()
-            || matches!(
-                c.downcast_ref::<crate::report::ReportError>(),
-                Some(crate::report::ReportError::Refused { .. })
-            )
-    }) {
-        2
-    } else {
-        1
+    let mut message = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if message.ends_with(&text) {
+            continue; // the wrapper's own message already quotes its cause
+        }
+        if !message.is_empty() {
+            message.push_str(": ");
+        }
+        message.push_str(&text);
     }
+    // messages echo user data (column names, cells, paths): no control character reaches the terminal
+    eprintln!("error: {}", crate::text::escape_control(&message));
+    i32::from(exit_code(e))
+}
+
+impl ExitCode for UsageError {
+    fn exit_code(&self) -> u8 {
+        exit::BAD_INPUT
+    }
+}
+
+/// The exit code of an error: that of the outermost error in its chain whose type says one ([`ExitCode`]);
+/// [`exit::FAILURE`] when none does.
+pub fn exit_code(e: &anyhow::Error) -> u8 {
+    e.chain().find_map(known_exit_code).unwrap_or(exit::FAILURE)
+}
+
+/// The exit code of one error in a chain, if its type is one of the library's error types.
+fn known_exit_code(e: &(dyn std::error::Error + 'static)) -> Option<u8> {
+    macro_rules! first_known {
+        ($($t:ty),+ $(,)?) => {
+            $(if let Some(e) = e.downcast_ref::<$t>() {
+                return Some(e.exit_code());
+            })+
+        };
+    }
+    first_known!(
+        UsageError,
+        crate::data::DataError,
+        crate::aircraft::AircraftError,
+        crate::limits::LimitError,
+        crate::aero::AirframeError,
+        crate::paper::PaperError,
+        crate::sim::SimError,
+        crate::report::ReportError,
+        crate::campaign::CampaignError,
+        crate::compare::CompareError,
+        crate::diagnose::DiagnoseError,
+        crate::aero::AeroError,
+        crate::estimate::EstimateError,
+        crate::aero::measured::MeasuredError,
+    );
+    None
 }

@@ -1,6 +1,6 @@
 //! `flightid regress`: identified modal parameters of a campaign vs a stored baseline.
 
-use super::campaign::{classify, load_spec};
+use super::campaign::load_spec;
 use crate::campaign::{self, Baseline, RunOptions};
 use crate::cli::UsageError;
 use std::path::PathBuf;
@@ -60,9 +60,8 @@ pub fn run(args: &RegressCmd) -> anyhow::Result<()> {
             progress: true,
             ..Default::default()
         },
-    )
-    .map_err(classify);
-    let results = summary.and_then(|_| campaign::load_results(&dir).map_err(classify));
+    );
+    let results = summary.and_then(|_| campaign::load_results(&dir));
     if args.results.is_none() {
         let _ = std::fs::remove_dir_all(&dir);
     }
@@ -72,9 +71,7 @@ pub fn run(args: &RegressCmd) -> anyhow::Result<()> {
         let configs = if !args.configuration.is_empty() {
             args.configuration.clone()
         } else if args.baseline.exists() {
-            Baseline::load(&args.baseline)
-                .map_err(classify)?
-                .configurations
+            Baseline::load(&args.baseline)?.configurations
         } else {
             known.clone()
         };
@@ -87,7 +84,7 @@ pub fn run(args: &RegressCmd) -> anyhow::Result<()> {
             .into());
         }
         let b = Baseline::from_results(&spec.name, &configs, &results);
-        b.save(&args.baseline).map_err(classify)?;
+        b.save(&args.baseline)?;
         println!(
             "wrote {} ({} quantities for {})",
             args.baseline.display(),
@@ -96,7 +93,7 @@ pub fn run(args: &RegressCmd) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    let baseline = Baseline::load(&args.baseline).map_err(classify)?;
+    let baseline = Baseline::load(&args.baseline)?;
     if let Some(c) = baseline.configurations.iter().find(|c| !known.contains(c)) {
         return Err(UsageError(format!(
             "baseline {} covers configuration '{c}', which {} does not have",

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use super::common::emit_json;
 use super::common::ColumnsArg;
-use super::diagnose::{classify, start_workers, SimSource};
+use super::diagnose::{start_workers, SimSource};
 use super::UsageError;
 use crate::diagnose::analyse_replay;
 use crate::diagnose::extension::ExtensionFile;
@@ -44,13 +44,8 @@ pub struct ReplayCmd {
 /// Runs `flightid replay`.
 pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
     let rec = args.columns.read(&args.data)?;
-    let case = ReplayCase::new(&rec).map_err(classify)?;
-    let model = args
-        .model
-        .as_deref()
-        .map(ExtendedModel::read)
-        .transpose()
-        .map_err(classify)?;
+    let case = ReplayCase::new(&rec)?;
+    let model = args.model.as_deref().map(ExtendedModel::read).transpose()?;
     let source = match (&model, &args.linear) {
         (Some(m), _) => SimSource::Model(m),
         (None, Some(p)) => SimSource::Linear(p),
@@ -59,7 +54,7 @@ pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
     let mut workers = start_workers(&source, case.sim_rate_hz(), 1)?;
     let names = workers[0].sim.coefficient_names();
     let exts = match (&model, &args.extension) {
-        (Some(m), _) => m.effects(&names).map_err(classify)?,
+        (Some(m), _) => m.effects(&names)?,
         (None, Some(p)) => ExtensionFile::read(p)
             .and_then(|f| f.build(&names))
             .map_err(|e| UsageError(e.to_string()))?,
@@ -69,7 +64,7 @@ pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
         .iter()
         .map(|(e, p)| (e.as_ref(), p.as_slice()))
         .collect();
-    let (_, stats, trim) = analyse_replay(&mut workers[0], &case, &refs).map_err(classify)?;
+    let (_, stats, trim) = analyse_replay(&mut workers[0], &case, &refs)?;
     if let Some(target) = &args.json {
         let mut v = BTreeMap::new();
         v.insert("residuals", serde_json::to_value(&stats)?);

@@ -38,7 +38,7 @@ pub fn run(args: &SegmentsArgs) -> anyhow::Result<()> {
         min_amplitude_rad: args.min_amplitude_deg.to_radians(),
         ..SegmentOptions::default()
     };
-    let segments = data::find_segments(&rec, &opts).map_err(|e| UsageError(e.to_string()))?;
+    let segments = data::find_segments(&rec, &opts)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&segments)?);
         return Ok(());

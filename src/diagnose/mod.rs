@@ -46,7 +46,7 @@ pub enum DiagnoseError {
     #[error("extension file {path}: {message}")]
     ExtensionFile { path: String, message: String },
     /// The report could not be written.
-    #[error("report: {0}")]
+    #[error(transparent)]
     Report(#[from] crate::report::ReportError),
     /// The simulation failed (trim at the measured condition, bridge error).
     #[error("simulation during {during}: {source}")]

@@ -331,7 +331,8 @@ fn identifiable<'e>(
         .zip(masks)
     {
         let crb = 1.0 / i.sqrt();
-        if !(3.0 * crb <= res) {
+        let determined = 3.0 * crb <= res; // false for a NaN bound too
+        if !determined {
             out.skipped.push(Skipped {
                 effect: e.effect().into(),
                 target: e.target().into(),

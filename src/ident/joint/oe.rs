@@ -1,0 +1,180 @@
+//! Joint output error by variable projection and its white-residual Cramér–Rao bound (the `oe` row of
+//! the method table in [`super`]).
+
+use super::{linear_system, sse, Centered, Nuisance};
+use crate::ident::linalg::{inverse, lstsq_qr, solve_square};
+use crate::ident::{ContinuousModel, IdentError};
+
+/// Variable-projection output error (Golub & Pereyra): Levenberg–Marquardt on `a₁…a_n` of the
+/// projected cost `min over (B, x_r, c_r)` of the joint simulation error; forward-difference
+/// Jacobian of the projected residual (Kaufman's simplification is not needed at this size).
+pub(super) fn oe_joint(
+    recs: &[Centered],
+    dt_s: f64,
+    m: usize,
+    start: ContinuousModel,
+) -> Result<ContinuousModel, IdentError> {
+    const MAX_ITER: usize = 60;
+    let delay_s = start.delay_s;
+    let n = start.den.len() - 1;
+    let residual = |a: &[f64]| -> Option<(Vec<f64>, Vec<f64>)> {
+        let mut den = vec![1.0];
+        den.extend_from_slice(a);
+        let (mat, y) = linear_system(recs, dt_s, &den, m, delay_s);
+        let theta = lstsq_qr(&mat, &y, "oe (joint)").ok()?;
+        let r: Vec<f64> = (0..y.len())
+            .map(|i| {
+                y[i] - (0..theta.len())
+                    .map(|c| mat[(i, c)] * theta[c])
+                    .sum::<f64>()
+            })
+            .collect();
+        r.iter().all(|v| v.is_finite()).then_some((r, theta))
+    };
+    let mut a = start.den[1..].to_vec();
+    let Some((mut r, mut theta)) = residual(&a) else {
+        return Err(IdentError::Failed {
+            method: "oe (joint)".into(),
+            reason: "the starting model cannot be simulated".into(),
+        });
+    };
+    let mut cost: f64 = r.iter().map(|v| v * v).sum();
+    let mut mu = 1e-3;
+    for _ in 0..MAX_ITER {
+        // Jacobian of the projected residual by forward differences.
+        let mut jac = vec![0.0; r.len() * n];
+        for i in 0..n {
+            let h = 1e-6 * a[i].abs().max(1e-3);
+            let mut ap = a.clone();
+            ap[i] += h;
+            let Some((rp, _)) = residual(&ap) else {
+                continue;
+            };
+            for k in 0..r.len() {
+                jac[k * n + i] = (rp[k] - r[k]) / h;
+            }
+        }
+        let mut jtj = vec![0.0; n * n];
+        let mut jtr = vec![0.0; n];
+        for k in 0..r.len() {
+            let row = &jac[k * n..(k + 1) * n];
+            for i in 0..n {
+                jtr[i] -= row[i] * r[k];
+                for j in 0..n {
+                    jtj[i * n + j] += row[i] * row[j];
+                }
+            }
+        }
+        let mut accepted = false;
+        let mut gain = 0.0;
+        for _ in 0..12 {
+            let mut h = jtj.clone();
+            for i in 0..n {
+                h[i * n + i] += mu * jtj[i * n + i].max(1e-300);
+            }
+            let Some(delta) = solve_square(&h, &jtr) else {
+                mu *= 10.0;
+                continue;
+            };
+            let trial: Vec<f64> = a.iter().zip(&delta).map(|(x, d)| x + d).collect();
+            if let Some((rt, tt)) = residual(&trial) {
+                let ct: f64 = rt.iter().map(|v| v * v).sum();
+                if ct < cost {
+                    gain = (cost - ct) / cost;
+                    a = trial;
+                    r = rt;
+                    theta = tt;
+                    cost = ct;
+                    mu = (mu / 10.0).max(1e-12);
+                    accepted = true;
+                    break;
+                }
+            }
+            mu *= 10.0;
+        }
+        if !accepted || gain < 1e-12 {
+            break;
+        }
+    }
+    let mut den = vec![1.0];
+    den.extend_from_slice(&a);
+    Ok(ContinuousModel::new(theta[..=m].to_vec(), den, delay_s))
+}
+
+/// White-residual Cramér–Rao bound of `[b…, a…]` for the joint output-error model: `σ²(JᵀJ)⁻¹`
+/// over all parameters (nuisances included), `J` by central differences for `a` and exactly
+/// (the basis columns) for the linear parameters; the `[B, A]` block is returned.
+pub(super) fn covariance(
+    recs: &[Centered],
+    dt_s: f64,
+    model: &ContinuousModel,
+    nuis: &[Nuisance],
+) -> Option<Vec<f64>> {
+    let (n, m) = (model.den.len() - 1, model.num.len() - 1);
+    let (lin, y) = linear_system(recs, dt_s, &model.den, m, model.delay_s);
+    // Linear parameters in `lin`'s column order: B, then per record [x_r…, c_r].
+    let mut theta = model.num.clone();
+    for q in nuis {
+        theta.extend_from_slice(&q.coef);
+    }
+    let output = |den: &[f64]| -> Vec<f64> {
+        let (mat, _) = linear_system(recs, dt_s, den, m, model.delay_s);
+        (0..y.len())
+            .map(|i| (0..theta.len()).map(|c| mat[(i, c)] * theta[c]).sum())
+            .collect()
+    };
+    let nl = theta.len();
+    let p = nl + n;
+    let mut da = Vec::with_capacity(n);
+    for i in 1..=n {
+        let h = 1e-6 * model.den[i].abs().max(1e-3);
+        let (mut up, mut dn) = (model.den.clone(), model.den.clone());
+        up[i] += h;
+        dn[i] -= h;
+        let (yu, yd) = (output(&up), output(&dn));
+        da.push(
+            yu.iter()
+                .zip(&yd)
+                .map(|(a, b)| (a - b) / (2.0 * h))
+                .collect::<Vec<f64>>(),
+        );
+    }
+    // Parameter order for the matrix: [b (m+1), a (n), nuisances].
+    let col = |i: usize, c: usize| -> f64 {
+        if c <= m {
+            lin[(i, c)]
+        } else if c <= m + n {
+            da[c - m - 1][i]
+        } else {
+            lin[(i, c - n)]
+        }
+    };
+    let mut jtj = vec![0.0; p * p];
+    let mut row = vec![0.0; p];
+    for i in 0..y.len() {
+        for (c, v) in row.iter_mut().enumerate() {
+            *v = col(i, c);
+        }
+        for a in 0..p {
+            if row[a] == 0.0 {
+                continue;
+            }
+            for b in 0..p {
+                jtj[a * p + b] += row[a] * row[b];
+            }
+        }
+    }
+    let y_model: Vec<f64> = nuis
+        .iter()
+        .flat_map(|q| q.y_model.iter().copied())
+        .collect();
+    let dof = y.len().saturating_sub(p).max(1);
+    let sigma2 = sse(&y, &y_model) / dof as f64;
+    let inv = inverse(&jtj, p)?;
+    let q = m + 1 + n;
+    Some(
+        (0..q * q)
+            .map(|k| sigma2 * inv[(k / q) * p + k % q])
+            .collect(),
+    )
+}
