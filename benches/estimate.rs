@@ -8,13 +8,18 @@
 //! The record is simulated inside the bench from known parameters with white output noise (for
 //! timing; accuracy is tested elsewhere). Each figure is the median of `--repeat` fits (default 5).
 //!
+//! Also timed: subspace identification (`--method n4sid`) of the same records, order 4, with the
+//! short-period derivatives it reads off in the measured-state basis (no target; the field's Python
+//! subspace package takes 25–50 ms on JSBSim records of this size).
+//!
 //! Run: `cargo bench --bench estimate -- [--repeat 5] [--case 'toml oe'] [--json FILE]`
 
 use std::time::Instant;
 
 use flightid::estimate::{
-    fit, simulate_states, Entry, Estimate, InputHold, InputSignal, LinearModel, Method, Model,
-    Nuisance, Options, Parameter, Record, Run, Signature, StateModel, UserModel,
+    fit, simulate_states, subspace, Entry, Estimate, InputHold, InputSignal, LinearModel, Method,
+    Model, Nuisance, Options, Parameter, Record, Run, Signature, StateModel, SubspaceOptions,
+    UserModel,
 };
 use rand::{rngs::StdRng, Rng, SeedableRng};
 use rand_distr::StandardNormal;
@@ -268,6 +273,50 @@ fn time_fit(
     })
 }
 
+/// Median time of a subspace fit of `rec` and the short-period derivatives it reads off.
+fn time_subspace(rec: &Record, repeat: usize) -> String {
+    let names: Vec<String> = ["u", "alpha", "q", "theta", "ax", "az"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let inputs = vec!["elevator".to_string(), "throttle".to_string()];
+    let options = SubspaceOptions {
+        order: Some(4),
+        ..SubspaceOptions::default()
+    };
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeat {
+        let t0 = Instant::now();
+        match subspace(
+            std::slice::from_ref(rec),
+            &inputs,
+            &names,
+            Some(&[0, 1, 2, 3]),
+            &options,
+        ) {
+            Ok(m) => last = Some(m),
+            Err(e) => return format!("  n4sid {}: failed: {e}", rec.name),
+        }
+        times.push(t0.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    let Some(m) = last else {
+        return "  n4sid: no repeat".into();
+    };
+    let truth = |name: &str| TRUTH[NAMES.iter().position(|n| *n == name).unwrap_or(0)];
+    let err = |got: f64, name: &str| 100.0 * (got / truth(name) - 1.0);
+    format!(
+        "  n4sid {:<12} {:>8.1} ms  M_alpha {:+.1} %  M_q {:+.1} %  M_de {:+.1} %  Z_alpha {:+.1} %",
+        rec.name,
+        1e3 * times[times.len() / 2],
+        err(m.continuous.a[(2, 1)], "M_alpha"),
+        err(m.continuous.a[(2, 2)], "M_q"),
+        err(m.continuous.b[(2, 0)], "M_de"),
+        err(m.continuous.a[(1, 1)], "Z_alpha"),
+    )
+}
+
 fn main() {
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let value = |flag: &str| {
@@ -317,6 +366,11 @@ fn main() {
                 t.worst_error_sigma
             ),
             Err(e) => println!("  failed: {e}"),
+        }
+    }
+    if "n4sid".contains(only.as_str()) || only.is_empty() {
+        for rate in [10.0, 50.0] {
+            println!("{}", time_subspace(&record(rate, 7), repeat));
         }
     }
     let get = |i: usize| results[i].as_ref().ok().map(|t| t.median_s);

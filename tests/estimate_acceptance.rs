@@ -209,3 +209,171 @@ fn jsbsim_turbulence_output_error_and_filter_error_against_the_still_air_referen
         );
     }
 }
+
+/// Runs `scripts/gen_longitudinal_records.py` into `dir` (extra arguments appended); the truth.
+fn longitudinal_records(dir: &Path, first: u32, n: u32, extra: &[&str]) -> serde_json::Value {
+    let out = Command::new(python())
+        .arg(script("gen_longitudinal_records.py"))
+        .arg(dir)
+        .arg(first.to_string())
+        .arg(n.to_string())
+        .args(extra)
+        .output()
+        .expect("run the generator");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    read_json(&dir.join("truth.json"))
+}
+
+/// Fits `models/longitudinal_nonlinear.toml` (every parameter "auto") to seed `seed`'s two records.
+fn fit_longitudinal(dir: &Path, seed: u32) -> serde_json::Value {
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/longitudinal_nonlinear.toml");
+    let json = dir.join(format!("est{seed}.json"));
+    let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
+        .arg("estimate")
+        .arg("--model")
+        .arg(&model)
+        .arg("--data")
+        .arg(dir.join(format!("seed{seed}_a.csv")))
+        .arg("--data")
+        .arg(dir.join(format!("seed{seed}_b.csv")))
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "seed {seed}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("start values from the records"),
+        "the auto start values are reported: {stderr}"
+    );
+    let v = read_json(&json);
+    assert_eq!(v["converged"], true, "seed {seed}: {v}");
+    v
+}
+
+/// A nonlinear longitudinal model written as a TOML file (states V, α, θ, q; elevator and a
+/// measured thrust as inputs; V, α, θ, q, ax, az measured, with an α-vane and an az bias), fitted
+/// with no start value given: scipy's DOP853 flies the same equations with its own trim, noise and
+/// biases (`scripts/gen_longitudinal_records.py`), 40 s at 25 Hz, two records per seed.
+///
+/// - Inputs logged exactly (6 seeds, 60 estimates): at least 57 within 3σ of the truth, and the
+///   RMS of the normalised errors in [0.5, 1.6] (measured: 0 of 60 beyond 3σ, RMS ≈ 0.9).
+/// - Inputs logged with noise, as on a real aircraft (0.02° on the elevator, 10 N on the thrust;
+///   3 seeds): the well-determined derivatives stay within a few percent (measured worst: CL_α
+///   0.3 %, Cm_α 0.4 %, Cm_q 1.7 %, Cm_δe 1.0 %). Their σ are then optimistic (the input noise acts
+///   as process noise that output error does not model: 13 of 60 estimates beyond 3σ over 6
+///   seeds), which this test does not hide: it asserts only the relative errors there.
+#[test]
+fn nonlinear_longitudinal_toml_model_from_auto_start_values_recovers_the_truth() {
+    let exact = tempfile::tempdir().unwrap();
+    let truth = longitudinal_records(exact.path(), 1, 6, &["exact-inputs"]);
+    let truth = truth.as_object().unwrap();
+    let (mut beyond, mut z2) = (Vec::new(), Vec::new());
+    for seed in 1..=6 {
+        let v = fit_longitudinal(exact.path(), seed);
+        for (name, t) in truth {
+            let (value, sigma) = value(&v, name);
+            let z = (value - t.as_f64().unwrap()) / sigma;
+            z2.push(z * z);
+            if z.abs() > 3.0 {
+                beyond.push(format!("seed {seed} {name} z = {z:.1}"));
+            }
+        }
+    }
+    assert!(beyond.len() <= 3, "beyond 3σ: {beyond:?}");
+    let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+    assert!((0.5..=1.6).contains(&rms), "RMS normalised error {rms:.2}");
+
+    let noisy = tempfile::tempdir().unwrap();
+    let truth = longitudinal_records(noisy.path(), 1, 3, &[]);
+    for seed in 1..=3 {
+        let v = fit_longitudinal(noisy.path(), seed);
+        for (name, tolerance) in [
+            ("CL_alpha", 0.02),
+            ("Cm_alpha", 0.02),
+            ("Cm_q", 0.05),
+            ("Cm_de", 0.03),
+            ("CD_0", 0.06),
+            ("CL_de", 0.15),
+        ] {
+            let t = truth[name].as_f64().unwrap();
+            let (value, _) = value(&v, name);
+            assert!(
+                ((value - t) / t).abs() < tolerance,
+                "seed {seed} {name} {value} against {t}"
+            );
+        }
+    }
+}
+
+/// `estimate --method n4sid` on the independent short-period generator's records (5 seeds, two
+/// records each): the subspace model, written in the basis of the measured α and q, reads as the
+/// short-period derivatives; they land within 8 % of the truth (measured: within 3 % on M_α, M_q,
+/// M_δe, Z_α). Z_δe is small and poorly determined and is not asserted.
+#[test]
+fn n4sid_reads_the_short_period_derivatives_off_independent_records() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(python())
+        .arg(script("gen_short_period_records.py"))
+        .arg(dir.path())
+        .args(["1", "5"])
+        .output()
+        .expect("run the generator");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let truth = read_json(&dir.path().join("truth.json"));
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/short_period.toml");
+    for seed in 1..=5 {
+        let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .args(["estimate", "--method", "n4sid", "--model"])
+            .arg(&model)
+            .arg("--data")
+            .arg(dir.path().join(format!("seed{seed}_a.csv")))
+            .arg("--data")
+            .arg(dir.path().join(format!("seed{seed}_b.csv")))
+            .args(["--json", "-"])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        let v: serde_json::Value = serde_json::from_str(&text[text.find('{').unwrap()..]).unwrap();
+        assert_eq!(v["order"], 2);
+        assert_eq!(v["states"], serde_json::json!(["alpha_rad", "q_rad_s"]));
+        let a = |i: usize, j: usize| v["a"][i][j].as_f64().unwrap();
+        let b = |i: usize| v["b"][i][0].as_f64().unwrap();
+        for (name, got) in [
+            ("Z_alpha", a(0, 0)),
+            ("M_alpha", a(1, 0)),
+            ("M_q", a(1, 1)),
+            ("M_de", b(1)),
+        ] {
+            let t = truth[name].as_f64().unwrap();
+            assert!(
+                ((got - t) / t).abs() < 0.08,
+                "seed {seed} {name} {got} against {t}"
+            );
+        }
+        assert!(
+            (a(0, 1) - 1.0).abs() < 0.08,
+            "seed {seed}: α̇ per q {}",
+            a(0, 1)
+        );
+        let modes = v["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), 1, "one short-period pair: {modes:?}");
+    }
+}

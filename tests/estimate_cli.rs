@@ -266,3 +266,96 @@ fn report_holds_overlays_residuals_and_the_correlation_matrix() {
     );
     assert!(mine.join("notes.txt").is_file());
 }
+
+/// Start values "auto" and `--method n4sid` refuse what they cannot do, exit 2, saying why: a
+/// parameter that enters an equation nonlinearly, a state the record does not measure, n4sid
+/// without channels, and a report n4sid does not write.
+#[test]
+fn auto_start_values_and_n4sid_refuse_bad_requests_with_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("a.csv");
+    write_record(&csv, [0.0, 0.0], [0.0, 0.0], 5);
+    let good = std::fs::read_to_string(model_file()).unwrap();
+    let auto = good.replace("M_q     = -1.5", "M_q     = \"auto\"");
+    let cases = [
+        (
+            auto.replace("M_q*q_rad_s", "M_q*M_q*q_rad_s"),
+            "nonlinearly",
+        ),
+        (
+            auto.replace(
+                "states  = [\"alpha_rad\", \"q_rad_s\"]",
+                "states  = [\"alpha_rad\", \"q_rad_s\", \"theta_rad\"]",
+            )
+            .replace("[equations]", "[equations]\ntheta_rad = \"q_rad_s\""),
+            "theta_rad",
+        ),
+        (
+            good.replace("M_q     = -1.5", "M_q     = \"guess\""),
+            "or \"auto\"",
+        ),
+    ];
+    for (text, why) in cases {
+        let (code, err) = bad_model(&text, &csv);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(why), "expected '{why}' in: {err}");
+    }
+    let (code, err) = bad_model(&auto, &csv);
+    assert_eq!(
+        code, 0,
+        "a model that is affine in its auto parameter fits: {err}"
+    );
+    assert!(err.contains("start values from the records"), "{err}");
+
+    let run = |args: &[&str]| {
+        let out = bin()
+            .arg("estimate")
+            .args(args)
+            .arg("--data")
+            .arg(&csv)
+            .output()
+            .unwrap();
+        (
+            out.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (code, err) = run(&["--method", "n4sid"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--inputs and --outputs"), "{err}");
+    let report = dir.path().join("rep");
+    let (code, err) = run(&[
+        "--method",
+        "n4sid",
+        "--inputs",
+        "elevator_rad",
+        "--outputs",
+        "alpha_rad,q_rad_s",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(!report.exists());
+    let (code, err) = run(&[
+        "--method",
+        "n4sid",
+        "--inputs",
+        "elevator_rad",
+        "--outputs",
+        "nope",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("'nope'"), "{err}");
+    let (code, err) = run(&["--method", "oe"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("needs --model"), "{err}");
+    let (code, err) = run(&[
+        "--method",
+        "n4sid",
+        "--inputs",
+        "elevator_rad",
+        "--outputs",
+        "alpha_rad,q_rad_s",
+    ]);
+    assert_eq!(code, 0, "{err}");
+}

@@ -29,6 +29,8 @@ mod model;
 mod record;
 mod report;
 pub mod riccati;
+mod start;
+mod subspace;
 mod summary;
 mod user_model;
 
@@ -38,6 +40,8 @@ pub use layout::{Nuisance, NuisanceKind};
 pub use linear::{Entry, LinearModel};
 pub use model::{Discrete, Model, Parameter, Signature, SimError, StateModel};
 pub use record::{InputHold, InputSignal, Record, Run};
+pub use start::{start_values, StartValues};
+pub use subspace::{subspace, SubspaceModel, SubspaceOptions, SubspaceRecord};
 pub use summary::HIGH_CORRELATION;
 pub use user_model::{ModelFileError, UserModel};
 

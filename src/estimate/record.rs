@@ -62,6 +62,35 @@ impl Record {
         }
     }
 
+    /// The `inputs` and `outputs` columns of a flight record (initial state empty: for models
+    /// without named states, such as a subspace fit).
+    pub fn from_columns(
+        rec: &crate::data::FlightRecord,
+        inputs: &[String],
+        outputs: &[String],
+        name: &str,
+    ) -> Result<Record, super::EstimateError> {
+        let take = |cols: &[String], what: &str| {
+            cols.iter()
+                .map(|c| {
+                    rec.column(c)
+                        .map(<[f64]>::to_vec)
+                        .ok_or_else(|| super::EstimateError::Record {
+                            record: name.to_string(),
+                            reason: format!("{what} '{c}' is not a column"),
+                        })
+                })
+                .collect::<Result<Vec<_>, _>>()
+        };
+        Ok(Record {
+            name: name.to_string(),
+            time_s: rec.time_s.clone(),
+            inputs: take(inputs, "input")?,
+            outputs: take(outputs, "output")?,
+            initial_state: Vec::new(),
+        })
+    }
+
     /// Median sample interval, s.
     pub fn median_dt_s(&self) -> f64 {
         let mut d: Vec<f64> = self.time_s.windows(2).map(|w| w[1] - w[0]).collect();

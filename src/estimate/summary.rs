@@ -3,6 +3,8 @@
 use serde_json::{json, Map, Value};
 
 use super::fit::{Estimate, ParameterEstimate};
+use super::record::InputHold;
+use super::subspace::SubspaceModel;
 
 /// Correlations above this magnitude are flagged in the table.
 pub const HIGH_CORRELATION: f64 = 0.9;
@@ -151,4 +153,139 @@ impl Estimate {
             "warnings": self.warnings,
         })
     }
+}
+
+impl SubspaceModel {
+    /// The model for people: order and singular values, the continuous-time matrices, the modes
+    /// and the fit.
+    pub fn table(&self) -> String {
+        let how = if self.order_from_data {
+            "the largest singular-value gap"
+        } else {
+            "given"
+        };
+        let hold = match self.hold {
+            InputHold::Linear => "linear interpolation",
+            InputHold::Zoh => "zero-order hold",
+        };
+        let mut out = format!(
+            "subspace identification (PO-MOESP): order {} ({how}), {} block rows, {:.3} s\n",
+            self.order, self.horizon, self.wall_s
+        );
+        let shown: Vec<String> = self
+            .singular_values
+            .iter()
+            .take(12)
+            .map(|v| format!("{v:.4}"))
+            .collect();
+        out.push_str(&format!("singular values: {}\n", shown.join(" ")));
+        let states = self.state_labels();
+        out.push_str(&format!(
+            "continuous-time model (inputs between samples by {hold}); states: {}\n",
+            match &self.state_names {
+                Some(_) => states.join(", "),
+                None => format!("{} internal states (no measured basis)", self.order),
+            }
+        ));
+        let cont = &self.continuous;
+        out.push_str(&matrix_block("A", &states, &states, &cont.a));
+        out.push_str(&matrix_block("B", &states, &self.inputs, &cont.b));
+        out.push_str(&matrix_block("C", &self.outputs, &states, &cont.c));
+        out.push_str(&matrix_block("D", &self.outputs, &self.inputs, &cont.d));
+        out.push_str("modes:\n");
+        for mode in &self.modes {
+            let pole = if mode.pole.im.abs() > 0.0 {
+                format!("{:.4} ± {:.4}i", mode.pole.re, mode.pole.im.abs())
+            } else {
+                format!("{:.4}", mode.pole.re)
+            };
+            out.push_str(&format!(
+                "  pole {pole:<22} ω_n {:>8.4} rad/s  ζ {:>7.4}\n",
+                mode.omega_n_rad_s, mode.zeta
+            ));
+        }
+        let fit: Vec<String> = self
+            .outputs
+            .iter()
+            .zip(&self.fit_percent)
+            .map(|(n, f)| format!("{n} {f:.1} %"))
+            .collect();
+        out.push_str(&format!("fit: {}\n", fit.join(", ")));
+        out
+    }
+
+    fn state_labels(&self) -> Vec<String> {
+        match &self.state_names {
+            Some(names) => names.clone(),
+            None => (1..=self.order).map(|i| format!("x{i}")).collect(),
+        }
+    }
+
+    /// The model for programs (`docs/estimate.md`).
+    pub fn to_json(&self) -> Value {
+        let rows = |m: &faer::Mat<f64>| -> Vec<Vec<f64>> {
+            (0..m.nrows())
+                .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+                .collect()
+        };
+        let per_output = |values: &[f64]| -> Map<String, Value> {
+            self.outputs
+                .iter()
+                .zip(values)
+                .map(|(n, v)| (n.clone(), json!(v)))
+                .collect()
+        };
+        json!({
+            "method": "n4sid",
+            "order": self.order,
+            "order_from_data": self.order_from_data,
+            "horizon": self.horizon,
+            "singular_values": self.singular_values,
+            "states": self.state_names,
+            "inputs": self.inputs,
+            "outputs": self.outputs,
+            "input_hold": self.hold,
+            "a": rows(&self.continuous.a),
+            "b": rows(&self.continuous.b),
+            "c": rows(&self.continuous.c),
+            "d": rows(&self.continuous.d),
+            "discrete": {
+                "dt_s": self.discrete.dt_s,
+                "a": rows(&self.discrete.a),
+                "b": rows(&self.discrete.b),
+                "c": rows(&self.discrete.c),
+                "d": rows(&self.discrete.d),
+            },
+            "modes": self.modes,
+            "fit_percent": per_output(&self.fit_percent),
+            "records": self.records.iter().map(|r| json!({
+                "name": r.name,
+                "fit_percent": per_output(&r.fit_percent),
+            })).collect::<Vec<_>>(),
+            "wall_s": self.wall_s,
+        })
+    }
+}
+
+/// `name` as a labelled matrix, one row per line.
+fn matrix_block(name: &str, rows: &[String], cols: &[String], m: &faer::Mat<f64>) -> String {
+    let w = rows
+        .iter()
+        .map(|r| r.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(4);
+    let mut out = format!("{name:<w$}");
+    for c in cols {
+        out.push_str(&format!(" {c:>14}"));
+    }
+    out.push('\n');
+    for (i, r) in rows.iter().enumerate() {
+        out.push_str(&format!("{r:<w$}"));
+        for j in 0..cols.len() {
+            out.push_str(&format!(" {:>14.6}", m[(i, j)]));
+        }
+        out.push('\n');
+    }
+    out
 }

@@ -41,6 +41,9 @@ pub struct UserModel {
     pub nuisance: Nuisance,
     /// Initial states estimated (`initial_state = "estimate"`) rather than measured.
     pub estimate_initial_state: bool,
+    /// Parameters written `"auto"`: their start values come from the records
+    /// ([`super::start_values`]).
+    pub auto_start: Vec<usize>,
 }
 
 const TOP_KEYS: [&str; 9] = [
@@ -142,12 +145,22 @@ impl UserModel {
                     err(
                         key_line(text, Some(sec), k),
                         k,
-                        format!("{k} must be a number"),
+                        if sec == "parameters" {
+                            format!("{k} must be a number or \"auto\"")
+                        } else {
+                            format!("{k} must be a number")
+                        },
                     )
                 })
         };
         let mut parameters = Vec::new();
+        let mut auto_start = Vec::new();
         for (k, v) in section("parameters")? {
+            if v.as_str() == Some("auto") {
+                auto_start.push(parameters.len());
+                parameters.push(Parameter::free(k.clone(), 0.0));
+                continue;
+            }
             parameters.push(Parameter::free(k.clone(), number("parameters", &k, &v)?));
         }
         for (k, v) in section("fixed")? {
@@ -340,7 +353,32 @@ impl UserModel {
             parameters,
             nuisance,
             estimate_initial_state,
+            auto_start,
         })
+    }
+
+    /// The record with the model's inputs and its states as the outputs (for start values from
+    /// the records: every state must be a column).
+    pub fn state_record(&self, rec: &FlightRecord, name: &str) -> Result<Record, ModelFileError> {
+        let outputs = self
+            .signature
+            .states
+            .iter()
+            .map(|s| {
+                rec.column(s).map(<[f64]>::to_vec).ok_or_else(|| ModelFileError {
+                    file: self.file.clone(),
+                    line: word_line(&self.text, s),
+                    name: s.clone(),
+                    message: format!(
+                        "start values \"auto\" need every state measured: '{s}' is not a column of {name}"
+                    ),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut record = self.record(rec, name)?;
+        record.initial_state = outputs.iter().map(|c| c[0]).collect();
+        record.outputs = outputs;
+        Ok(record)
     }
 
     /// The record's columns in this model's terms. A missing input or output column, or a

@@ -22,6 +22,7 @@ mod filter;
 mod iv;
 mod joint;
 mod linalg;
+pub(crate) use linalg::lstsq_qr;
 mod ls;
 mod metrics;
 mod oe;
