@@ -39,12 +39,16 @@ use super::flight_models::{
     LATERAL_STATES, LONGITUDINAL_PARAMETERS, LONGITUDINAL_STATES,
 };
 use super::measured::{
-    air_data, dimensional, equation_error_measured, lateral_modes_at, longitudinal_modes_at,
-    model_constants, modes_with_uncertainty, moved_to_cg, records_exciting, reference_condition,
-    AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, ReferenceCondition,
+    air_data, dimensional, lateral_modes_at, longitudinal_modes_at, model_constants,
+    modes_with_uncertainty, moved_to_cg, records_exciting, reference_condition, AirData,
+    AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, ReferenceCondition,
 };
 use crate::data::{self, G0_M_S2};
 use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signature, StateModel};
+
+mod free;
+use free::{equation_error_starts, parameters, LAT_FREE, LON_FREE};
+pub use free::{parse_free, FreeChoice, FREE_GROUPS};
 
 /// Column of the air density input (a constant per record).
 const DENSITY: &str = "density_kg_m3";
@@ -175,59 +179,6 @@ impl StateModel for LateralModel {
 
 crate::model_from_state_model!(LateralModel);
 
-/// One entry of `--free`: a parameter or a group, freed (`NAME`) or held (`-NAME`).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct FreeChoice {
-    /// The parameters it names.
-    pub names: Vec<&'static str>,
-    /// Free (true) or held at its start value (false).
-    pub free: bool,
-}
-
-/// Groups `--free` accepts besides parameter names.
-pub const FREE_GROUPS: [(&str, &[&str]); 5] = [
-    ("speed", &["CL_V", "CD_V", "Cm_V"]),
-    ("alphadot", &["CL_alphadot", "Cm_alphadot"]),
-    ("zero", &["CL_0", "CD_0", "Cm_0", "CY_0", "Cl_0", "Cn_0"]),
-    ("skew", &["tau_alpha_s", "tau_beta_s"]),
-    ("all", &[]),
-];
-
-/// Parses `--free` entries: a parameter of either model (`Cm_alphadot`), a group of [`FREE_GROUPS`]
-/// (`speed`, `alphadot`, `zero`, `skew`, `all`), each optionally prefixed with `-` to hold it instead.
-pub fn parse_free(entries: &[String]) -> Result<Vec<FreeChoice>, String> {
-    let known = || {
-        LONGITUDINAL_PARAMETERS
-            .iter()
-            .chain(&LATERAL_PARAMETERS)
-            .copied()
-    };
-    entries
-        .iter()
-        .map(|e| {
-            let e = e.trim();
-            let (free, name) = match e.strip_prefix('-') {
-                Some(rest) => (false, rest),
-                None => (true, e.strip_prefix('+').unwrap_or(e)),
-            };
-            let names: Vec<&'static str> = if name == "all" {
-                known().collect()
-            } else if let Some((_, g)) = FREE_GROUPS.iter().find(|(g, _)| *g == name) {
-                g.to_vec()
-            } else if let Some(n) = known().find(|n| *n == name) {
-                vec![n]
-            } else {
-                return Err(format!(
-                    "unknown parameter or group '{name}' (groups: speed, alphadot, zero, skew, all; \
-                     parameters: {})",
-                    known().collect::<Vec<_>>().join(", ")
-                ));
-            };
-            Ok(FreeChoice { names, free })
-        })
-        .collect()
-}
-
 /// Options of [`output_error_report`].
 #[derive(Debug, Clone, Default)]
 pub struct OutputErrorOptions {
@@ -238,38 +189,6 @@ pub struct OutputErrorOptions {
     /// Free the α̇ terms (as `--free alphadot`).
     pub alphadot: bool,
 }
-
-/// Parameters free by default (module doc).
-const LON_FREE: [&str; 10] = [
-    "CL_0",
-    "CL_alpha",
-    "CL_de",
-    "CD_0",
-    "CD_alpha",
-    "Cm_0",
-    "Cm_alpha",
-    "Cm_q",
-    "Cm_de",
-    "tau_alpha_s",
-];
-const LAT_FREE: [&str; 16] = [
-    "CY_0",
-    "CY_beta",
-    "CY_dr",
-    "Cl_0",
-    "Cl_beta",
-    "Cl_p",
-    "Cl_r",
-    "Cl_da",
-    "Cl_dr",
-    "Cn_0",
-    "Cn_beta",
-    "Cn_p",
-    "Cn_r",
-    "Cn_da",
-    "Cn_dr",
-    "tau_beta_s",
-];
 
 /// The records of one axis ([`records_exciting`]).
 fn records_for(
@@ -295,94 +214,74 @@ fn need<'a>(
     })
 }
 
-/// Start value and free flag of every parameter of a model (module doc), with the choices applied.
-#[allow(clippy::too_many_arguments)]
-fn parameters(
-    names: &[&'static str],
-    default_free: &[&str],
-    starts: &BTreeMap<String, f64>,
-    fallback: &BTreeMap<&'static str, f64>,
-    still: &BTreeSet<&'static str>,
-    options: &OutputErrorOptions,
-    notes: &mut Vec<String>,
-) -> Vec<Parameter> {
-    let mut free: BTreeSet<&str> = default_free.iter().copied().collect();
-    if options.alphadot {
-        free.extend(["CL_alphadot", "Cm_alphadot"]);
-    }
-    for c in &options.free {
-        for n in &c.names {
-            if c.free {
-                free.insert(n);
-            } else {
-                free.remove(n);
-            }
-        }
-    }
-    let mut held_still = Vec::new();
-    let params = names
-        .iter()
-        .map(|&n| {
-            let value = starts
-                .get(n)
-                .copied()
-                .or_else(|| fallback.get(n).copied())
-                .unwrap_or(0.0);
-            let mut p = Parameter::free(n, value);
-            if n.starts_with("tau_") {
-                p = p.bounded(-0.25, 0.25);
-            }
-            let is_free = free.contains(n) && !still.contains(n);
-            if free.contains(n) && still.contains(n) {
-                held_still.push(n);
-            }
-            let keeps_start = n.ends_with("_0") || n.starts_with("tau_");
-            if is_free {
-                p
-            } else if keeps_start && !still.contains(n) {
-                Parameter { fixed: true, ..p }
-            } else {
-                Parameter::fixed(n, 0.0)
-            }
-        })
-        .collect();
-    if !held_still.is_empty() {
-        notes.push(format!(
-            "held at 0 (a surface no record moves, or a vane the records lack): {}",
-            held_still.join(", ")
-        ));
-    }
-    params
-}
-
-/// Equation-error start values by name (empty when equation error cannot be formed).
-fn equation_error_starts(
-    records: &[(String, data::FlightRecord)],
-    airframe: &Airframe,
-    axis: AxisChoice,
-    notes: &mut Vec<String>,
-) -> BTreeMap<String, f64> {
-    match equation_error_measured(records, airframe, axis, false) {
-        Ok(ee) => ee
-            .derivatives
-            .into_iter()
-            .filter(|(k, _)| k != "CL_q")
-            .map(|(k, e)| (k, e.value))
-            .collect(),
-        Err(e) => {
-            notes.push(format!(
-                "no equation-error start values ({e}); generic ones used"
-            ));
-            BTreeMap::new()
-        }
-    }
-}
-
 /// The result of one axis's fit.
 struct AxisFit {
     estimate: estimate::Estimate,
     theta: Vec<f64>,
     constants: Constants,
+}
+
+/// The outputs of an axis that every record carries, or an error naming the columns the axis could use.
+fn outputs_in_every_record<O: Copy>(
+    all: &[O],
+    column: fn(O) -> &'static str,
+    records: &[&(String, data::FlightRecord)],
+    axis: &str,
+) -> Result<Vec<O>, MeasuredError> {
+    let outputs: Vec<O> = all
+        .iter()
+        .copied()
+        .filter(|&o| records.iter().all(|(_, r)| r.column(column(o)).is_some()))
+        .collect();
+    if outputs.is_empty() {
+        return Err(MeasuredError::Record {
+            file: records
+                .iter()
+                .map(|(n, _)| n.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            message: format!(
+                "no {axis} output column ({}) in every record",
+                all.iter()
+                    .map(|&o| column(o))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        });
+    }
+    Ok(outputs)
+}
+
+/// One record of the core: the given inputs and initial state, the measured `outputs` columns of `raw`.
+fn core_record(
+    name: &str,
+    raw: &data::FlightRecord,
+    inputs: Vec<Vec<f64>>,
+    outputs: &[&str],
+    initial_state: Vec<f64>,
+) -> Result<Record, MeasuredError> {
+    Ok(Record {
+        name: name.to_string(),
+        time_s: raw.time_s.clone(),
+        inputs,
+        outputs: outputs
+            .iter()
+            .map(|c| need(name, raw, c, "").map(<[f64]>::to_vec))
+            .collect::<Result<_, _>>()?,
+        initial_state,
+    })
+}
+
+/// Nuisance terms (module doc): every record's four initial states, and an additive bias on each output
+/// among `biased`.
+fn states_and_biases<O: PartialEq>(outputs: &[O], biased: &[O]) -> Nuisance {
+    Nuisance {
+        initial_state: (0..4).collect(),
+        output_bias: (0..outputs.len())
+            .filter(|&i| biased.contains(&outputs[i]))
+            .collect(),
+        ..Nuisance::default()
+    }
 }
 
 /// Fits the longitudinal model to the records (module doc).
@@ -401,18 +300,8 @@ fn fit_longitudinal(
     } else if records.iter().any(|(_, r)| r.column("thrust_n").is_some()) {
         notes.push("longitudinal: thrust_n is not in every record; thrust left out (T = 0; C_D0 absorbs it)".into());
     }
-    let outputs: Vec<LonOutput> = LonOutput::ALL
-        .into_iter()
-        .filter(|o| records.iter().all(|(_, r)| r.column(o.column()).is_some()))
-        .collect();
-    if outputs.is_empty() {
-        return Err(MeasuredError::Record {
-            file: records.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", "),
-            message: "no longitudinal output column (airspeed_m_s, alpha_rad, theta_rad, q_rad_s, ax_m_s2, \
-                      az_m_s2, qdot_rad_s2) in every record"
-                .into(),
-        });
-    }
+    let outputs =
+        outputs_in_every_record(&LonOutput::ALL, LonOutput::column, records, "longitudinal")?;
     let mut recs = Vec::new();
     for (name, raw) in records {
         let why = "the longitudinal model's states";
@@ -440,23 +329,11 @@ fn fit_longitudinal(
             inputs.push(need(name, raw, "thrust_n", "")?.to_vec());
         }
         inputs.push(vec![air[name.as_str()].density_kg_m3; n]);
-        recs.push(Record {
-            name: name.clone(),
-            time_s: raw.time_s.clone(),
-            inputs,
-            outputs: outputs
-                .iter()
-                .map(|o| need(name, raw, o.column(), "").map(<[f64]>::to_vec))
-                .collect::<Result<_, _>>()?,
-            initial_state: x0,
-        });
+        let columns: Vec<&str> = outputs.iter().map(|o| o.column()).collect();
+        recs.push(core_record(name, raw, inputs, &columns, x0)?);
     }
     // Start values: equation error, then the trim (module doc).
-    let owned: Vec<(String, data::FlightRecord)> = records
-        .iter()
-        .map(|(n, r)| (n.clone(), r.clone()))
-        .collect();
-    let starts = equation_error_starts(&owned, airframe, AxisChoice::Longitudinal, notes);
+    let starts = equation_error_starts(records, airframe, AxisChoice::Longitudinal, notes);
     let qs = cond.qbar_pa() * constants.geometry.wing_area_m2;
     let span = constants.geometry.span_m;
     let aspect = if span.is_finite() {
@@ -516,13 +393,7 @@ fn fit_longitudinal(
     );
     let model = LongitudinalModel::new(constants, outputs.clone(), thrust);
     let bias = [LonOutput::Q, LonOutput::Ax, LonOutput::Az, LonOutput::Qdot];
-    let nuisance = Nuisance {
-        initial_state: (0..4).collect(),
-        output_bias: (0..outputs.len())
-            .filter(|&i| bias.contains(&outputs[i]))
-            .collect(),
-        ..Nuisance::default()
-    };
+    let nuisance = states_and_biases(&outputs, &bias);
     fit_model(&model, &params, &recs, &nuisance, options, constants)
 }
 
@@ -536,18 +407,7 @@ fn fit_lateral(
     notes: &mut Vec<String>,
 ) -> Result<AxisFit, MeasuredError> {
     let constants = model_constants(airframe, false, cond.airspeed_m_s)?;
-    let outputs: Vec<LatOutput> = LatOutput::ALL
-        .into_iter()
-        .filter(|o| records.iter().all(|(_, r)| r.column(o.column()).is_some()))
-        .collect();
-    if outputs.is_empty() {
-        return Err(MeasuredError::Record {
-            file: records.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", "),
-            message: "no lateral output column (beta_rad, p_rad_s, r_rad_s, phi_rad, ay_m_s2, pdot_rad_s2, \
-                      rdot_rad_s2) in every record"
-                .into(),
-        });
-    }
+    let outputs = outputs_in_every_record(&LatOutput::ALL, LatOutput::column, records, "lateral")?;
     let mut recs = Vec::new();
     let mut zero_filled = BTreeSet::new();
     for (name, raw) in records {
@@ -574,16 +434,8 @@ fn fit_lateral(
                 }
             })
             .collect();
-        recs.push(Record {
-            name: name.clone(),
-            time_s: raw.time_s.clone(),
-            inputs,
-            outputs: outputs
-                .iter()
-                .map(|o| need(name, raw, o.column(), "").map(<[f64]>::to_vec))
-                .collect::<Result<_, _>>()?,
-            initial_state: x0,
-        });
+        let columns: Vec<&str> = outputs.iter().map(|o| o.column()).collect();
+        recs.push(core_record(name, raw, inputs, &columns, x0)?);
     }
     if !zero_filled.is_empty() {
         notes.push(format!(
@@ -591,11 +443,7 @@ fn fit_lateral(
             zero_filled.into_iter().collect::<Vec<_>>().join(", ")
         ));
     }
-    let owned: Vec<(String, data::FlightRecord)> = records
-        .iter()
-        .map(|(n, r)| (n.clone(), r.clone()))
-        .collect();
-    let starts = equation_error_starts(&owned, airframe, AxisChoice::Lateral, notes);
+    let starts = equation_error_starts(records, airframe, AxisChoice::Lateral, notes);
     let fallback: BTreeMap<&'static str, f64> = [
         ("CY_beta", -0.5),
         ("Cl_beta", -0.05),
@@ -643,13 +491,7 @@ fn fit_lateral(
         LatOutput::Pdot,
         LatOutput::Rdot,
     ];
-    let nuisance = Nuisance {
-        initial_state: (0..4).collect(),
-        output_bias: (0..outputs.len())
-            .filter(|&i| bias.contains(&outputs[i]))
-            .collect(),
-        ..Nuisance::default()
-    };
+    let nuisance = states_and_biases(&outputs, &bias);
     fit_model(&model, &params, &recs, &nuisance, options, constants)
 }
 
@@ -880,192 +722,4 @@ pub fn output_error_report(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::aero::airframe::SensorPositions;
-    use crate::aero::params::{Geometry, MassProperties};
-    use crate::estimate::{simulate_states, InputHold, InputSignal, Run};
-
-    fn constants() -> Constants {
-        Constants {
-            mass: MassProperties {
-                mass_kg: 1200.0,
-                ixx_kg_m2: 1800.0,
-                iyy_kg_m2: 2200.0,
-                izz_kg_m2: 3500.0,
-                ixz_kg_m2: 60.0,
-            },
-            geometry: Geometry {
-                wing_area_m2: 16.0,
-                span_m: 11.0,
-                chord_m: 1.5,
-            },
-            thrust_inclination_rad: 0.0,
-            thrust_moment_arm_m: 0.0,
-            sensors: SensorPositions {
-                imu_m: [0.5, 0.0, 0.2],
-                alpha_vane_m: [2.5, 0.0, 0.0],
-                beta_vane_m: [2.5, 0.0, 0.0],
-            },
-            v_ref_m_s: 55.0,
-            g_m_s2: G0_M_S2,
-        }
-    }
-
-    /// Deterministic zero-mean noise of standard deviation `sigma` (sum of 12 uniforms, an LCG).
-    fn noise(seed: u64, n: usize, sigma: f64) -> Vec<f64> {
-        let mut s = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (0..n)
-            .map(|_| {
-                let mut acc = 0.0;
-                for _ in 0..12 {
-                    s = s
-                        .wrapping_mul(6364136223846793005)
-                        .wrapping_add(1442695040888963407);
-                    acc += (s >> 11) as f64 / (1u64 << 53) as f64;
-                }
-                sigma * (acc - 6.0)
-            })
-            .collect()
-    }
-
-    /// An elevator 3-2-1-1 of `amp` rad on the trim elevator, unit 0.4 s from 1 s, 50 Hz for 12 s.
-    fn multistep(n: usize, amp: f64, trim: f64) -> Vec<f64> {
-        (0..n)
-            .map(|k| {
-                let t = k as f64 * 0.02;
-                let u = 0.4;
-                let s = if (1.0..1.0 + 3.0 * u).contains(&t) {
-                    1.0
-                } else if (1.0 + 3.0 * u..1.0 + 5.0 * u).contains(&t) {
-                    -1.0
-                } else if (1.0 + 5.0 * u..1.0 + 6.0 * u).contains(&t) {
-                    1.0
-                } else if (1.0 + 6.0 * u..1.0 + 7.0 * u).contains(&t) {
-                    -1.0
-                } else {
-                    0.0
-                };
-                trim + amp * s
-            })
-            .collect()
-    }
-
-    /// The longitudinal model simulated with known derivatives, measured with noise at sensors away from the
-    /// CG, a vane skew and gyro/accelerometer biases, is fitted back: the core and the model agree, so the
-    /// estimates land within a few σ of the truth (σ of the noise: α 0.05°, q 0.05°/s, a 0.02 m/s²).
-    #[test]
-    fn longitudinal_output_error_recovers_the_derivatives_it_simulated() {
-        let c = constants();
-        let truth: Vec<f64> = LONGITUDINAL_PARAMETERS
-            .iter()
-            .map(|n| match *n {
-                "CL_0" => 0.25,
-                "CL_alpha" => 5.2,
-                "CL_de" => 0.4,
-                "CD_0" => 0.03,
-                "CD_alpha" => 0.25,
-                "Cm_0" => 0.02,
-                "Cm_alpha" => -0.8,
-                "Cm_q" => -14.0,
-                "Cm_de" => -1.3,
-                "tau_alpha_s" => 0.03,
-                _ => 0.0,
-            })
-            .collect();
-        let model = LongitudinalModel::new(c, LonOutput::ALL[..6].to_vec(), true);
-        let n = 600;
-        let time_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.02).collect();
-        let mut records = Vec::new();
-        for (r, amp) in [0.03, -0.025].into_iter().enumerate() {
-            let inputs = vec![multistep(n, amp, -0.02), vec![1500.0; n], vec![1.1; n]];
-            let run = Run {
-                record: r,
-                time_s: &time_s,
-                input: InputSignal::measured(&time_s, &inputs, InputHold::Linear),
-                max_step_s: 0.01,
-            };
-            let x0 = [55.0, 0.05, 0.05, 0.0];
-            let clean = simulate_states(&model, &truth, &x0, &run).unwrap();
-            let sigma = [0.1, 0.001, 0.001, 0.001, 0.02, 0.02];
-            let bias = [0.0, 0.0, 0.0, 0.002, 0.05, -0.04];
-            let outputs = clean
-                .iter()
-                .enumerate()
-                .map(|(o, y)| {
-                    let e = noise(10 * r as u64 + o as u64, n, sigma[o]);
-                    y.iter().zip(e).map(|(v, e)| v + e + bias[o]).collect()
-                })
-                .collect();
-            records.push(Record {
-                name: format!("rec{r}"),
-                time_s: time_s.clone(),
-                inputs,
-                outputs,
-                initial_state: vec![54.0, 0.045, 0.052, 0.003],
-            });
-        }
-        let mut notes = Vec::new();
-        let starts: BTreeMap<String, f64> = LONGITUDINAL_PARAMETERS
-            .iter()
-            .zip(&truth)
-            .map(|(n, v)| {
-                (
-                    n.to_string(),
-                    if n.starts_with("tau") { 0.0 } else { 1.25 * v },
-                )
-            })
-            .collect();
-        let params = parameters(
-            &LONGITUDINAL_PARAMETERS,
-            &LON_FREE,
-            &starts,
-            &BTreeMap::new(),
-            &BTreeSet::new(),
-            &OutputErrorOptions::default(),
-            &mut notes,
-        );
-        let nuisance = Nuisance {
-            initial_state: (0..4).collect(),
-            output_bias: vec![3, 4, 5],
-            ..Nuisance::default()
-        };
-        let fit = fit_model(
-            &model,
-            &params,
-            &records,
-            &nuisance,
-            &OutputErrorOptions::default(),
-            c,
-        )
-        .unwrap();
-        assert!(fit.estimate.converged, "{:?}", fit.estimate.stop);
-        for name in ["CL_alpha", "Cm_alpha", "Cm_q", "Cm_de", "tau_alpha_s"] {
-            let k = LONGITUDINAL_PARAMETERS
-                .iter()
-                .position(|n| *n == name)
-                .unwrap();
-            let p = fit.estimate.parameter(name).unwrap();
-            let err = (p.value - truth[k]).abs();
-            // 4σ: a test that fails one run in ~10⁴ when the fit is right, and at once when it is not.
-            assert!(
-                err < 4.0 * p.std_error && err < 0.03 * truth[k].abs(),
-                "{name}: {} ± {} vs {}",
-                p.value,
-                p.std_error,
-                truth[k]
-            );
-        }
-    }
-
-    #[test]
-    fn free_lists_name_groups_and_holds() {
-        let c = parse_free(&["speed".into(), "-Cm_0".into(), "Cl_r".into()]).unwrap();
-        assert_eq!(c[0].names, vec!["CL_V", "CD_V", "Cm_V"]);
-        assert!(c[0].free && !c[1].free && c[2].free);
-        let e = parse_free(&["Cm_bogus".into()]).unwrap_err();
-        assert!(e.contains("Cm_bogus"), "{e}");
-    }
-}
+mod tests;

@@ -639,5 +639,4 @@ fn srivc_step(
 }
 
 #[cfg(test)]
-#[path = "joint_tests.rs"]
 mod tests;

@@ -1,0 +1,181 @@
+//! Which parameters of the built-in models are free and where they start: the `--free` choices and groups,
+//! the default free set of each axis, and start values from equation error (Morelli & Klein §6.3) with the
+//! axis's fallbacks.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use super::OutputErrorOptions;
+use crate::aero::airframe::Airframe;
+use crate::aero::flight_models::{LATERAL_PARAMETERS, LONGITUDINAL_PARAMETERS};
+use crate::aero::measured::{equation_error_measured, AxisChoice};
+use crate::data;
+use crate::estimate::Parameter;
+
+/// One entry of `--free`: a parameter or a group, freed (`NAME`) or held (`-NAME`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FreeChoice {
+    /// The parameters it names.
+    pub names: Vec<&'static str>,
+    /// Free (true) or held at its start value (false).
+    pub free: bool,
+}
+
+/// Groups `--free` accepts besides parameter names.
+pub const FREE_GROUPS: [(&str, &[&str]); 5] = [
+    ("speed", &["CL_V", "CD_V", "Cm_V"]),
+    ("alphadot", &["CL_alphadot", "Cm_alphadot"]),
+    ("zero", &["CL_0", "CD_0", "Cm_0", "CY_0", "Cl_0", "Cn_0"]),
+    ("skew", &["tau_alpha_s", "tau_beta_s"]),
+    ("all", &[]),
+];
+
+/// Parses `--free` entries: a parameter of either model (`Cm_alphadot`), a group of [`FREE_GROUPS`]
+/// (`speed`, `alphadot`, `zero`, `skew`, `all`), each optionally prefixed with `-` to hold it instead.
+pub fn parse_free(entries: &[String]) -> Result<Vec<FreeChoice>, String> {
+    let known = || {
+        LONGITUDINAL_PARAMETERS
+            .iter()
+            .chain(&LATERAL_PARAMETERS)
+            .copied()
+    };
+    entries
+        .iter()
+        .map(|e| {
+            let e = e.trim();
+            let (free, name) = match e.strip_prefix('-') {
+                Some(rest) => (false, rest),
+                None => (true, e.strip_prefix('+').unwrap_or(e)),
+            };
+            let names: Vec<&'static str> = if name == "all" {
+                known().collect()
+            } else if let Some((_, g)) = FREE_GROUPS.iter().find(|(g, _)| *g == name) {
+                g.to_vec()
+            } else if let Some(n) = known().find(|n| *n == name) {
+                vec![n]
+            } else {
+                return Err(format!(
+                    "unknown parameter or group '{name}' (groups: speed, alphadot, zero, skew, all; \
+                     parameters: {})",
+                    known().collect::<Vec<_>>().join(", ")
+                ));
+            };
+            Ok(FreeChoice { names, free })
+        })
+        .collect()
+}
+
+/// Parameters free by default (module doc).
+pub(super) const LON_FREE: [&str; 10] = [
+    "CL_0",
+    "CL_alpha",
+    "CL_de",
+    "CD_0",
+    "CD_alpha",
+    "Cm_0",
+    "Cm_alpha",
+    "Cm_q",
+    "Cm_de",
+    "tau_alpha_s",
+];
+pub(super) const LAT_FREE: [&str; 16] = [
+    "CY_0",
+    "CY_beta",
+    "CY_dr",
+    "Cl_0",
+    "Cl_beta",
+    "Cl_p",
+    "Cl_r",
+    "Cl_da",
+    "Cl_dr",
+    "Cn_0",
+    "Cn_beta",
+    "Cn_p",
+    "Cn_r",
+    "Cn_da",
+    "Cn_dr",
+    "tau_beta_s",
+];
+
+/// Start value and free flag of every parameter of a model (module doc), with the choices applied.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn parameters(
+    names: &[&'static str],
+    default_free: &[&str],
+    starts: &BTreeMap<String, f64>,
+    fallback: &BTreeMap<&'static str, f64>,
+    still: &BTreeSet<&'static str>,
+    options: &OutputErrorOptions,
+    notes: &mut Vec<String>,
+) -> Vec<Parameter> {
+    let mut free: BTreeSet<&str> = default_free.iter().copied().collect();
+    if options.alphadot {
+        free.extend(["CL_alphadot", "Cm_alphadot"]);
+    }
+    for c in &options.free {
+        for n in &c.names {
+            if c.free {
+                free.insert(n);
+            } else {
+                free.remove(n);
+            }
+        }
+    }
+    let mut held_still = Vec::new();
+    let params = names
+        .iter()
+        .map(|&n| {
+            let value = starts
+                .get(n)
+                .copied()
+                .or_else(|| fallback.get(n).copied())
+                .unwrap_or(0.0);
+            let mut p = Parameter::free(n, value);
+            if n.starts_with("tau_") {
+                p = p.bounded(-0.25, 0.25);
+            }
+            let is_free = free.contains(n) && !still.contains(n);
+            if free.contains(n) && still.contains(n) {
+                held_still.push(n);
+            }
+            let keeps_start = n.ends_with("_0") || n.starts_with("tau_");
+            if is_free {
+                p
+            } else if keeps_start && !still.contains(n) {
+                Parameter { fixed: true, ..p }
+            } else {
+                Parameter::fixed(n, 0.0)
+            }
+        })
+        .collect();
+    if !held_still.is_empty() {
+        notes.push(format!(
+            "held at 0 (a surface no record moves, or a vane the records lack): {}",
+            held_still.join(", ")
+        ));
+    }
+    params
+}
+
+/// Equation-error start values by name (empty when equation error cannot be formed).
+pub(super) fn equation_error_starts(
+    records: &[&(String, data::FlightRecord)],
+    airframe: &Airframe,
+    axis: AxisChoice,
+    notes: &mut Vec<String>,
+) -> BTreeMap<String, f64> {
+    let owned: Vec<(String, data::FlightRecord)> = records.iter().map(|&r| r.clone()).collect();
+    match equation_error_measured(&owned, airframe, axis, false) {
+        Ok(ee) => ee
+            .derivatives
+            .into_iter()
+            .filter(|(k, _)| k != "CL_q")
+            .map(|(k, e)| (k, e.value))
+            .collect(),
+        Err(e) => {
+            notes.push(format!(
+                "no equation-error start values ({e}); generic ones used"
+            ));
+            BTreeMap::new()
+        }
+    }
+}
