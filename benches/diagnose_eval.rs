@@ -4,9 +4,13 @@
 //! the named set exactly right (effect and target), values within 15 % of the hidden effect's size
 //! (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
 //!
-//! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--out DIR]`
-//! (`--clean`: every case clean, the false-alarm Monte Carlo over random maneuver timing, lengths 30–90 s,
-//! noise levels, trim points, headings and rates).
+//! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
+//! [--first K] [--out DIR]`
+//! - `--clean`: every case clean (the acceptance's maneuver sequence, lengths 30–90 s).
+//! - `--false-alarm`: the false-alarm Monte Carlo: every case clean, a random maneuver plan (the full sequence,
+//!   longitudinal only, lateral only, the 3-2-1-1 alone, the sequence reversed), lengths 15–90 s, noise levels
+//!   0.5–2 × the level-1 noise, random trim points, headings, latitudes and rates. Prints the false-alarm rate
+//!   with its one-sided 95 % upper bound (Clopper–Pearson).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -23,6 +27,7 @@ struct Args {
     seed: u64,
     turbulence: bool,
     clean: bool,
+    false_alarm: bool,
     out: PathBuf,
     first: usize,
 }
@@ -33,6 +38,7 @@ fn args() -> Args {
         seed: 1,
         turbulence: false,
         clean: false,
+        false_alarm: false,
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
     };
@@ -52,6 +58,11 @@ fn args() -> Args {
             }
             "--clean" => {
                 a.clean = true;
+                i += 1;
+                continue;
+            }
+            "--false-alarm" => {
+                a.false_alarm = true;
                 i += 1;
                 continue;
             }
@@ -125,8 +136,19 @@ fn generate(a: &Args) {
     if a.turbulence {
         cmd.arg("--turbulence");
     }
-    if a.clean {
+    if a.clean || a.false_alarm {
         cmd.args(["--effects", "[]"]);
+    }
+    if a.false_alarm {
+        cmd.args([
+            "--plan",
+            "random",
+            "--min-duration",
+            "15",
+            "--max-duration",
+            "90",
+        ])
+        .args(["--max-noise", "2"]);
     }
     let st = cmd.status().expect("running the generator");
     assert!(st.success(), "the generator failed");
@@ -208,10 +230,12 @@ fn main() {
             .map(|c| c.criterion_delta)
             .fold(f64::INFINITY, f64::min);
         println!(
-            "case {i:3} [{}] {:5.1} s {:3.0} Hz {:4} sims {:5.1} s, round-0 min dBIC {min_bic:8.1}: hidden [{}] named [{}]",
+            "case {i:3} [{}] {:12} {:5.1} s {:3.0} Hz noise {:3.1} {:4} sims {:5.1} s, round-0 min dBIC {min_bic:8.1}: hidden [{}] named [{}]",
             if ok_v { "ok " } else if ok { "set" } else { "BAD" },
+            truth["plan"].as_str().unwrap_or("full"),
             truth["duration_s"].as_f64().unwrap_or(0.0),
             truth["log_rate_hz"].as_f64().unwrap_or(0.0),
+            truth["noise_level"].as_f64().unwrap_or(0.0),
             d.simulations,
             d.wall_s,
             hidden.join(" "),
@@ -231,4 +255,36 @@ fn main() {
         wall / n.max(1) as f64,
         t0.elapsed().as_secs_f64()
     );
+    if clean > 0 {
+        println!(
+            "false-alarm rate {clean_named}/{clean} = {:.1} % (one-sided 95 % upper bound {:.1} %, Clopper-Pearson)",
+            pct(clean_named, clean),
+            100.0 * upper_bound_95(clean_named, clean)
+        );
+    }
+}
+
+/// One-sided 95 % Clopper–Pearson upper bound of a binomial proportion with `k` events in `n` trials: the p at
+/// which P(X ≤ k | n, p) = 0.05 (bisection; for k = 0 it is 1 − 0.05^(1/n)).
+fn upper_bound_95(k: usize, n: usize) -> f64 {
+    let cdf = |p: f64| -> f64 {
+        // Σ_{j≤k} C(n, j) p^j (1 − p)^(n − j), the terms built by their ratio.
+        let mut term = (1.0 - p).powi(n as i32);
+        let mut sum = term;
+        for j in 0..k.min(n) {
+            term *= (n - j) as f64 / (j + 1) as f64 * p / (1.0 - p).max(1e-300);
+            sum += term;
+        }
+        sum
+    };
+    let (mut lo, mut hi) = (k as f64 / n.max(1) as f64, 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if cdf(mid) > 0.05 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
 }

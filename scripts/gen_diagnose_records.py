@@ -19,6 +19,7 @@ Hidden effects and how they are made:
   aero_nonlinearity: an added term (Cm_alpha2: dCm = k alpha^2, CL_alpha2: dCL = k alpha^2, alpha in rad).
 
 Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--turbulence] [--clean-share 0.25] [--first K]
+       [--effects JSON] [--duration S | --min-duration S --max-duration S] [--plan NAME|random] [--max-noise L]
 Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema).
 """
 
@@ -186,9 +187,26 @@ class Aircraft:
         return {s: fdm[SURFACES[s][0]] for s in SURFACES}
 
 
-def maneuvers(rng, duration_s, validation):
-    """Command deviations (rad of surface) as functions of time: the four maneuvers in sequence."""
-    slots = [0.06, 0.30, 0.50, 0.72] if not validation else [0.05, 0.27, 0.52, 0.75]
+# Maneuver plans of the false-alarm Monte Carlo (--plan random): which of the four maneuvers are flown, in order.
+PLANS = {
+    "full": ["e3211", "ad", "rd", "ed"],
+    "longitudinal": ["e3211", "ed"],
+    "lateral": ["ad", "rd"],
+    "e3211": ["e3211"],
+    "reversed": ["rd", "ad", "ed", "e3211"],
+}
+
+
+def maneuvers(rng, duration_s, validation, plan=None):
+    """Command deviations (rad of surface) as functions of time: the four maneuvers in sequence, or the plan's
+    maneuvers spread evenly over the record (a maneuver not in the plan is not flown)."""
+    order = ["e3211", "ad", "rd", "ed"]
+    if plan is None:
+        slots = [0.06, 0.30, 0.50, 0.72] if not validation else [0.05, 0.27, 0.52, 0.75]
+    else:
+        first = 0.06 if not validation else 0.05
+        at = {m: first + (1.0 - first) * j / len(plan) for j, m in enumerate(plan)}
+        slots = [at.get(m, 2.0) for m in order]  # 2.0: after the end of the record
     t0 = [max(1.0, f * duration_s + rng.uniform(-1.0, 1.0)) for f in slots]
     a = {
         "e3211": rng.uniform(0.025, 0.045) * rng.choice([-1, 1]),
@@ -220,7 +238,7 @@ def maneuvers(rng, duration_s, validation):
     return cmd
 
 
-def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation):
+def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation, plan=None):
     fdm = ac.fdm
     trim = ac.trim(cond, effects)
     fdm["gen/override/elevator"] = 0.0
@@ -239,7 +257,7 @@ def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation):
         fdm["atmosphere/turb-type"] = 3
         fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_ft_sec"] = rng.uniform(10.0, 20.0)
         fdm["atmosphere/turbulence/milspec/severity"] = 1
-    cmd = maneuvers(rng, duration_s, validation)
+    cmd = maneuvers(rng, duration_s, validation, plan)
     tau_act, rate_max = 0.04, 1.2  # the aircraft's own actuator: first order with a rate limit
     rows = []
 
@@ -351,6 +369,10 @@ def main():
     ap.add_argument("--duration", type=float, default=None, help="record length, s (default random in the range)")
     ap.add_argument("--min-duration", type=float, default=30.0, help="shortest random record length, s")
     ap.add_argument("--max-duration", type=float, default=90.0, help="longest random record length, s")
+    ap.add_argument("--plan", default=None, choices=sorted(PLANS) + ["random"],
+                    help="maneuver plan (default: the four maneuvers in sequence; random: one plan per case)")
+    ap.add_argument("--max-noise", type=float, default=1.0,
+                    help="highest noise level (multiple of the level-1 noise; the level is drawn from 0.5 up)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     root = tempfile.mkdtemp(prefix="gen-diag-")
@@ -376,12 +398,18 @@ def main():
                 "longitude_deg": float(rng.uniform(-180, 180)),
             }
             duration = args.duration or float(rng.uniform(args.min_duration, args.max_duration))
-            noise_level = float(rng.uniform(0.5, 1.0))
+            noise_level = float(rng.uniform(0.5, args.max_noise))
+            plan = None
+            if args.plan == "random":
+                plan = sorted(PLANS)[int(rng.integers(len(PLANS)))]
+            elif args.plan is not None:
+                plan = args.plan
             truth = {"effects": effects, "condition": cond, "sim_rate_hz": sim_hz, "log_rate_hz": log_hz,
                      "duration_s": duration, "noise_level": noise_level, "turbulence": args.turbulence,
-                     "seed": args.seed, "case": i}
+                     "seed": args.seed, "case": i, "plan": plan or "full"}
             for part, validation in (("train", False), ("valid", True)):
-                rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation)
+                rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation,
+                           PLANS[plan] if plan else None)
                 cols, data = sensors(rows, effects, noise_level, rng)
                 write_csv(os.path.join(args.out, f"case_{i:03d}_{part}.csv"), cols, data,
                           {"generator": "gen_diagnose_records.py (JSBSim c172x, own API)", "case": i})

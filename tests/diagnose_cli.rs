@@ -129,14 +129,25 @@ fn linear_model_replays_near_its_trim_and_refuses_far_from_it() {
     let fit = v["residuals"]["q_rad_s"]["fit_percent"].as_f64().unwrap();
     assert!(fit > 80.0, "linear replay q fit {fit} %");
     // diagnose runs on the linear model too; the accelerations it does not produce are left out, and said so.
+    // With `--json -` stdout is the JSON document alone (the summary and the progress go to stderr).
     let o = flightid(&[
         "diagnose",
         "--linear",
         lin.to_str().unwrap(),
         "--data",
         full.to_str().unwrap(),
+        "--json",
+        "-",
     ]);
     assert!(o.status.success(), "{}", text(&o));
+    let d: serde_json::Value =
+        serde_json::from_slice(&o.stdout).expect("stdout is one JSON document");
+    assert!(d["named_cause"].is_array(), "{d}");
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("simulations in"),
+        "the summary goes to stderr: {}",
+        text(&o)
+    );
     assert!(
         text(&o).contains("does not produce ax_m_s2, ay_m_s2, az_m_s2"),
         "{}",

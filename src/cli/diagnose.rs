@@ -1,5 +1,6 @@
 //! `flightid diagnose`: what the simulation gets wrong on measured data, the named cause, the validation gain.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
@@ -122,18 +123,24 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         }
         None => rate_of(&train)?,
     };
-    let progress =
-        super::common::spinner("diagnose: replay, fit each candidate extension, validate");
-    let mut workers = start_workers(&source, rate, args.workers)?;
+    let starting = super::common::spinner("diagnose: starting the simulations");
+    let workers = start_workers(&source, rate, args.workers);
+    starting.finish_and_clear();
+    let mut workers = workers?;
+    // The search shows its own progress line (stage, candidate round, fits and simulations) on stderr.
     let d = diagnose(
         &mut workers,
         &train,
         valid.as_ref(),
         &DiagnoseOptions::default(),
-    );
-    progress.finish_and_clear();
-    let d = d?;
-    summary(&d, workers.len());
+    )?;
+    // With `--json -` stdout carries only the JSON; the summary goes to stderr.
+    let mut out: Box<dyn Write> = if args.json.as_deref() == Some("-") {
+        Box::new(std::io::stderr())
+    } else {
+        Box::new(std::io::stdout())
+    };
+    summary(&d, workers.len(), &mut out)?;
     if let Some(target) = &args.json {
         emit_json(target, &d)?;
     }
@@ -151,10 +158,11 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
             .into());
         }
         let m = write_model(workers[0].sim.as_mut(), &ext, dir)?;
-        println!(
+        writeln!(
+            out,
             "extended model written to {} (load with `flightid fly --model {0}` or `flightid replay --model {0}`)",
             m.dir.display()
-        );
+        )?;
     }
     if let Some(dir) = &args.report {
         let index = report::write_report(&d, &args.aircraft, &train, valid.as_ref(), dir)?;
@@ -164,44 +172,52 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
 }
 
 /// Terminal summary: named causes with value ± standard error, and the validation gain.
-fn summary(d: &Diagnosis, workers: usize) {
+fn summary(d: &Diagnosis, workers: usize, out: &mut dyn Write) -> std::io::Result<()> {
     if d.named_cause.is_empty() {
-        println!(
+        writeln!(
+            out,
             "no significant model error found (no extension passes the BIC, significance and validation tests)"
-        );
+        )?;
     }
     for c in &d.named_cause {
-        print!(
+        write!(
+            out,
             "named cause: {} on {} = {:.5} ± {:.5}",
             c.effect, c.target, c.value, c.std_error
-        );
+        )?;
         if !c.ambiguous_with.is_empty() {
-            print!(
+            write!(
+                out,
                 "  (cannot be told apart from: {})",
                 c.ambiguous_with.join(", ")
-            );
+            )?;
         }
-        println!();
+        writeln!(out)?;
     }
     for m in &d.trim_mismatch {
-        println!(
+        writeln!(
+            out,
             "trim: {:<13} measured {:+.5}  model {:+.5}",
             m.quantity, m.measured, m.model
-        );
+        )?;
     }
     if let Some(v) = &d.validation {
-        println!(
+        writeln!(
+            out,
             "validation (weighted ISE): {:.1} -> {:.1} ({:.0} % less)",
             v.ise_before,
             v.ise_after,
             100.0 * (1.0 - v.ise_after / v.ise_before)
-        );
+        )?;
         for (c, before) in &v.fit_percent_before {
             let after = v.fit_percent_after.get(c).copied().unwrap_or(f64::NAN);
-            println!("  {c:<13} fit {before:6.1} % -> {after:6.1} %");
+            writeln!(out, "  {c:<13} fit {before:6.1} % -> {after:6.1} %")?;
         }
     } else {
-        println!("no validation record (--validate): the gain on unseen data is not measured");
+        writeln!(
+            out,
+            "no validation record (--validate): the gain on unseen data is not measured"
+        )?;
     }
     for w in &d.warnings {
         super::warn(w);
@@ -212,14 +228,16 @@ fn summary(d: &Diagnosis, workers: usize) {
             for line in
                 crate::report::text::wrap(&text, crate::report::text::TERMINAL_WIDTH, "", "  ")
             {
-                println!("{line}");
+                writeln!(out, "{line}")?;
             }
         }
     }
-    println!(
+    writeln!(
+        out,
         "{} simulations in {:.1} s ({:.0} % of the workers' time inside the simulation)",
         d.simulations,
         d.wall_s,
         100.0 * d.simulation_s / d.wall_s.max(1e-9) / workers.max(1) as f64
-    );
+    )?;
+    Ok(())
 }

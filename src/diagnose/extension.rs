@@ -61,6 +61,12 @@ pub trait Extension: Send + Sync {
     fn apply_input(&self, _p: &[f64], _surface: &str, _dev: &mut [f64], _dt_s: f64) {}
     /// Changes the simulated record (Stage::Output).
     fn apply_output(&self, _p: &[f64], _rec: &mut FlightRecord) {}
+    /// The catalogue entry (effect, target) whose linear term this one refines, e.g. `aero_derivative/CL_alpha`
+    /// for `CL_alpha2`. Near a trim point a refinement acts mostly as a change of that term, so its smallest
+    /// effect worth naming is measured against that term's resolution on the record (see `select`).
+    fn refines(&self) -> Option<(&'static str, String)> {
+        None
+    }
 }
 
 /// Pure time delay of a surface deflection: the aircraft responds to δ(t − τ). Value: τ, s.
@@ -110,6 +116,12 @@ impl Extension for AeroNonlinearity {
     }
     fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError> {
         sim.set_added_term(&self.0, p[0])
+    }
+    fn refines(&self) -> Option<(&'static str, String)> {
+        // `Cm_alpha2` (k α²) refines `Cm_alpha`: around α₀ it adds the slope 2kα₀ and the offset kα₀².
+        self.0
+            .strip_suffix('2')
+            .map(|linear| ("aero_derivative", linear.to_string()))
     }
 }
 

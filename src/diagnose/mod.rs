@@ -69,6 +69,9 @@ pub struct DiagnoseOptions {
     /// Floor of the noise-normalised residual variance in the criterion: a cost below `floor · n` (the
     /// residual already at the measurement-noise level) earns no further credit.
     pub residual_floor: f64,
+    /// Share of a linear term's resolution that a refinement of it (`CL_alpha2` of `CL_alpha`) must match in
+    /// output signature to be worth naming (docs/diagnose.md, Selection).
+    pub refinement_share: f64,
     /// Correlation of sensitivities above which near-equal candidates form an ambiguous group.
     pub ambiguity_correlation: f64,
     /// Show the search's progress on a terminal (stderr).
@@ -85,6 +88,7 @@ impl Default for DiagnoseOptions {
             min_relative_reduction: 0.02,
             residual_floor: 1.0,
             ambiguity_correlation: 0.9,
+            refinement_share: 1.0 / 3.0,
             progress: true,
         }
     }
@@ -113,6 +117,9 @@ pub struct Candidate {
     pub z: f64,
     /// Effective number of independent residuals after the fit.
     pub n_eff: f64,
+    /// Smallest effect worth naming on this record (parameter units; larger than the entry's own for a term
+    /// that refines a linear one on a record that barely excites the difference).
+    pub resolution: f64,
     /// Relative reduction of the validation ISE by the accepted effects up to this one (reported, never used
     /// to select).
     pub validation_gain: Option<f64>,
@@ -226,13 +233,15 @@ pub fn diagnose(
     let Some(first) = workers.first_mut() else {
         return Err(DiagnoseError::BadData("no simulation worker".into()));
     };
+    // The progress line is cleared when `progress` is dropped, also on an early error return.
+    let progress = progress::Progress::new(opts.progress);
+    progress.stage("trim, baseline replay", 0);
     let p = prepare::prepare(first, train, valid)?;
     let base = baseline::baseline(first, &p)?;
-    let progress = progress::Progress::new(opts.progress);
-    let sel = select::select(workers, &p, &base, opts, &progress);
-    progress.finish();
-    let sel = sel?;
+    let sel = select::select(workers, &p, &base, opts, &progress)?;
+    progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
+    progress.finish();
     Ok(Diagnosis {
         named_cause: sel.named,
         candidates: sel.candidates,

@@ -17,10 +17,11 @@ impl Progress {
             let b = indicatif::ProgressBar::new(0);
             b.set_style(
                 indicatif::ProgressStyle::with_template(
-                    "diagnose: round {prefix} {bar:30} {pos}/{len} fits  {msg}  {elapsed}",
+                    "diagnose: {prefix:24} {bar:30} {pos}/{len} fits  {msg}  {elapsed}",
                 )
                 .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
             );
+            b.enable_steady_tick(std::time::Duration::from_millis(250));
             b
         } else {
             indicatif::ProgressBar::hidden()
@@ -32,12 +33,17 @@ impl Progress {
         }
     }
 
+    /// A new stage (trim and baseline, identifiability screening, validation) with `fits` steps planned.
+    pub fn stage(&self, label: &str, fits: usize) {
+        self.bar.set_prefix(label.to_string());
+        self.bar.set_length(fits as u64);
+        self.bar.set_position(0);
+    }
+
     /// A new selection round with `fits` candidate fits planned.
     pub fn round(&self, round: usize, fits: usize) {
         self.round.store(round, Ordering::Relaxed);
-        self.bar.set_prefix((round + 1).to_string());
-        self.bar.set_length(fits as u64);
-        self.bar.set_position(0);
+        self.stage(&format!("candidate round {}", round + 1), fits);
     }
 
     /// One fit done with `simulations` simulations (0: only simulations, no fit, when `simulations` is counted
@@ -60,6 +66,12 @@ impl Progress {
 
     /// Removes the progress line.
     pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
         self.bar.finish_and_clear();
     }
 }

@@ -1,9 +1,20 @@
 //! Stage 3, select: forward selection over the catalogue.
 //!
-//! - Identifiability, before any fit: the Fisher information of each entry's parameter on this record,
-//!   I = Σ_k s_k² with s = ∂r/∂θ the noise-normalised residual sensitivity at "no effect". An entry whose
-//!   Cramér–Rao bound 1/√I exceeds a third of its resolution (the smallest effect worth naming) cannot be named
-//!   from this record (an input that does not move, an output that is not measured) and is skipped.
+//! - Identifiability, before any fit: the Fisher information of each entry's parameter on this record after
+//!   the nuisance terms, I = ‖(1 − P_N) s‖² with s = ∂r/∂θ the noise-normalised residual sensitivity at
+//!   "no effect" and P_N the projection onto the sensitivities of the nuisance terms, an offset on every
+//!   channel that may carry a sensor bias (the Schur complement of the information matrix: the information
+//!   left once the nuisance terms are estimated jointly; Jategaonkar, Flight Vehicle System Identification,
+//!   2nd ed., §4.17; Morelli & Klein §5.4 on partial correlation). An entry whose Cramér–Rao bound 1/√I
+//!   exceeds a third of its resolution (the smallest effect worth naming) cannot be named from this record
+//!   (an input that does not move, an output that is not measured, a term the record does not excite) and is
+//!   skipped.
+//! - Resolution on the record: an entry that refines a linear term (`CL_alpha2` refines `CL_alpha`) acts near
+//!   the trim point mostly as a change of that term, so its smallest effect worth naming is the one whose
+//!   output signature is as large as that of the linear term at a share f of its resolution:
+//!   r_k = max(r_k⁰, f r_lin √(I_lin / I_k)). A record with a narrow α range thus needs a large k. The share
+//!   (`DiagnoseOptions::refinement_share`, a third: the precision the linear term itself must be determined
+//!   to) is checked by the false-alarm Monte Carlo of the evaluation bench.
 //! - Screening, each round: the score (Lagrange-multiplier) test of every remaining entry, the cost reduction
 //!   of one Gauss–Newton step from "no effect", ΔJ = (sᵀr)² / (sᵀs) (Rao 1948; the stepwise idea of Klein &
 //!   Morelli, Aircraft System Identification, §5.4), with the sensitivities of the unextended model.
@@ -80,7 +91,13 @@ impl RoundContext {
             + k * o.n_eff.ln()
     }
 
-    fn candidate(&self, e: &dyn Extension, o: &FitOutcome, full_fit: bool) -> Candidate {
+    fn candidate(
+        &self,
+        e: &dyn Extension,
+        o: &FitOutcome,
+        full_fit: bool,
+        resolution: f64,
+    ) -> Candidate {
         let k = o.values.len() - 1;
         Candidate {
             effect: e.effect().into(),
@@ -93,6 +110,7 @@ impl RoundContext {
             criterion_delta: self.bic(e, o),
             z: (o.values[k] - e.params()[0].null).abs() / o.std_errors[k].max(1e-300),
             n_eff: o.n_eff,
+            resolution,
             validation_gain: None,
             rejected_because: None,
             round: self.round,
@@ -108,27 +126,38 @@ fn rejection(
     o: &FitOutcome,
     base_cost: f64,
     opts: &DiagnoseOptions,
+    mask: &[bool],
 ) -> Option<String> {
     let rel = 1.0 - o.cost_after / base_cost;
     let spec = e.params()[0];
+    let resolution = c.resolution;
     let at_bound = (c.value - spec.min).abs() <= 1e-9 * spec.min.abs().max(1.0)
         || (c.value - spec.max).abs() <= 1e-9 * spec.max.abs().max(1.0);
-    let crb = o.crb_std_errors.last().copied().unwrap_or(f64::INFINITY);
+    // Cramér–Rao σ of the candidate with the other free parameters and the sensor offsets as nuisance terms.
+    let crb = match o.sensitivities.split_last() {
+        Some((s, others)) => {
+            let n = s.len() as f64;
+            let s2 = o.cost_after / (n - o.values.len() as f64).max(1.0);
+            let info = profiled_information(s, others, mask);
+            (s2 / info).sqrt()
+        }
+        None => f64::INFINITY,
+    }
+    .max(o.crb_std_errors.last().copied().unwrap_or(f64::INFINITY));
     if at_bound {
         // No interior optimum: the effect explains something else (a missing input, another effect).
         Some(format!(
             "value at the bound of its range [{}, {}]",
             spec.min, spec.max
         ))
-    } else if (c.value - spec.null).abs() < spec.resolution {
+    } else if (c.value - spec.null).abs() < resolution {
         Some(format!(
-            "smaller than the resolution {} of the effect",
-            spec.resolution
+            "smaller than the resolution {resolution:.3} of the effect on this record"
         ))
-    } else if 3.0 * crb > spec.resolution {
+    } else if 3.0 * crb > resolution {
         Some(format!(
-            "not determined by the record (Cramér–Rao σ {crb:.3e} > a third of the resolution {})",
-            spec.resolution
+            "not determined by the record (Cramér–Rao σ {crb:.3e} after the nuisance terms > a third of \
+             the resolution {resolution:.3})"
         ))
     } else if c.criterion_delta >= opts.bic_threshold {
         Some(format!(
@@ -168,44 +197,158 @@ fn score_test(e: &dyn Extension, s: &[f64], r: &[f64], cost: f64, n_eff: f64) ->
     }
 }
 
-/// The catalogue entries the record can identify, their sensitivities at the unextended model, and the
-/// others with the reason (Cramér–Rao bound 1/√(sᵀs) above a third of the entry's resolution).
-#[allow(clippy::type_complexity)]
+/// Fisher information about the parameter with sensitivity `s` once the nuisance terms are estimated with it:
+/// ‖(1 − P) s‖², P the projection onto the `others` columns and onto an offset on every channel whose `mask`
+/// entry is set (channel-major vectors, `mask.len()` channels of equal length). The Schur complement
+/// I_θθ − I_θN I_NN⁻¹ I_Nθ of the information matrix, computed by modified Gram–Schmidt.
+pub fn profiled_information(s: &[f64], others: &[Vec<f64>], mask: &[bool]) -> f64 {
+    let m = s.len() / mask.len().max(1);
+    // An offset on a channel: remove each masked channel's mean (the offsets are orthogonal to each other).
+    let demean = |v: &[f64]| -> Vec<f64> {
+        let mut v = v.to_vec();
+        if m == 0 {
+            return v;
+        }
+        for (c, chunk) in v.chunks_mut(m).enumerate() {
+            if mask.get(c).copied().unwrap_or(false) {
+                let mean = chunk.iter().sum::<f64>() / m as f64;
+                chunk.iter_mut().for_each(|x| *x -= mean);
+            }
+        }
+        v
+    };
+    let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    for o in others {
+        let mut u = demean(o);
+        let norm0 = dot(&u, &u).sqrt();
+        for b in &basis {
+            let c = dot(&u, b);
+            u.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
+        }
+        let norm = dot(&u, &u).sqrt();
+        if norm > 1e-9 * norm0.max(1e-300) {
+            u.iter_mut().for_each(|x| *x /= norm);
+            basis.push(u);
+        }
+    }
+    let mut v = demean(s);
+    for b in &basis {
+        let c = dot(&v, b);
+        v.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
+    }
+    dot(&v, &v)
+}
+
+/// The channels (order of `case.outputs`) on which a sensor offset is a nuisance term of `e`: those whose
+/// sensor bias is in the catalogue, except the one `e` itself is the bias of.
+fn offset_mask(outputs: &[String], entries: &[&dyn Extension], e: &dyn Extension) -> Vec<bool> {
+    outputs
+        .iter()
+        .map(|c| {
+            let biasable = entries
+                .iter()
+                .any(|x| x.effect() == "sensor_bias" && x.target() == c);
+            biasable && !(e.effect() == "sensor_bias" && e.target() == c)
+        })
+        .collect()
+}
+
+/// What the identifiability stage hands the selection: the entries the record can identify, their
+/// sensitivities at the unextended model, their resolution on this record and their nuisance masks; and the
+/// entries it cannot identify, with the reason.
+struct Identifiable<'e> {
+    entries: Vec<&'e dyn Extension>,
+    sensitivities: Vec<Vec<f64>>,
+    resolution: Vec<f64>,
+    masks: Vec<Vec<bool>>,
+    skipped: Vec<Skipped>,
+}
+
+/// The catalogue entries the record can identify: Cramér–Rao bound 1/√I, from the information after the
+/// nuisance terms ([`profiled_information`]), at most a third of the entry's resolution on this record.
 fn identifiable<'e>(
     workers: &mut [Worker],
     w: &Weighted,
     p: &'e Prepared,
+    opts: &DiagnoseOptions,
     progress: &Progress,
-) -> Result<(Vec<&'e dyn Extension>, Vec<Vec<f64>>, Vec<Skipped>), DiagnoseError> {
+) -> Result<Identifiable<'e>, DiagnoseError> {
     let entries = p.entries();
     let r0 = residuals(&mut workers[0], w, &[]).map_err(sim_err("replay"))?;
-    progress.round(0, entries.len());
+    progress.stage("identifiability", entries.len());
     let sens = par_map(workers, &entries, |wk, e| {
         let out = null_sensitivity(wk, w, &[], *e, &r0);
         progress.fitted(1);
         out
     });
-    let (mut keep, mut keep_sens, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
-    for (e, s) in entries.into_iter().zip(sens) {
-        let s = s.map_err(sim_err("replay"))?;
-        let info: f64 = s.iter().map(|v| v * v).sum();
-        let crb = 1.0 / info.sqrt();
-        let res = e.params()[0].resolution;
-        if 3.0 * crb > res {
-            skipped.push(Skipped {
+    let sens: Vec<Vec<f64>> = sens
+        .into_iter()
+        .collect::<Result<_, _>>()
+        .map_err(sim_err("replay"))?;
+    let masks: Vec<Vec<bool>> = entries
+        .iter()
+        .map(|e| offset_mask(&w.case.outputs, &entries, *e))
+        .collect();
+    let info: Vec<f64> = sens
+        .iter()
+        .zip(&masks)
+        .map(|(s, mask)| profiled_information(s, &[], mask))
+        .collect();
+    let resolution: Vec<f64> = entries
+        .iter()
+        .zip(&info)
+        .map(|(e, &i_k)| {
+            let own = e.params()[0].resolution;
+            let Some((effect, target)) = e.refines() else {
+                return own;
+            };
+            match entries
+                .iter()
+                .position(|x| x.effect() == effect && x.target() == target)
+            {
+                Some(j) if i_k > 0.0 => {
+                    let lin = entries[j].params()[0].resolution;
+                    own.max(opts.refinement_share * lin * (info[j] / i_k).sqrt())
+                }
+                Some(_) => f64::INFINITY,
+                None => own,
+            }
+        })
+        .collect();
+    let mut out = Identifiable {
+        entries: Vec::new(),
+        sensitivities: Vec::new(),
+        resolution: Vec::new(),
+        masks: Vec::new(),
+        skipped: Vec::new(),
+    };
+    for ((((e, s), i), res), mask) in entries
+        .into_iter()
+        .zip(sens)
+        .zip(info)
+        .zip(resolution)
+        .zip(masks)
+    {
+        let crb = 1.0 / i.sqrt();
+        let determined = 3.0 * crb <= res; // false for a NaN bound too
+        if !determined {
+            out.skipped.push(Skipped {
                 effect: e.effect().into(),
                 target: e.target().into(),
                 reason: format!(
-                    "the record cannot identify it: Cramér–Rao σ {crb:.3e} from the Fisher information \
-                     exceeds a third of the resolution {res}"
+                    "the record cannot identify it: Cramér–Rao σ {crb:.3e} from the Fisher information after \
+                     the nuisance terms exceeds a third of the resolution {res:.3} on this record"
                 ),
             });
         } else {
-            keep.push(e);
-            keep_sens.push(s);
+            out.entries.push(e);
+            out.sensitivities.push(s);
+            out.resolution.push(res);
+            out.masks.push(mask);
         }
     }
-    Ok((keep, keep_sens, skipped))
+    Ok(out)
 }
 
 type FullFit<'e> = Result<(FitOutcome, Vec<Active<'e>>), crate::sim::SimError>;
@@ -226,7 +369,13 @@ pub fn select<'e>(
         case: v,
         sigma: s.clone(),
     });
-    let (catalogue, sens, unidentifiable) = identifiable(workers, &w, p, progress)?;
+    let Identifiable {
+        entries: catalogue,
+        sensitivities: sens,
+        resolution,
+        masks,
+        skipped: unidentifiable,
+    } = identifiable(workers, &w, p, opts, progress)?;
     let n_eff_lags = lag_window(&p.case);
     let mut selected: Vec<Active> = Vec::new();
     let mut named: Vec<NamedCause> = Vec::new();
@@ -262,7 +411,7 @@ pub fn select<'e>(
         };
         for (j, o) in quick.iter().enumerate() {
             if !top.contains(&j) {
-                candidates.push(ctx.candidate(catalogue[pool[j]], o, false));
+                candidates.push(ctx.candidate(catalogue[pool[j]], o, false, resolution[pool[j]]));
             }
         }
         let top_exts: Vec<&dyn Extension> = top.iter().map(|&j| catalogue[pool[j]]).collect();
@@ -281,8 +430,9 @@ pub fn select<'e>(
         let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
         for (t, r) in full.iter().enumerate() {
             let Ok((o, _)) = r else { continue };
-            let mut c = ctx.candidate(top_exts[t], o, true);
-            c.rejected_because = rejection(&c, top_exts[t], o, base_cost, opts);
+            let i = pool[top[t]];
+            let mut c = ctx.candidate(top_exts[t], o, true, resolution[i]);
+            c.rejected_because = rejection(&c, top_exts[t], o, base_cost, opts, &masks[i]);
             if c.rejected_because.is_none() {
                 sig.push((t, o.cost_after, candidates.len()));
             }
@@ -362,4 +512,38 @@ fn ambiguity(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::profiled_information;
+
+    /// Two channels of four samples each.
+    const MASK_BOTH: [bool; 2] = [true, true];
+
+    #[test]
+    fn an_offset_carries_no_information_once_offsets_are_nuisance_terms() {
+        // A constant on each channel is exactly what the two offsets explain: nothing is left.
+        let s = [1.0, 1.0, 1.0, 1.0, -2.0, -2.0, -2.0, -2.0];
+        assert!(profiled_information(&s, &[], &MASK_BOTH) < 1e-24);
+        // Without the offsets, the whole ‖s‖² = 4 + 16 is information.
+        assert!((profiled_information(&s, &[], &[false, false]) - 20.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn information_is_the_schur_complement_of_the_information_matrix() {
+        // Schur complement I_ss − I_sn² / I_nn for one nuisance column, no offsets:
+        // s·s = 1 + 4 + 9 + 16 = 30, s·n = 1 + 2 = 3, n·n = 2 → 30 − 9/2 = 25.5.
+        let s = [1.0, 2.0, 3.0, 4.0];
+        let n = vec![1.0, 1.0, 0.0, 0.0];
+        let i = profiled_information(&s, &[n], &[false]);
+        assert!((i - 25.5).abs() < 1e-12, "{i}");
+    }
+
+    #[test]
+    fn a_parallel_nuisance_column_removes_all_information() {
+        let s = [0.5, -1.0, 2.0, 0.0, 1.0, 3.0, -1.0, 0.5];
+        let n = s.iter().map(|v| -3.0 * v).collect::<Vec<f64>>();
+        assert!(profiled_information(&s, &[n], &[false, false]) < 1e-20);
+    }
 }
