@@ -171,3 +171,87 @@ fn a_log_without_surfaces_says_what_is_missing() {
         "{err}"
     );
 }
+
+/// Maneuvers flown the way a pilot flies them, by an independent generator
+/// (`scripts/gen_maneuver_records.py`: finite rise times, ±25 % jitter on every pulse's width and
+/// amplitude, trim offsets, sensor noise, autopilot wander, 20–50 Hz): every maneuver is found on
+/// its surface, its start within 0.5 s and its end within 1 s, as a kind the generator allows; the
+/// turn and the trim change between them are listed as rejected activity, not as maneuvers; level
+/// flight gives nothing. Five seeds.
+#[test]
+fn independent_generator_maneuvers_are_found_and_level_flight_gives_none() {
+    let python = flightid::sim::env::python().expect("provisioned Python");
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_maneuver_records.py");
+    for seed in 1..=5 {
+        let dir = tempfile::tempdir().unwrap();
+        let out = std::process::Command::new(&python)
+            .arg(&script)
+            .arg(dir.path())
+            .arg(seed.to_string())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let truth: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("truth.json")).unwrap())
+                .unwrap();
+        let rec = flightid::data::read_csv(&dir.path().join("maneuvers.csv")).unwrap();
+        let scan = flightid::data::scan_segments(&rec, &SegmentOptions::default()).unwrap();
+        let planted = truth["maneuvers"].as_array().unwrap();
+        for m in planted {
+            let (surface, start, end) = (
+                m["surface"].as_str().unwrap(),
+                m["start_s"].as_f64().unwrap(),
+                m["end_s"].as_f64().unwrap(),
+            );
+            let hit = scan.segments.iter().find(|s| {
+                s.surface == surface
+                    && (s.start_s - start).abs() <= 0.5
+                    && (s.end_s - end).abs() <= 1.0
+            });
+            let Some(hit) = hit else {
+                panic!(
+                    "seed {seed}: {surface} at {start:.1}-{end:.1} s not found in {:#?}",
+                    scan
+                );
+            };
+            let kinds: Vec<&str> = m["kinds"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter_map(|k| k.as_str())
+                .collect();
+            assert!(
+                kinds.contains(&hit.kind.name()),
+                "seed {seed}: {surface} at {start:.1} s called {} (allowed {kinds:?})",
+                hit.kind.name()
+            );
+        }
+        assert_eq!(
+            scan.segments.len(),
+            planted.len(),
+            "seed {seed}: {:#?}",
+            scan.segments
+        );
+        for turn in [140.0, 161.5] {
+            assert!(
+                scan.rejected
+                    .iter()
+                    .any(|r| r.surface == "aileron_rad" && (r.start_s - turn).abs() < 1.0),
+                "seed {seed}: the turn at {turn} s is listed as rejected: {:#?}",
+                scan.rejected
+            );
+        }
+        let level = flightid::data::read_csv(&dir.path().join("level.csv")).unwrap();
+        let quiet = flightid::data::scan_segments(&level, &SegmentOptions::default()).unwrap();
+        assert!(
+            quiet.segments.is_empty(),
+            "seed {seed}: level flight: {:#?}",
+            quiet.segments
+        );
+    }
+}

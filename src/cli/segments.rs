@@ -38,10 +38,25 @@ pub fn run(args: &SegmentsArgs) -> anyhow::Result<()> {
         min_amplitude_rad: args.min_amplitude_deg.to_radians(),
         ..SegmentOptions::default()
     };
-    let segments = data::find_segments(&rec, &opts)?;
+    let scan = data::scan_segments(&rec, &opts)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&segments)?);
+        println!("{}", serde_json::to_string_pretty(&scan)?);
         return Ok(());
+    }
+    let segments = &scan.segments;
+    if !scan.rejected.is_empty() {
+        println!("surface activity that is not a maneuver:");
+        for r in &scan.rejected {
+            println!(
+                "  {:<13} {:>9.2} - {:>9.2} s  {:>6.2} deg  {}",
+                r.surface,
+                r.start_s,
+                r.end_s,
+                r.amplitude_rad.to_degrees(),
+                r.reason
+            );
+        }
+        println!();
     }
     if segments.is_empty() {
         println!("no maneuvers found in {}", args.file.display());
@@ -51,7 +66,7 @@ pub fn run(args: &SegmentsArgs) -> anyhow::Result<()> {
         "{:>3}  {:<13} {:<8} {:>9} {:>9} {:>9} {:>9}  steady",
         "#", "surface", "kind", "start_s", "end_s", "amp_deg", "trim_deg"
     );
-    for s in &segments {
+    for s in segments {
         println!(
             "{:>3}  {:<13} {:<8} {:>9.2} {:>9.2} {:>9.2} {:>9.2}  {}",
             s.number,

@@ -25,8 +25,8 @@ pub use servo_map::ServoMap;
 pub use tlog::{parse_tlog_bytes, read_tlog, Stretch, StretchChoice, TlogOptions, TlogReport};
 pub mod segments;
 pub use segments::{
-    find_segments, segment_window, ManeuverKind, Segment, SegmentOptions, SegmentRef,
-    SEGMENT_LEAD_IN_S, SEGMENT_TAIL_S,
+    find_segments, scan_segments, segment_window, ManeuverKind, Rejected, Segment, SegmentOptions,
+    SegmentRef, SegmentScan, SEGMENT_LEAD_IN_S, SEGMENT_TAIL_S,
 };
 pub mod check;
 pub use check::{check_compatibility, CheckOptions, CheckReport, Estimate};

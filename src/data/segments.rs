@@ -9,11 +9,16 @@
 //!    `max(0.25°, 6 × robust noise)`, the noise being 1.4826 × MAD of the sample-to-sample
 //!    difference / √2.
 //! 3. Events: active samples grouped, bridging quiet gaps shorter than 1.5 s.
-//! 4. Classification by the signed pulses inside an event (runs of one sign): 2 alternating pulses
-//!    of similar width → doublet; 4 alternating pulses with widths ≈ 3:2:1:1 → 3-2-1-1; 6 or more
-//!    alternating pulses → sweep. Anything else (a single pulse such as a turn entry, a step) is not
-//!    a maneuver and is not listed.
-//! 5. Near-steady check: over the 2 s before the start the body rates (when present) stay within
+//! 4. Classification by the signed pulses inside an event (runs of one sign, slivers under a quarter
+//!    of the median width merged): 2 alternating pulses of similar width (ratio 0.6–1.6) → doublet;
+//!    4 with widths ≈ 3:2:1:1 (±40 %) → 3-2-1-1; 6 or more → sweep; any other train of 2–5
+//!    alternating pulses (unequal doublets, 2-1-1s, 3-2-1-1s with loose timing) → multistep.
+//! 5. Pulse trains across quiet holds: single pulses (back at trim within 8 s) on one surface,
+//!    alternating in sign and at most 8 s apart, are one maneuver — bank-to-bank on the aileron, a
+//!    multistep on the other surfaces.
+//! 6. What is not a maneuver is listed with the reason (`SegmentScan::rejected`): a spike shorter
+//!    than 0.2 s, a deflection held longer than 8 s (a trim change, a turn, a step), a lone pulse.
+//! 7. Near-steady check: over the 2 s before the start the body rates (when present) stay within
 //!    0.05 rad/s of their mean.
 
 use serde::Serialize;
@@ -31,6 +36,10 @@ pub enum ManeuverKind {
     ThreeTwoOneOne,
     /// Six or more alternating half-cycles (chirp / frequency sweep).
     Sweep,
+    /// Two to five alternating pulses that are not a doublet or a 3-2-1-1.
+    Multistep,
+    /// Aileron pulses of alternating sign separated by holds (rolls from one bank to the other).
+    BankToBank,
 }
 
 impl ManeuverKind {
@@ -40,6 +49,8 @@ impl ManeuverKind {
             ManeuverKind::Doublet => "doublet",
             ManeuverKind::ThreeTwoOneOne => "3-2-1-1",
             ManeuverKind::Sweep => "sweep",
+            ManeuverKind::Multistep => "multistep",
+            ManeuverKind::BankToBank => "bank-to-bank",
         }
     }
 }
@@ -68,6 +79,37 @@ pub struct Segment {
     /// End index (exclusive).
     pub end_index: usize,
 }
+
+/// Surface activity that is not a maneuver, and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Rejected {
+    /// Surface column.
+    pub surface: String,
+    /// Start of the activity, s.
+    pub start_s: f64,
+    /// End of the activity, s.
+    pub end_s: f64,
+    /// Largest deviation from trim, rad.
+    pub amplitude_rad: f64,
+    /// Why it is not a maneuver.
+    pub reason: String,
+}
+
+/// Everything [`scan_segments`] saw.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SegmentScan {
+    /// The maneuvers, in time order.
+    pub segments: Vec<Segment>,
+    /// Surface activity that is not a maneuver, in time order.
+    pub rejected: Vec<Rejected>,
+}
+
+/// Longest a single deflection may last and still be a pulse, s (also the longest hold between
+/// the pulses of a pulse train).
+const MAX_PULSE_S: f64 = 8.0;
+
+/// Shortest activity that is an input rather than a spike, s.
+const MIN_ACTIVITY_S: f64 = 0.2;
 
 /// Tuning of [`find_segments`].
 #[derive(Debug, Clone)]
@@ -100,9 +142,15 @@ impl Default for SegmentOptions {
 
 /// Finds the maneuvers on every surface column present, in time order.
 pub fn find_segments(rec: &FlightRecord, opts: &SegmentOptions) -> Result<Vec<Segment>, DataError> {
+    Ok(scan_segments(rec, opts)?.segments)
+}
+
+/// Finds the maneuvers on every surface column present and lists the activity that is not one.
+pub fn scan_segments(rec: &FlightRecord, opts: &SegmentOptions) -> Result<SegmentScan, DataError> {
     rec.validate()?;
     let dt_s = rec.dt_s().unwrap_or(1.0);
     let mut out = Vec::new();
+    let mut rejected = Vec::new();
     let present: Vec<&String> = opts
         .surfaces
         .iter()
@@ -115,6 +163,7 @@ pub fn find_segments(rec: &FlightRecord, opts: &SegmentOptions) -> Result<Vec<Se
             present: rec.column_names().join(", "),
         });
     }
+    let last = rec.len() - 1;
     for surface in present {
         let u = rec.column(surface).unwrap_or(&[]);
         let baseline = moving_median_baseline(&rec.time_s, u, opts.baseline_window_s);
@@ -122,18 +171,56 @@ pub fn find_segments(rec: &FlightRecord, opts: &SegmentOptions) -> Result<Vec<Se
         let thr = opts.min_amplitude_rad.max(6.0 * difference_noise(u));
         let active: Vec<bool> = dev.iter().map(|d| d.abs() > thr).collect();
         let gap = (opts.max_gap_s / dt_s).ceil() as usize;
+        let amplitude = |s: usize, e: usize| dev[s..e].iter().fold(0.0_f64, |m, d| m.max(d.abs()));
+        // (start, end, class, sign of a single pulse)
+        let mut found: Vec<(usize, usize, Class, f64)> = Vec::new();
         for (s, e) in events(&active, gap) {
-            let Some(kind) = classify(&dev[s..e], &active[s..e]) else {
+            let span_s = rec.time_s[e.min(last)] - rec.time_s[s];
+            let settled =
+                settles_back(&rec.time_s, u, s, e, (2.0 * thr).max(0.1 * amplitude(s, e)));
+            match settled.and_then(|()| classify(&dev[s..e], &active[s..e], span_s)) {
+                Ok(class) => {
+                    let sign = dev[s..e]
+                        .iter()
+                        .copied()
+                        .fold(0.0_f64, |m, d| if d.abs() > m.abs() { d } else { m })
+                        .signum();
+                    found.push((s, e, class, sign));
+                }
+                Err(reason) => rejected.push(Rejected {
+                    surface: surface.clone(),
+                    start_s: rec.time_s[s],
+                    end_s: rec.time_s[e.min(last)],
+                    amplitude_rad: amplitude(s, e),
+                    reason,
+                }),
+            }
+        }
+        let train_kind = if surface.starts_with("aileron") {
+            ManeuverKind::BankToBank
+        } else {
+            ManeuverKind::Multistep
+        };
+        for (s, e, class) in pulse_trains(&found, &rec.time_s, train_kind) {
+            let Class::Maneuver(kind) = class else {
+                rejected.push(Rejected {
+                    surface: surface.clone(),
+                    start_s: rec.time_s[s],
+                    end_s: rec.time_s[e.min(last)],
+                    amplitude_rad: amplitude(s, e),
+                    reason: format!(
+                        "a lone pulse (no opposite pulse within {MAX_PULSE_S} s to make a doublet or a pulse train)"
+                    ),
+                });
                 continue;
             };
-            let amplitude_rad = dev[s..e].iter().fold(0.0_f64, |m, d| m.max(d.abs()));
             out.push(Segment {
                 number: 0,
                 surface: surface.clone(),
                 kind,
                 start_s: rec.time_s[s],
-                end_s: rec.time_s[(e).min(rec.len() - 1)],
-                amplitude_rad,
+                end_s: rec.time_s[e.min(last)],
+                amplitude_rad: amplitude(s, e),
                 trim_rad: baseline[s],
                 steady_before: steady_before(rec, s, 2.0, opts.steady_rate_tol_rad_s),
                 start_index: s,
@@ -145,7 +232,61 @@ pub fn find_segments(rec: &FlightRecord, opts: &SegmentOptions) -> Result<Vec<Se
     for (i, seg) in out.iter_mut().enumerate() {
         seg.number = i + 1;
     }
-    Ok(out)
+    rejected.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
+    Ok(SegmentScan {
+        segments: out,
+        rejected,
+    })
+}
+
+/// `Err` when the surface settles away from where it started: the medians over 1 s before `s`
+/// and 1 s after `e` differ by more than `tol` (a turn's roll-in, a trim change). Passes at the
+/// record's edges.
+fn settles_back(t: &[f64], u: &[f64], s: usize, e: usize, tol: f64) -> Result<(), String> {
+    let before_lo = t.partition_point(|&x| x < t[s] - 1.0);
+    let end = e.min(t.len() - 1);
+    let after_hi = t.partition_point(|&x| x <= t[end] + 1.0);
+    if before_lo + 2 > s || end + 2 > after_hi {
+        return Ok(());
+    }
+    let mut before = u[before_lo..s].to_vec();
+    let mut after = u[end..after_hi].to_vec();
+    let shift = median_in_place(&mut after) - median_in_place(&mut before);
+    if shift.abs() > tol {
+        return Err(format!(
+            "the surface settles {:.2} deg away from where it started (a turn entry or exit, a trim \
+             change), not back at trim",
+            shift.to_degrees()
+        ));
+    }
+    Ok(())
+}
+
+/// Joins consecutive single pulses of alternating sign at most [`MAX_PULSE_S`] apart into one
+/// maneuver of `train_kind`; everything else passes unchanged: `(start, end, class)`.
+fn pulse_trains(
+    found: &[(usize, usize, Class, f64)],
+    t: &[f64],
+    train_kind: ManeuverKind,
+) -> Vec<(usize, usize, Class)> {
+    let mut out: Vec<(usize, usize, Class)> = Vec::new();
+    // the last entry is a single pulse or a train of them, ending with a pulse of this sign
+    let mut open_train: Option<f64> = None;
+    for &(s, e, class, sign) in found {
+        let is_pulse = class == Class::Pulse;
+        if let (Some(prev), Some(last_sign)) = (out.last_mut(), open_train) {
+            let close = t[s] - t[prev.1.min(t.len() - 1)] <= MAX_PULSE_S;
+            if is_pulse && sign == -last_sign && close {
+                prev.1 = e;
+                prev.2 = Class::Maneuver(train_kind);
+                open_train = Some(sign);
+                continue;
+            }
+        }
+        out.push((s, e, class));
+        open_train = is_pulse.then_some(sign);
+    }
+    out
 }
 
 /// Trim baseline: centred moving median over `window_s`, on a 0.25 s decimated grid.
@@ -212,8 +353,14 @@ fn events(active: &[bool], gap: usize) -> Vec<(usize, usize)> {
     out
 }
 
-/// Classifies one event from its signed pulses (runs of one sign among active samples).
-fn classify(dev: &[f64], active: &[bool]) -> Option<ManeuverKind> {
+/// Classifies one event from its signed pulses (runs of one sign among active samples), or says
+/// why it is not a maneuver.
+fn classify(dev: &[f64], active: &[bool], span_s: f64) -> Result<Class, String> {
+    if span_s < MIN_ACTIVITY_S {
+        return Err(format!(
+            "a spike of {span_s:.2} s (an input lasts at least {MIN_ACTIVITY_S} s)"
+        ));
+    }
     // Pulses: (sign, number of active samples); samples of the other sign split pulses, quiet
     // samples do not.
     let mut pulses: Vec<(f64, usize)> = Vec::new();
@@ -230,7 +377,7 @@ fn classify(dev: &[f64], active: &[bool]) -> Option<ManeuverKind> {
     // Ignore slivers (< 1/4 of the median pulse) left by noise at the edges of a step.
     let mut widths: Vec<f64> = pulses.iter().map(|p| p.1 as f64).collect();
     if widths.is_empty() {
-        return None;
+        return Err("no deflection above the threshold".into());
     }
     let med = median_in_place(&mut widths);
     let mut merged: Vec<(f64, usize)> = Vec::new();
@@ -241,10 +388,23 @@ fn classify(dev: &[f64], active: &[bool]) -> Option<ManeuverKind> {
         }
     }
     let w: Vec<f64> = merged.iter().map(|p| p.1 as f64).collect();
-    match w.len() {
+    let dt_s = span_s / dev.len().max(1) as f64;
+    let longest_s = w.iter().fold(0.0_f64, |m, v| m.max(*v)) * dt_s;
+    if longest_s > MAX_PULSE_S {
+        return Err(format!(
+            "a deflection held for {longest_s:.1} s (a turn, a trim change or a step, not a pulse back \
+             to trim within {MAX_PULSE_S} s)"
+        ));
+    }
+    Ok(Class::Maneuver(match w.len() {
+        1 => return Ok(Class::Pulse),
         2 => {
             let r = w[0] / w[1];
-            (0.6..=1.6).contains(&r).then_some(ManeuverKind::Doublet)
+            if (0.6..=1.6).contains(&r) {
+                ManeuverKind::Doublet
+            } else {
+                ManeuverKind::Multistep
+            }
         }
         4 => {
             let unit = w.iter().sum::<f64>() / 7.0;
@@ -253,11 +413,24 @@ fn classify(dev: &[f64], active: &[bool]) -> Option<ManeuverKind> {
                 .iter()
                 .zip(expected)
                 .all(|(wi, e)| (wi / (e * unit) - 1.0).abs() < 0.4);
-            ok.then_some(ManeuverKind::ThreeTwoOneOne)
+            if ok {
+                ManeuverKind::ThreeTwoOneOne
+            } else {
+                ManeuverKind::Multistep
+            }
         }
-        n if n >= 6 => Some(ManeuverKind::Sweep),
-        _ => None,
-    }
+        n if n >= 6 => ManeuverKind::Sweep,
+        _ => ManeuverKind::Multistep,
+    }))
+}
+
+/// What one burst of surface activity is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Class {
+    /// A maneuver by itself.
+    Maneuver(ManeuverKind),
+    /// One pulse back at trim: a maneuver only as part of a pulse train.
+    Pulse,
 }
 
 /// True if the body rates present stay within `tol` of their mean over `window_s` before `start`.
