@@ -119,7 +119,10 @@ fn identify_bad_input_is_a_one_line_error_with_exit_code_2() {
             "flaps",
         ),
         (identify(&nan, &[]), "NaN"),
-        (identify(&short, &["--method", "oe"]), "too few samples"),
+        (
+            identify(&short, &["--method", "oe", "--poles", "4", "--zeros", "2"]),
+            "too few samples",
+        ),
         (identify(&still, &[]), "never moves"),
         (identify(&good, &["--method", "bogus"]), "bogus"),
         (identify(&good, &["--poles", "2", "--zeros", "2"]), "zeros"),
@@ -134,4 +137,61 @@ fn identify_bad_input_is_a_one_line_error_with_exit_code_2() {
         assert!(err.contains(needle), "expected '{needle}' in: {err}");
         assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
     }
+}
+
+/// Without --poles/--zeros the order comes from the data. On the independent short-period
+/// generator's records (`scripts/gen_short_period_records.py`: scipy, noisy α, q and elevator,
+/// biases, a random initial state; three seeds) q/δe is the short period, two poles and one zero,
+/// and α/δe has two poles; the table lists every order tried with its verdict.
+#[test]
+fn identify_chooses_the_order_from_independent_records() {
+    let dir = tempfile::tempdir().unwrap();
+    let gen = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_short_period_records.py");
+    let out = Command::new(flightid::sim::env::python().expect("provisioned Python"))
+        .arg(gen)
+        .arg(dir.path())
+        .args(["1", "3"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for seed in 1..=3 {
+        let csv = dir.path().join(format!("seed{seed}_a.csv"));
+        for (output, poles, zeros) in [("q_rad_s", 2, Some(1)), ("alpha_rad", 2, None)] {
+            let out = flightid()
+                .args(["identify", "--data"])
+                .arg(&csv)
+                .args(["--input", "elevator", "--output", output, "--json", "-"])
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            let tf = &v["result"]["tf"];
+            let n = tf["den"].as_array().unwrap().len() - 1;
+            let m = tf["num"].as_array().unwrap().len() - 1;
+            assert_eq!(n, poles, "seed {seed} {output}: {}", v["order_selection"]);
+            if let Some(z) = zeros {
+                assert_eq!(m, z, "seed {seed} {output}: {}", v["order_selection"]);
+            }
+            assert_eq!(v["order_selection"].as_array().unwrap().len(), 10);
+        }
+    }
+    let text = flightid()
+        .args(["identify", "--data"])
+        .arg(dir.path().join("seed1_a.csv"))
+        .args(["--input", "elevator", "--output", "q_rad_s"])
+        .output()
+        .unwrap();
+    let s = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        s.contains("order chosen from the data") && s.contains("chosen"),
+        "{s}"
+    );
 }

@@ -42,6 +42,10 @@ fn ls_continuous_model_simulates_like_its_discrete_arx_model() {
                 "theta_rad",
                 "--method",
                 "ls",
+                "--poles",
+                "4",
+                "--zeros",
+                "2",
                 "--json",
             ]),
     );

@@ -31,12 +31,15 @@ pub struct IdentifyCmd {
     /// Estimator: ls (the paper's ARX least squares), iv, srivc or oe.
     #[arg(long, default_value = "srivc")]
     pub method: String,
-    /// Number of poles.
-    #[arg(long, default_value_t = 4)]
-    pub poles: usize,
-    /// Number of zeros (fewer than poles).
-    #[arg(long, default_value_t = 2)]
-    pub zeros: usize,
+    /// Number of poles. Without --poles and --zeros the order is chosen from the data: every
+    /// order up to 4 poles is fitted and the simplest whose simulation fit is within 1 point of the
+    /// best is kept, setting aside unstable poles, pole-zero cancellations and insignificant poles
+    /// (the table lists each). With several records or segments the default is 4.
+    #[arg(long)]
+    pub poles: Option<usize>,
+    /// Number of zeros (fewer than poles; default with --poles: 2, or poles − 1 if fewer).
+    #[arg(long)]
+    pub zeros: Option<usize>,
     /// Also estimate a pure input delay.
     #[arg(long)]
     pub delay: bool,
@@ -128,10 +131,11 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
     } else {
         (u.to_vec(), y.to_vec())
     };
+    let (poles, zeros) = given_order(args);
     let opts = IdentOptions {
         method,
-        poles: args.poles,
-        zeros: args.zeros,
+        poles,
+        zeros,
         estimate_delay: args.delay,
     };
     let bad_input = |e: &IdentError| {
@@ -144,7 +148,17 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
                 | IdentError::InvalidOptions(_)
         )
     };
-    let r = match ident::identify(&u, &y, dt_s, &opts) {
+    let selected = if args.poles.is_none() && args.zeros.is_none() {
+        ident::select_order(&u, &y, dt_s, method, args.delay, 4).map(Some)
+    } else {
+        Ok(None)
+    };
+    let fitted = match selected {
+        Ok(Some(sel)) => Ok((sel.result, sel.poles, sel.zeros, Some(sel.candidates))),
+        Ok(None) => ident::identify(&u, &y, dt_s, &opts).map(|r| (r, poles, zeros, None)),
+        Err(e) => Err(e),
+    };
+    let (r, poles, zeros, candidates) = match fitted {
         Ok(r) => r,
         Err(e) if bad_input(&e) => {
             return Err(UsageError(format!(
@@ -170,8 +184,11 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         super::warn(w);
     }
     if args.json.as_deref() != Some("-") {
+        if let Some(c) = &candidates {
+            print_order_selection(c, poles, zeros);
+        }
         print_result(
-            args,
+            (poles, zeros),
             &data_path.display().to_string(),
             &in_col,
             &out_col,
@@ -186,14 +203,55 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
                 "input": in_col,
                 "output": out_col,
                 "result": r,
+                "order_selection": candidates,
             }),
         )?;
     }
     Ok(())
 }
 
+/// `(poles, zeros)` as given, with their defaults (4 poles; 2 zeros, fewer than the poles).
+fn given_order(args: &IdentifyCmd) -> (usize, usize) {
+    let poles = args.poles.unwrap_or(4);
+    (poles, args.zeros.unwrap_or(2.min(poles.saturating_sub(1))))
+}
+
+/// The orders tried and the one chosen.
+fn print_order_selection(candidates: &[ident::OrderCandidate], poles: usize, zeros: usize) {
+    let rows = candidates
+        .iter()
+        .map(|c| {
+            let chosen = c.poles == poles && c.zeros == zeros;
+            vec![
+                format!("{}/{}", c.poles, c.zeros),
+                match c.fit_sim_percent {
+                    Some(f) if f < -999.0 => "< -999".into(),
+                    Some(f) => format!("{f:.2}"),
+                    None => "-".into(),
+                },
+                match (&c.set_aside, chosen) {
+                    (_, true) => "chosen".into(),
+                    (Some(why), _) => format!("set aside: {why}"),
+                    (None, _) => "eligible".into(),
+                },
+            ]
+        })
+        .collect();
+    println!(
+        "{}",
+        text_table(&Table {
+            caption: format!(
+                "order chosen from the data: the simplest within {} point of the best simulation fit",
+                ident::FIT_MARGIN_PERCENT
+            ),
+            header: vec!["poles/zeros".into(), "fit %".into(), "verdict".into()],
+            rows,
+        })
+    );
+}
+
 fn print_result(
-    args: &IdentifyCmd,
+    (poles, zeros): (usize, usize),
     source: &str,
     in_col: &str,
     out_col: &str,
@@ -201,7 +259,7 @@ fn print_result(
 ) {
     println!(
         "{} -> {} from {}: {} samples at {:.4} s, method {}, {} poles / {} zeros",
-        in_col, out_col, source, r.n_samples, r.dt_s, r.method, args.poles, args.zeros
+        in_col, out_col, source, r.n_samples, r.dt_s, r.method, poles, zeros
     );
     println!(
         "trim removed: input {:.6}, output {:.6}",
@@ -404,10 +462,11 @@ fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
             dt_s,
         });
     }
+    let (poles, zeros) = given_order(args);
     let opts = IdentOptions {
         method,
-        poles: args.poles,
-        zeros: args.zeros,
+        poles,
+        zeros,
         estimate_delay: args.delay,
     };
     let joint = match ident::identify_joint(&records, &opts) {
@@ -426,7 +485,7 @@ fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
     };
     if args.json.as_deref() != Some("-") {
         let source = format!("{} record(s) jointly", records.len());
-        print_result(args, &source, &in_col, &out_col, &joint.result);
+        print_result((poles, zeros), &source, &in_col, &out_col, &joint.result);
         if opts.estimate_delay {
             println!("delay: whole samples only in a joint fit");
         }

@@ -26,6 +26,7 @@ pub(crate) use linalg::lstsq_qr;
 mod ls;
 mod metrics;
 mod oe;
+mod order;
 mod srivc;
 #[cfg(test)]
 mod tests;
@@ -36,6 +37,9 @@ use serde::{Deserialize, Serialize};
 pub use crate::lti::{modes, Mode, TransferFunction};
 pub use joint::{identify_joint, JointRecord, JointResult, RecordFit};
 pub use metrics::{ise, CorrelationTest};
+pub use order::{
+    select_order, OrderCandidate, OrderSelection, FIT_MARGIN_PERCENT, UNSTABLE_MARGIN_PERCENT,
+};
 
 /// Which estimator [`identify`] runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -1,0 +1,243 @@
+//! From the solution to the [`Estimate`]: Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein
+//! 1994), correlations, per-record fits, names of the nuisance terms.
+
+use super::*;
+
+impl Problem<'_> {
+    /// Covariance, correlation, per-record fits and the named results.
+    pub(super) fn summarise(&self, sol: Solution, method: Method, started: Instant) -> Estimate {
+        let layout = &self.layout;
+        let p = layout.len();
+        let sig = self.model.signature();
+        let res = self.residuals(&sol.predictions);
+        let mut warnings = Vec::new();
+        let names: Vec<String> = (0..p).map(|j| self.free_name(j)).collect();
+        let (cov_white, cov) = match self.jacobian(&sol.phi, &sol.predictions, true) {
+            Ok(cols) => self.covariances(&cols, &res, &sol.noise, &names, &mut warnings),
+            Err(e) => {
+                warnings.push(format!(
+                    "no standard errors: a perturbed simulation failed ({e})"
+                ));
+                (vec![0.0; p * p], vec![0.0; p * p])
+            }
+        };
+        let sd = |c: &[f64], j: usize| c[j * p + j].max(0.0).sqrt();
+        let estimate = |j: usize, name: String, kind, record| {
+            let value = sol.phi[j];
+            let std_error = sd(&cov, j);
+            let at_bound = value <= layout.lower[j] || value >= layout.upper[j];
+            ParameterEstimate {
+                name,
+                kind,
+                record,
+                value,
+                std_error,
+                std_error_white: sd(&cov_white, j),
+                t: if std_error > 0.0 {
+                    value.abs() / std_error
+                } else {
+                    0.0
+                },
+                fixed: false,
+                at_bound,
+            }
+        };
+        let theta = layout.theta(&sol.phi);
+        let parameters: Vec<ParameterEstimate> = sig
+            .parameters
+            .iter()
+            .enumerate()
+            .map(|(i, name)| match layout.free.iter().position(|&f| f == i) {
+                Some(j) => estimate(j, name.clone(), None, None),
+                None => ParameterEstimate {
+                    name: name.clone(),
+                    kind: None,
+                    record: None,
+                    value: theta[i],
+                    std_error: 0.0,
+                    std_error_white: 0.0,
+                    t: 0.0,
+                    fixed: true,
+                    at_bound: false,
+                },
+            })
+            .collect();
+        let nf = layout.free.len();
+        let nuisance: Vec<ParameterEstimate> = layout
+            .slots
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                estimate(
+                    nf + k,
+                    s.target.clone(),
+                    Some(s.kind),
+                    s.record.map(|r| self.records[r].name.clone()),
+                )
+            })
+            .collect();
+        // a process-noise variance at 0 is the output-error answer, not a bound hit
+        let noteworthy = |p: &&ParameterEstimate| {
+            p.at_bound && !(p.kind == Some(NuisanceKind::ProcessNoise) && p.value == 0.0)
+        };
+        for pe in parameters.iter().chain(&nuisance).filter(noteworthy) {
+            warnings.push(format!("{} ended on a bound ({})", pe.name, pe.value));
+        }
+        let correlation: Vec<Vec<f64>> = (0..p)
+            .map(|a| {
+                (0..p)
+                    .map(|b| {
+                        let d = sd(&cov, a) * sd(&cov, b);
+                        if d > 0.0 {
+                            (cov[a * p + b] / d).clamp(-1.0, 1.0)
+                        } else if a == b {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let ny = sig.outputs.len();
+        let residual_covariance = (0..ny)
+            .map(|a| {
+                (0..ny)
+                    .map(|b| if a == b { sol.noise[a] } else { 0.0 })
+                    .collect()
+            })
+            .collect();
+        let records = self
+            .records
+            .iter()
+            .zip(&sol.predictions)
+            .map(|(rec, pred)| RecordFit {
+                name: rec.name.clone(),
+                time_s: rec.time_s.clone(),
+                measured: rec.outputs.clone(),
+                predicted: pred.clone(),
+                fit_percent: rec
+                    .outputs
+                    .iter()
+                    .zip(pred)
+                    .map(|(z, y)| fit_percent(z, y))
+                    .collect(),
+            })
+            .collect();
+        Estimate {
+            method,
+            outputs: sig.outputs.clone(),
+            parameters,
+            nuisance,
+            free: names,
+            covariance: (0..p).map(|a| cov[a * p..(a + 1) * p].to_vec()).collect(),
+            correlation,
+            residual_covariance,
+            records,
+            iterations: sol.iterations,
+            converged: sol.stop == StopReason::Converged,
+            stop: sol.stop,
+            cost: self.cost(&res, &sol.noise),
+            cost_history: sol.cost_history,
+            wall_s: started.elapsed().as_secs_f64(),
+            covariance_method: COVARIANCE_METHOD,
+            warnings,
+        }
+    }
+
+    /// Name of φ entry `j`: the parameter, or `kind:target@record` for a nuisance term.
+    pub(super) fn free_name(&self, j: usize) -> String {
+        match self.layout.slot(j) {
+            None => self.model.signature().parameters[self.layout.free[j]].clone(),
+            Some(s) => {
+                let kind = match s.kind {
+                    NuisanceKind::InitialState => "x0",
+                    NuisanceKind::OutputBias => "bias",
+                    NuisanceKind::InputBias => "input_bias",
+                    NuisanceKind::InputSkew => "skew",
+                    NuisanceKind::ProcessNoise => "process_noise",
+                };
+                match s.record {
+                    Some(r) => format!("{kind}:{}@{}", s.target, self.records[r].name),
+                    None => format!("{kind}:{}", s.target),
+                }
+            }
+        }
+    }
+
+    /// White and coloured-residual covariances (row-major p × p) from the sensitivity columns.
+    pub(super) fn covariances(
+        &self,
+        cols: &[Vec<f64>],
+        res: &Predictions,
+        noise: &[f64],
+        names: &[String],
+        warnings: &mut Vec<String>,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let p = cols.len();
+        let (x, _) = self.weighted(cols, res, noise);
+        let m: Mat<f64> = x.transpose() * &x;
+        let minv = pseudo_inverse(&m, names, warnings);
+        // W = Σ_records Σ_outputs w_o · Σ_ij x_i R_vv(i−j) x_jᵀ over that output's weighted rows
+        let off = self.offsets();
+        let mut w = vec![0.0; p * p];
+        for (r, rec) in self.records.iter().enumerate() {
+            let n = rec.len();
+            for (o, r_o) in noise.iter().enumerate() {
+                let start = off[r] + o * n;
+                let block: Vec<Vec<f64>> = (0..p)
+                    .map(|j| (0..n).map(|k| x[(start + k, j)]).collect())
+                    .collect();
+                let refs: Vec<&[f64]> = block.iter().map(Vec::as_slice).collect();
+                let wo = lag_weighted_products(&refs, &lag_weights(&res[r][o]));
+                for (acc, v) in w.iter_mut().zip(&wo) {
+                    *acc += v / r_o;
+                }
+            }
+        }
+        let coloured = sandwich(&minv, &w, p);
+        (minv, coloured)
+    }
+}
+
+/// Inverse of the symmetric information matrix by eigendecomposition; eigenvalues below 1e-12 of
+/// the largest (an unidentifiable direction) are dropped and the parameters that dominate that
+/// direction named in a warning.
+fn pseudo_inverse(m: &Mat<f64>, names: &[String], warnings: &mut Vec<String>) -> Vec<f64> {
+    let p = m.nrows();
+    // scale to unit diagonal first so the threshold is independent of parameter units
+    let d: Vec<f64> = (0..p)
+        .map(|j| m[(j, j)].max(f64::MIN_POSITIVE).sqrt())
+        .collect();
+    let scaled = Mat::from_fn(p, p, |a, b| m[(a, b)] / (d[a] * d[b]));
+    let mut inv = vec![0.0; p * p];
+    let Ok(evd) = scaled.self_adjoint_eigen(Side::Lower) else {
+        warnings.push("the information matrix could not be decomposed: no standard errors".into());
+        return inv;
+    };
+    let (u, s) = (evd.U(), evd.S().column_vector());
+    let largest = (0..p).map(|i| s[i]).fold(0.0_f64, f64::max);
+    for i in 0..p {
+        if s[i] <= 1e-12 * largest {
+            let j = (0..p)
+                .max_by(|&a, &b| u[(a, i)].abs().total_cmp(&u[(b, i)].abs()))
+                .unwrap_or(0);
+            warnings.push(format!(
+                "the records do not determine {} (a combination led by it has no information)",
+                names[j]
+            ));
+            continue;
+        }
+        for a in 0..p {
+            for b in 0..p {
+                inv[a * p + b] += u[(a, i)] * u[(b, i)] / s[i];
+            }
+        }
+    }
+    for a in 0..p {
+        for b in 0..p {
+            inv[a * p + b] /= d[a] * d[b];
+        }
+    }
+    inv
+}
