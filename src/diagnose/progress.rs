@@ -35,9 +35,9 @@ impl Progress {
 
     /// A new stage (trim and baseline, identifiability screening, validation) with `fits` steps planned.
     pub fn stage(&self, label: &str, fits: usize) {
-        self.bar.set_prefix(label.to_string());
-        self.bar.set_length(fits as u64);
         self.bar.set_position(0);
+        self.bar.set_length(fits as u64);
+        self.bar.set_prefix(label.to_string());
     }
 
     /// A new selection round with `fits` candidate fits planned.

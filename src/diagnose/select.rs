@@ -446,7 +446,27 @@ pub fn select<'e>(
             break;
         };
         let others: Vec<(usize, f64)> = sig.iter().map(|&(t, c, _)| (t, c)).collect();
-        let ambiguous_with = ambiguity(best, best_fit, best_cost, &others, &full, &top_exts, opts);
+        // A significant candidate with which the chosen one's parameter is no longer determined (Cramér–Rao σ
+        // from the information after that candidate and the offsets, above a third of the resolution).
+        let ib = pool[top[best]];
+        let inseparable: Vec<bool> = (0..top.len())
+            .map(|t| {
+                let it = pool[top[t]];
+                let info = profiled_information(&sens[ib], &[sens[it].clone()], &masks[ib]);
+                let determined = 3.0 / info.sqrt() <= resolution[ib]; // false for a NaN bound too
+                t != best && !determined
+            })
+            .collect();
+        let ambiguous_with = ambiguity(
+            best,
+            best_fit,
+            best_cost,
+            &others,
+            &full,
+            &top_exts,
+            &inseparable,
+            opts,
+        );
         // Accept: the joint fit updates the values of the effects already selected.
         selected = best_active.clone();
         for s in selected.iter_mut() {
@@ -486,7 +506,9 @@ pub fn select<'e>(
 }
 
 /// The significant candidates the data cannot tell apart from the chosen one: nearly the same cost
-/// (n_eff ln(J/J_best) < 10) and strongly correlated output sensitivities.
+/// (n_eff ln(J/J_best) < 10) and strongly correlated output sensitivities, or `inseparable` (the record does not
+/// determine the chosen one's parameter once this candidate is estimated with it).
+#[allow(clippy::too_many_arguments)]
 fn ambiguity(
     best: usize,
     best_fit: &FitOutcome,
@@ -494,6 +516,7 @@ fn ambiguity(
     sig: &[(usize, f64)],
     full: &[FullFit],
     exts: &[&dyn Extension],
+    inseparable: &[bool],
     opts: &DiagnoseOptions,
 ) -> Vec<String> {
     let kb = best_fit.values.len() - 1;
@@ -507,7 +530,9 @@ fn ambiguity(
             &best_fit.sensitivities[kb],
             &o.sensitivities[o.values.len() - 1],
         );
-        if best_fit.n_eff * (c / best_cost).ln() < 10.0 && rho.abs() > opts.ambiguity_correlation {
+        let alike =
+            best_fit.n_eff * (c / best_cost).ln() < 10.0 && rho.abs() > opts.ambiguity_correlation;
+        if alike || inseparable.get(t).copied().unwrap_or(false) {
             out.push(format!("{}/{}", exts[t].effect(), exts[t].target()));
         }
     }
