@@ -93,16 +93,12 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
         sim.set_coefficient_scale(name, *factor)
             .map_err(|e| UsageError(e.to_string()))?;
     }
-    let progress =
-        super::common::spinner("trim, linearize, fly doublets, identify, amplitude sweep");
-    let result = compare::compare_and_explain(&mut sim, &opts, &args.scales);
-    progress.finish_and_clear();
     let compare::ExplainedComparison {
         outcome,
         report,
         json,
         verdicts,
-    } = result?;
+    } = super::common::compare_with_spinner(&mut sim, &opts, &args.scales)?;
     let index = match &args.report {
         Some(dir) => Some(crate::report::write_report_dir(dir, &report, &json)?),
         None => None,
