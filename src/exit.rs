@@ -15,35 +15,25 @@ pub trait ExitCode {
     fn exit_code(&self) -> u8;
 }
 
-impl ExitCode for crate::data::DataError {
-    fn exit_code(&self) -> u8 {
-        BAD_INPUT
-    }
+/// Errors that are always the user's input: a data file, an aircraft or airframe file, a number out of its
+/// range, a paper option.
+macro_rules! always_bad_input {
+    ($($t:ty),+ $(,)?) => {
+        $(impl ExitCode for $t {
+            fn exit_code(&self) -> u8 {
+                BAD_INPUT
+            }
+        })+
+    };
 }
 
-impl ExitCode for crate::aircraft::AircraftError {
-    fn exit_code(&self) -> u8 {
-        BAD_INPUT
-    }
-}
-
-impl ExitCode for crate::limits::LimitError {
-    fn exit_code(&self) -> u8 {
-        BAD_INPUT
-    }
-}
-
-impl ExitCode for crate::aero::airframe::AirframeError {
-    fn exit_code(&self) -> u8 {
-        BAD_INPUT
-    }
-}
-
-impl ExitCode for crate::paper::PaperError {
-    fn exit_code(&self) -> u8 {
-        BAD_INPUT
-    }
-}
+always_bad_input!(
+    crate::data::DataError,
+    crate::aircraft::AircraftError,
+    crate::limits::LimitError,
+    crate::aero::airframe::AirframeError,
+    crate::paper::PaperError,
+);
 
 impl ExitCode for crate::sim::SimError {
     /// A crash, a failed trim or a bridge error says nothing about the user's input.

@@ -337,11 +337,7 @@ pub fn equation_error_measured(
             .collect::<Vec<_>>()
             .join("; ");
         return Err(MeasuredError::Record {
-            file: records
-                .iter()
-                .map(|(n, _)| n.as_str())
-                .collect::<Vec<_>>()
-                .join(", "),
+            file: names_of(records),
             message: format!("no coefficient equation could be formed ({why})"),
         });
     }
@@ -560,6 +556,17 @@ impl MeasuredReport {
         }
         out
     }
+}
+
+/// The names of `records`, comma separated (the `file` of an error about all of them).
+pub(super) fn names_of<'a>(
+    records: impl IntoIterator<Item = &'a (String, data::FlightRecord)>,
+) -> String {
+    records
+        .into_iter()
+        .map(|(n, _)| n.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The equation-error report: estimates, dimensional derivatives, modes (σ from the diagonal of the

@@ -235,11 +235,7 @@ fn outputs_in_every_record<O: Copy>(
         .collect();
     if outputs.is_empty() {
         return Err(MeasuredError::Record {
-            file: records
-                .iter()
-                .map(|(n, _)| n.as_str())
-                .collect::<Vec<_>>()
-                .join(", "),
+            file: super::measured::names_of(records.iter().copied()),
             message: format!(
                 "no {axis} output column ({}) in every record",
                 all.iter()

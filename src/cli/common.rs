@@ -85,6 +85,18 @@ pub fn emit_json<T: serde::Serialize>(target: &str, value: &T) -> anyhow::Result
     }
 }
 
+/// [`crate::compare::compare_and_explain`] behind a spinner (the `compare` and `demo` commands).
+pub fn compare_with_spinner(
+    sim: &mut JsbsimSim,
+    opts: &crate::compare::CompareOptions,
+    user_scales: &[(String, f64)],
+) -> Result<crate::compare::ExplainedComparison, crate::compare::CompareError> {
+    let progress = spinner("trim, linearize, fly doublets, identify, amplitude sweep");
+    let result = crate::compare::compare_and_explain(sim, opts, user_scales);
+    progress.finish_and_clear();
+    result
+}
+
 /// A spinner with elapsed time on stderr for work that takes more than a couple of seconds; indicatif draws
 /// nothing when stderr is not a terminal, so piped output stays clean. Finish it with `finish_and_clear`.
 pub fn spinner(message: &str) -> indicatif::ProgressBar {

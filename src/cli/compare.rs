@@ -4,7 +4,7 @@ use super::common::{emit_json, TrimArgs};
 use crate::cli::UsageError;
 use crate::compare::{self, CompareOptions};
 use crate::ident::Method;
-use crate::sim::{JsbsimSim, Simulator};
+use crate::sim::JsbsimSim;
 use anyhow::Context;
 use std::path::PathBuf;
 
@@ -47,101 +47,6 @@ pub struct CompareCmd {
     /// repeatable. Names are the model's `aero/coefficient/NAME` functions; an unknown name lists them.
     #[arg(long = "scale", value_name = "NAME=FACTOR", value_parser = parse_scale)]
     pub scales: Vec<(String, f64)>,
-}
-
-/// The model's kinks at the trim, which the linearization cannot see (a re-trim, then the probe), and, where the
-/// linearization fits poorly, each kink's measured share (the linearization's fits with the term removed): a
-/// report section after the overview and `nonsmooth_terms` / `nonsmooth_shares` in the JSON. Returns the
-/// section's verdict paragraphs for the terminal.
-pub(super) fn explain_linearization_gaps(
-    sim: &mut JsbsimSim,
-    opts: &CompareOptions,
-    user_scales: &[(String, f64)],
-    outcome: &compare::CompareOutcome,
-    report: &mut crate::report::Report,
-    json: &mut serde_json::Value,
-) -> anyhow::Result<Vec<String>> {
-    let aircraft = &outcome.aircraft;
-    sim.trim(&opts.point)
-        .with_context(|| format!("re-trimming {aircraft} to probe its coefficient functions"))?;
-    let truth = sim
-        .aero_truth()
-        .with_context(|| format!("probing the coefficient functions of {aircraft}"))?;
-    let gaps = compare::linearization_gaps(outcome);
-    let mut shares = Vec::new();
-    if !gaps.is_empty() {
-        for term in truth.nonsmooth.iter().take(MAX_KINKS_MEASURED) {
-            shares.push(kink_share(
-                sim,
-                opts,
-                user_scales,
-                &term.coefficient,
-                &gaps,
-            )?);
-        }
-    }
-    json["nonsmooth_terms"] = serde_json::to_value(&truth.nonsmooth)?;
-    json["nonsmooth_shares"] = serde_json::to_value(&shares)?;
-    let Some(section) = compare::nonsmooth_section(&truth.nonsmooth, outcome, &gaps, &shares)
-    else {
-        return Ok(Vec::new());
-    };
-    let verdicts = section
-        .paragraphs
-        .iter()
-        .filter(|p| p.starts_with("The linearization fits"))
-        .cloned()
-        .collect();
-    // right after the overview table that shows the poor fits
-    let at = report
-        .sections
-        .iter()
-        .position(|s| s.heading == "Overview")
-        .map_or(report.sections.len(), |i| i + 1);
-    report.sections.insert(at, section);
-    Ok(verdicts)
-}
-
-/// Kinks whose share is measured (each costs a trim, a linearization and a few flights, ~1.5 s on c172x).
-const MAX_KINKS_MEASURED: usize = 4;
-
-/// The linearization's fit on each gap transfer function with `coefficient` scaled to 0 (one cheap comparison:
-/// least squares only, one sweep amplitude), then the user's scale restored.
-fn kink_share(
-    sim: &mut JsbsimSim,
-    opts: &CompareOptions,
-    user_scales: &[(String, f64)],
-    coefficient: &str,
-    gaps: &[(String, f64)],
-) -> anyhow::Result<compare::KinkShare> {
-    let restore = user_scales
-        .iter()
-        .rev()
-        .find(|(n, _)| n == coefficient)
-        .map_or(1.0, |(_, f)| *f);
-    sim.set_coefficient_scale(coefficient, 0.0)?;
-    let quick = CompareOptions {
-        methods: vec![Method::Ls],
-        sweep_amplitudes_deg: vec![opts.amplitude_deg],
-        ..opts.clone()
-    };
-    let outcome = compare::run_compare(sim, &quick);
-    sim.set_coefficient_scale(coefficient, restore)?;
-    let (outcome, _) =
-        outcome.with_context(|| format!("comparing without {coefficient} to measure its share"))?;
-    let fits = outcome
-        .models
-        .iter()
-        .filter(|(k, _)| gaps.iter().any(|(g, _)| g == *k))
-        .filter_map(|(k, fits)| {
-            let lin = fits.iter().find(|f| f.model == "jsbsim_linearization")?;
-            Some((k.clone(), lin.fit_percent))
-        })
-        .collect();
-    Ok(compare::KinkShare {
-        coefficient: coefficient.to_string(),
-        fit_percent_without: fits,
-    })
 }
 
 /// `NAME=FACTOR` with a finite factor.
@@ -188,20 +93,12 @@ pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
         sim.set_coefficient_scale(name, *factor)
             .map_err(|e| UsageError(e.to_string()))?;
     }
-    let progress =
-        super::common::spinner("trim, linearize, fly doublets, identify, amplitude sweep");
-    let result = compare::run_compare(&mut sim, &opts);
-    progress.finish_and_clear();
-    let (outcome, mut report) = result?;
-    let mut json = compare::outcome_json(&outcome);
-    let verdicts = explain_linearization_gaps(
-        &mut sim,
-        &opts,
-        &args.scales,
-        &outcome,
-        &mut report,
-        &mut json,
-    )?;
+    let compare::ExplainedComparison {
+        outcome,
+        report,
+        json,
+        verdicts,
+    } = super::common::compare_with_spinner(&mut sim, &opts, &args.scales)?;
     let index = match &args.report {
         Some(dir) => Some(crate::report::write_report_dir(dir, &report, &json)?),
         None => None,

@@ -50,20 +50,12 @@ pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
     };
     let mut sim = JsbsimSim::start(&cfg, args.trim.rate_hz)
         .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
-    let progress =
-        super::common::spinner("trim, linearize, fly doublets, identify, amplitude sweep");
-    let result = compare::run_compare(&mut sim, &opts);
-    progress.finish_and_clear();
-    let (outcome, mut report) = result?;
-    let mut json = compare::outcome_json(&outcome);
-    let verdicts = super::compare::explain_linearization_gaps(
-        &mut sim,
-        &opts,
-        &[],
-        &outcome,
-        &mut report,
-        &mut json,
-    )?;
+    let compare::ExplainedComparison {
+        outcome,
+        report,
+        json,
+        verdicts,
+    } = super::common::compare_with_spinner(&mut sim, &opts, &[])?;
     let index = crate::report::write_report_dir(&args.report, &report, &json)?;
     if let Some(target) = &args.json {
         emit_json(target, &json)?;

@@ -10,7 +10,9 @@ use crate::sim::linear::{paper_transfer_functions, tf_json, PAPER_TFS};
 use crate::sim::{FlightPlan, SimError, Simulator, SurfaceInput, TrimPoint};
 use serde::Serialize;
 
+pub mod kinks;
 pub mod notes;
+pub use kinks::{compare_and_explain, ExplainedComparison};
 use serde_json::json;
 use std::collections::BTreeMap;
 
