@@ -28,19 +28,7 @@ fn read_json(path: &Path) -> serde_json::Value {
 fn short_period_parameters_lie_within_3_sigma_of_an_independent_generators_truth() {
     let dir = tempfile::tempdir().unwrap();
     let seeds = 1..=20;
-    let out = Command::new(python())
-        .arg(script("gen_short_period_records.py"))
-        .arg(dir.path())
-        .arg("1")
-        .arg("20")
-        .output()
-        .expect("run the generator");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let truth = read_json(&dir.path().join("truth.json"));
+    let truth = generate("gen_short_period_records.py", dir.path(), 1, 20, &[]);
     let truth = truth.as_object().unwrap();
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/short_period.toml");
     let mut misses = std::collections::BTreeMap::<String, usize>::new();
@@ -210,10 +198,11 @@ fn jsbsim_turbulence_output_error_and_filter_error_against_the_still_air_referen
     }
 }
 
-/// Runs `scripts/gen_longitudinal_records.py` into `dir` (extra arguments appended); the truth.
-fn longitudinal_records(dir: &Path, first: u32, n: u32, extra: &[&str]) -> serde_json::Value {
+/// Runs the generator `name` (in `scripts/`) into `dir` for seeds `first..first+n` (extra
+/// arguments appended); the truth it writes.
+fn generate(name: &str, dir: &Path, first: u32, n: u32, extra: &[&str]) -> serde_json::Value {
     let out = Command::new(python())
-        .arg(script("gen_longitudinal_records.py"))
+        .arg(script(name))
         .arg(dir)
         .arg(first.to_string())
         .arg(n.to_string())
@@ -274,7 +263,13 @@ fn fit_longitudinal(dir: &Path, seed: u32) -> serde_json::Value {
 #[test]
 fn nonlinear_longitudinal_toml_model_from_auto_start_values_recovers_the_truth() {
     let exact = tempfile::tempdir().unwrap();
-    let truth = longitudinal_records(exact.path(), 1, 6, &["exact-inputs"]);
+    let truth = generate(
+        "gen_longitudinal_records.py",
+        exact.path(),
+        1,
+        6,
+        &["exact-inputs"],
+    );
     let truth = truth.as_object().unwrap();
     let (mut beyond, mut z2) = (Vec::new(), Vec::new());
     for seed in 1..=6 {
@@ -293,7 +288,7 @@ fn nonlinear_longitudinal_toml_model_from_auto_start_values_recovers_the_truth()
     assert!((0.5..=1.6).contains(&rms), "RMS normalised error {rms:.2}");
 
     let noisy = tempfile::tempdir().unwrap();
-    let truth = longitudinal_records(noisy.path(), 1, 3, &[]);
+    let truth = generate("gen_longitudinal_records.py", noisy.path(), 1, 3, &[]);
     for seed in 1..=3 {
         let v = fit_longitudinal(noisy.path(), seed);
         for (name, tolerance) in [
@@ -321,18 +316,7 @@ fn nonlinear_longitudinal_toml_model_from_auto_start_values_recovers_the_truth()
 #[test]
 fn n4sid_reads_the_short_period_derivatives_off_independent_records() {
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(python())
-        .arg(script("gen_short_period_records.py"))
-        .arg(dir.path())
-        .args(["1", "5"])
-        .output()
-        .expect("run the generator");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let truth = read_json(&dir.path().join("truth.json"));
+    let truth = generate("gen_short_period_records.py", dir.path(), 1, 5, &[]);
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/short_period.toml");
     for seed in 1..=5 {
         let out = Command::new(env!("CARGO_BIN_EXE_flightid"))

@@ -631,25 +631,33 @@ mod tests {
         (truth, recs)
     }
 
-    #[test]
-    fn recovers_a_short_period_in_the_measured_state_basis() {
-        let (truth, recs) = records(0.0);
-        let names = vec!["alpha_rad".to_string(), "q_rad_s".to_string()];
+    /// The subspace fit of `recs` (input elevator, outputs α and q as the state basis).
+    fn short_period_fit(recs: &[Record], order: Option<usize>, hold: InputHold) -> SubspaceModel {
+        let names = ["alpha_rad".to_string(), "q_rad_s".to_string()];
         let opts = SubspaceOptions {
-            order: None,
-            hold: InputHold::Zoh,
+            order,
+            hold,
             ..SubspaceOptions::default()
         };
-        let est = subspace(
-            &recs,
+        subspace(
+            recs,
             &["elevator_rad".to_string()],
             &names,
             Some(&[0, 1]),
             &opts,
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    #[test]
+    fn recovers_a_short_period_in_the_measured_state_basis() {
+        let (truth, recs) = records(0.0);
+        let est = short_period_fit(&recs, None, InputHold::Zoh);
         assert_eq!(est.order, 2, "singular values {:?}", est.singular_values);
-        assert_eq!(est.state_names.as_deref(), Some(&names[..]));
+        assert_eq!(
+            est.state_names,
+            Some(vec!["alpha_rad".to_string(), "q_rad_s".to_string()])
+        );
         for i in 0..2 {
             for j in 0..2 {
                 let (got, want) = (est.continuous.a[(i, j)], truth.a[(i, j)]);
@@ -676,20 +684,7 @@ mod tests {
     #[test]
     fn the_wrong_hold_biases_only_the_input_matrix() {
         let (truth, recs) = records(0.0);
-        let names = vec!["alpha_rad".to_string(), "q_rad_s".to_string()];
-        let opts = SubspaceOptions {
-            order: Some(2),
-            hold: InputHold::Linear,
-            ..SubspaceOptions::default()
-        };
-        let est = subspace(
-            &recs,
-            &["elevator_rad".to_string()],
-            &names,
-            Some(&[0, 1]),
-            &opts,
-        )
-        .unwrap();
+        let est = short_period_fit(&recs, Some(2), InputHold::Linear);
         let a_err = (est.continuous.a[(1, 0)] - truth.a[(1, 0)]).abs();
         let b_err = (est.continuous.b[(1, 0)] - truth.b[(1, 0)]).abs();
         assert!(a_err < 1e-5, "A is the same under any hold: {a_err}");
@@ -702,20 +697,7 @@ mod tests {
     #[test]
     fn noisy_records_land_near_the_truth() {
         let (truth, recs) = records(0.004);
-        let names = vec!["alpha_rad".to_string(), "q_rad_s".to_string()];
-        let opts = SubspaceOptions {
-            order: Some(2),
-            hold: InputHold::Zoh,
-            ..SubspaceOptions::default()
-        };
-        let est = subspace(
-            &recs,
-            &["elevator_rad".to_string()],
-            &names,
-            Some(&[0, 1]),
-            &opts,
-        )
-        .unwrap();
+        let est = short_period_fit(&recs, Some(2), InputHold::Zoh);
         for (i, j) in [(1, 0), (1, 1)] {
             let (got, want) = (est.continuous.a[(i, j)], truth.a[(i, j)]);
             assert!(
