@@ -308,3 +308,16 @@ fn errors_deep_in_a_chunked_file_report_their_true_line() {
         }
     }
 }
+
+/// A CSV written into a folder that does not exist yet creates the folder (`fly --out
+/// new/flight.csv` on a fresh checkout), and reads back the same.
+#[test]
+fn writing_into_a_missing_folder_creates_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("new").join("deeper").join("flight.csv");
+    let mut rec = flightid::data::FlightRecord::new(vec![0.0, 0.1, 0.2]);
+    rec.push_column("q_rad_s", vec![0.0, 0.5, -0.25]);
+    flightid::data::write_csv_atomic(&path, &rec).unwrap();
+    let back = flightid::data::read_csv(&path).unwrap();
+    assert_eq!(back.column("q_rad_s").unwrap(), &[0.0, 0.5, -0.25]);
+}

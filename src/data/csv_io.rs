@@ -400,6 +400,8 @@ fn parse_header(line_bytes: &[u8], file: &str, line: usize) -> Result<Vec<String
 /// Writes the record as CSV through a temporary file in the same directory, synced to disk and then
 /// renamed over `path`: readers see either the old file or the complete new one, never a partial one.
 ///
+/// A missing parent folder is created (as `mkdir -p` would).
+///
 /// Floats are written in Rust's shortest round-trip form, so reading the file back gives the same bits.
 pub fn write_csv_atomic(path: &Path, rec: &FlightRecord) -> Result<(), DataError> {
     for (name, values) in &rec.columns {
@@ -429,6 +431,7 @@ pub fn write_csv_atomic(path: &Path, rec: &FlightRecord) -> Result<(), DataError
             source,
         }
     };
+    std::fs::create_dir_all(&dir).map_err(io_err("cannot create the output's folder"))?;
     let result = (|| {
         let f = OpenOptions::new()
             .write(true)
