@@ -255,7 +255,7 @@ pub fn levenberg_marquardt<P: Problem>(
                 stop = Stop::NoDescent;
                 break;
             }
-            Relaxation::Steady if !(gain >= options.tolerance) => {
+            Relaxation::Steady if gain < options.tolerance => {
                 stop = Stop::Converged;
                 break;
             }
@@ -328,7 +328,7 @@ impl<'a> System<'a> {
         match solver {
             StepSolver::Marquardt => {
                 let m: Mat<f64> = sa.transpose() * &sa;
-                if (0..active.len()).all(|k| !(m[(k, k)] > 0.0)) {
+                if !(0..active.len()).any(|k| m[(k, k)] > 0.0) {
                     return None;
                 }
                 Some(System::Marquardt {
@@ -342,7 +342,7 @@ impl<'a> System<'a> {
                 let svd = sa.thin_svd().ok()?;
                 let sv: Vec<f64> = svd.S().column_vector().iter().copied().collect();
                 let s_max = sv.first().copied().unwrap_or(0.0);
-                if !(s_max > 0.0) {
+                if s_max.is_nan() || s_max <= 0.0 {
                     return None;
                 }
                 let (u, v) = (svd.U(), svd.V().to_owned());
