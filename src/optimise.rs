@@ -202,10 +202,10 @@ pub fn levenberg_marquardt<P: Problem>(
             stop = Stop::NoDescent;
             break;
         };
-        let s = &lin.sensitivities;
-        let e = Mat::from_fn(lin.residuals.len(), 1, |i, _| lin.residuals[i]);
-        let g_mat = s.transpose() * &e;
-        let g: Vec<f64> = (0..s.ncols()).map(|j| g_mat[(j, 0)]).collect();
+        let (s, e) = (&lin.sensitivities, &lin.residuals);
+        let g: Vec<f64> = (0..s.ncols())
+            .map(|j| (0..e.len()).map(|i| s[(i, j)] * e[i]).sum())
+            .collect();
         let active = active_set(problem.bounds(), &x, &g);
         let Some(system) = System::new(options.solver, s, &lin.residuals, &g, &active) else {
             stop = Stop::Converged;
@@ -324,10 +324,12 @@ impl<'a> System<'a> {
         if active.is_empty() {
             return None;
         }
-        let sa = Mat::from_fn(s.nrows(), active.len(), |i, k| s[(i, active[k])]);
         match solver {
             StepSolver::Marquardt => {
-                let m: Mat<f64> = sa.transpose() * &sa;
+                let full: Mat<f64> = s.transpose() * s;
+                let m = Mat::from_fn(active.len(), active.len(), |i, k| {
+                    full[(active[i], active[k])]
+                });
                 if !(0..active.len()).any(|k| m[(k, k)] > 0.0) {
                     return None;
                 }
@@ -339,6 +341,7 @@ impl<'a> System<'a> {
                 })
             }
             StepSolver::TruncatedSvd { null_tolerance } => {
+                let sa = Mat::from_fn(s.nrows(), active.len(), |i, k| s[(i, active[k])]);
                 let svd = sa.thin_svd().ok()?;
                 let sv: Vec<f64> = svd.S().column_vector().iter().copied().collect();
                 let s_max = sv.first().copied().unwrap_or(0.0);
@@ -395,28 +398,22 @@ impl<'a> System<'a> {
     }
 }
 
-/// Solves `(M + μ diag M) δ = g` by partial-pivoting LU on the system scaled to a unit diagonal
-/// (parameters of very different units), a vanishing diagonal floored at 1e-12 of the largest.
+/// Solves `(M + μ diag M) δ = g` by partial-pivoting LU, a vanishing diagonal floored at 1e-12
+/// of the largest.
 fn marquardt_step(m: &Mat<f64>, g: &[f64], mu: f64) -> Option<Vec<f64>> {
     let n = g.len();
     let dmax = (0..n).map(|k| m[(k, k)]).fold(0.0_f64, f64::max);
-    let diag: Vec<f64> = (0..n)
-        .map(|k| {
-            let v = m[(k, k)];
-            v + mu * v.max(1e-12 * dmax).max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    let d: Vec<f64> = diag.iter().map(|v| 1.0 / v.abs().sqrt()).collect();
-    if d.iter().any(|v| !v.is_finite()) {
-        return None;
-    }
     let a = Mat::from_fn(n, n, |i, k| {
-        let v = if i == k { diag[i] } else { m[(i, k)] };
-        d[i] * v * d[k]
+        let v = m[(i, k)];
+        if i == k {
+            v + mu * v.max(1e-12 * dmax).max(f64::MIN_POSITIVE)
+        } else {
+            v
+        }
     });
-    let b = Mat::from_fn(n, 1, |i, _| d[i] * g[i]);
-    let y = a.partial_piv_lu().solve(&b);
-    let x: Vec<f64> = (0..n).map(|i| d[i] * y[(i, 0)]).collect();
+    let b = Mat::from_fn(n, 1, |i, _| g[i]);
+    let x = a.partial_piv_lu().solve(&b);
+    let x: Vec<f64> = (0..n).map(|i| x[(i, 0)]).collect();
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
