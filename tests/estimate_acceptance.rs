@@ -74,16 +74,22 @@ fn short_period_parameters_lie_within_3_sigma_of_an_independent_generators_truth
     assert!((0.6..=1.6).contains(&rms), "RMS normalised error {rms:.2}");
 }
 
-/// Runs `flightid estimate` with `method` on `csv`; the JSON estimate.
-fn estimate(dir: &Path, csv: &Path, method: &str) -> serde_json::Value {
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/short_period.toml");
+/// Runs `flightid estimate --method METHOD --model MODEL` on `csv`; the JSON estimate (written
+/// as `<csv stem>-<tag>.json`).
+fn estimate_with(
+    dir: &Path,
+    model: &Path,
+    csv: &Path,
+    method: &str,
+    tag: &str,
+) -> serde_json::Value {
     let json = dir.join(format!(
-        "{}-{method}.json",
+        "{}-{tag}.json",
         csv.file_stem().unwrap().to_string_lossy()
     ));
     let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
         .args(["estimate", "--method", method, "--model"])
-        .arg(&model)
+        .arg(model)
         .arg("--data")
         .arg(csv)
         .arg("--json")
@@ -96,6 +102,12 @@ fn estimate(dir: &Path, csv: &Path, method: &str) -> serde_json::Value {
         String::from_utf8_lossy(&out.stderr)
     );
     read_json(&json)
+}
+
+fn model_file(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("models")
+        .join(name)
 }
 
 fn value(v: &serde_json::Value, name: &str) -> (f64, f64) {
@@ -111,22 +123,71 @@ fn spread(x: &[f64]) -> f64 {
     (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (x.len() - 1) as f64).sqrt()
 }
 
+/// The c172x's short-period derivatives at the generator's trim (4000 ft, 100 KTAS) from JSBSim's
+/// own aerodynamics: `scripts/oracle_aero.py` differences JSBSim's forces and moments about the
+/// CG; the two-state model's derivatives follow (Klein & Morelli §3.6, α̇ folded in as a two-state
+/// fit sees it): `Z_α = −q̄S(C_Lα + C_D)/(mV)`, `M_α = q̄Sc̄/I_yy (C_mα + C_mα̇ c̄/(2V) Z_α)`,
+/// `M_q = q̄Sc̄/I_yy c̄/(2V) (C_mq + C_mα̇)`, `M_δe = q̄Sc̄/I_yy (C_mδe + C_mα̇ c̄/(2V) Z_δe)` with
+/// `Z_δe = −q̄S C_Lδe/(mV)`, and `M_α̇ = q̄Sc̄/I_yy c̄/(2V) C_mα̇` alone.
+fn jsbsim_short_period_truth() -> std::collections::BTreeMap<&'static str, f64> {
+    let out = Command::new(python())
+        .arg(script("oracle_aero.py"))
+        .output()
+        .expect("run the aero oracle");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let get = |key: &str| -> f64 {
+        text.lines()
+            .find_map(|l| {
+                let (k, v) = l.split_once(" = ")?;
+                (k.trim() == key).then(|| v.split_whitespace().next()?.parse().ok())?
+            })
+            .unwrap_or_else(|| panic!("{key} missing from the oracle's output"))
+    };
+    let (qbar, s, c, v) = (get("qbar_pa"), get("S_m2"), get("cbar_m"), get("V_m_s"));
+    let (m, iyy) = (get("mass_kg"), get("iyy_kg_m2"));
+    let moment = qbar * s * c / iyy;
+    let rate = c / (2.0 * v);
+    let z_alpha = -qbar * s * (get("CL_alpha") + get("CD_trim")) / (m * v);
+    let z_de = -qbar * s * get("CL_de") / (m * v);
+    let m_adot = moment * rate * get("Cm_adot");
+    std::collections::BTreeMap::from([
+        ("Z_alpha", z_alpha),
+        ("M_alpha", moment * get("Cm_alpha") + m_adot * z_alpha),
+        ("M_q", moment * rate * get("Cm_q") + m_adot),
+        ("M_de", moment * get("Cm_de") + m_adot * z_de),
+        ("M_adot", m_adot),
+    ])
+}
+
 /// JSBSim's c172x flown by `scripts/fly_turbulent_short_period.py` through JSBSim's own Python API:
-/// an elevator 3-2-1-1 pair around trim, once in still air (the reference: output error on it) and
-/// in four MIL-F-8785C turbulence seeds (`atmosphere/turb-type` 3, 25 ft/s at 20 ft, severity 3).
-/// The short-period model is fitted with output error and with the filter error method, and both
-/// are shown against the still-air reference.
+/// an elevator 3-2-1-1 pair around trim, once in still air and in four MIL-F-8785C turbulence seeds
+/// (`atmosphere/turb-type` 3, severity 3: moderate), 11 s at 50 Hz. The truth is JSBSim's own
+/// aerodynamics about the CG ([`jsbsim_short_period_truth`]). Three fits per seed:
 ///
-/// What the numbers support (and this test asserts): the filter error method detects the
-/// turbulence (process-noise variance of α̇ ten times its still-air value, t > 5), converges on
-/// every seed, and its estimates of M_α and M_δe scatter less from seed to seed than output
-/// error's. What they do not support: the filter error estimates are not within 3σ of the
-/// still-air reference (M_q about −2.7 against −4.2, σ 0.15) — JSBSim's turbulence enters the
-/// pitching moment through the aerodynamic rate (q − q_gust) and the gust's α̇, coloured and
-/// correlated between the two equations, which a diagonal white F does not model. The table is
-/// printed for the record.
+/// - output error with the plain short period (`models/short_period.toml`): its estimates scatter
+///   far from the truth (its σ, corrected for coloured residuals, are wide);
+/// - the filter error method with that model (white process noise on α̇ and q̇): it detects the
+///   turbulence and is precise, but biased — JSBSim's gusts reach the pitching moment through the
+///   aerodynamic pitch rate `q − q_g`, a filtered copy of the gust's α̇, which a diagonal white `F`
+///   cannot describe (M_q near −2.6 against −4.3, beyond 3σ on every seed);
+/// - the filter error method with the Dryden gust written into the model
+///   (`models/short_period_gust.toml`, process noise on the gust state alone), started from the
+///   still-air output-error estimate as a flight-test engineer starts from a calm-air flight.
+///
+/// Asserted: the gust model's Z_α, M_α, M_q and M_δe lie within 3σ of JSBSim's truth in at least 14
+/// of the 16 estimates (measured: 15; the miss is M_δe on seed 1 at 4.9σ, 10 % off); the white
+/// filter's M_q is beyond 3σ on at least 3 of 4 seeds (measured: all 4, 9–14σ); output error's RMS
+/// relative error on M_α, M_q, M_δe is more than three times the gust model's. Z_α comes out
+/// 8–44 % steep (within 3σ), and M_α̇ alone, which only the gust separates, is printed, not
+/// asserted (measured −1.6 … −2.3 against −1.27): the model leaves out the speed changes
+/// (±7 % in V) and the rotation of the gust into body axes at up to 12° pitch and 20° bank.
 #[test]
-fn jsbsim_turbulence_output_error_and_filter_error_against_the_still_air_reference() {
+fn jsbsim_turbulence_filter_error_with_a_gust_state_finds_jsbsims_derivatives() {
     let dir = tempfile::tempdir().unwrap();
     let fly = |name: &str, args: &[&str]| {
         let csv = dir.path().join(format!("{name}.csv"));
@@ -143,59 +204,133 @@ fn jsbsim_turbulence_output_error_and_filter_error_against_the_still_air_referen
         );
         csv
     };
+    let truth = jsbsim_short_period_truth();
+    let plain = model_file("short_period.toml");
     let clean = fly("still", &[]);
-    let reference = estimate(dir.path(), &clean, "oe");
-    let clean_fem = estimate(dir.path(), &clean, "fem");
-    let q_still = clean_fem["nuisance"]["process_noise:alpha_rad"]["value"]
+    let still = estimate_with(dir.path(), &plain, &clean, "oe", "oe");
+    let still_fem = estimate_with(dir.path(), &plain, &clean, "fem", "fem");
+    let q_still = still_fem["nuisance"]["process_noise:alpha_rad"]["value"]
         .as_f64()
         .unwrap();
-    let names = ["Z_alpha", "Z_de", "M_alpha", "M_q", "M_de"];
-    let mut by_method: std::collections::BTreeMap<(&str, &str), Vec<f64>> = Default::default();
-    println!("still-air reference (oe):");
-    for n in names {
-        let (v, s) = value(&reference, n);
-        println!("  {n:8} {v:9.3} ± {s:.3}");
+    // the gust model, started from the still-air estimate
+    let mut gust_text = std::fs::read_to_string(model_file("short_period_gust.toml")).unwrap();
+    for name in ["Z_alpha", "Z_de", "M_alpha", "M_q", "M_de"] {
+        let (v, _) = value(&still, name);
+        let line = gust_text
+            .lines()
+            .find(|l| l.split('=').next().map(str::trim) == Some(name))
+            .unwrap()
+            .to_string();
+        gust_text = gust_text.replace(&line, &format!("{name} = {v}"));
     }
+    let gust = dir.path().join("short_period_gust.toml");
+    std::fs::write(&gust, gust_text).unwrap();
+
+    let names = ["Z_alpha", "M_alpha", "M_q", "M_de"];
+    println!("JSBSim truth: {truth:.3?}");
+    let mut within = 0;
+    let mut white_mq_misses = 0;
+    let (mut rel_oe, mut rel_gust) = (Vec::new(), Vec::new());
+    let mut by_method: std::collections::BTreeMap<(&str, &str), Vec<f64>> = Default::default();
     for seed in 1..=4 {
         let csv = fly(
             &format!("turbulence{seed}"),
             &["--turbulence", "milspec", "--seed", &seed.to_string()],
         );
-        for method in ["oe", "fem"] {
-            let est = estimate(dir.path(), &csv, method);
-            assert_eq!(est["converged"], true, "seed {seed} {method}: {est}");
-            let row: Vec<String> = names
-                .iter()
-                .map(|n| {
-                    let (v, s) = value(&est, n);
-                    let (t, _) = value(&reference, n);
-                    by_method.entry((method, n)).or_default().push(v);
-                    format!("{n} {v:.2}±{s:.2} ({:+.1}σ)", (v - t) / s)
-                })
-                .collect();
-            println!("seed {seed} {method:3}: {}", row.join("  "));
-            if method == "fem" {
+        for (tag, model, method) in [
+            ("oe", &plain, "oe"),
+            ("fem", &plain, "fem"),
+            ("fem+gust", &gust, "fem"),
+        ] {
+            let est = estimate_with(dir.path(), model, &csv, method, &tag.replace('+', "_"));
+            assert_eq!(est["converged"], true, "seed {seed} {tag}: {est}");
+            if tag == "fem+gust" {
+                let noise: Vec<&String> = est["nuisance"]
+                    .as_object()
+                    .unwrap()
+                    .keys()
+                    .filter(|k| k.starts_with("process_noise"))
+                    .collect();
+                assert_eq!(
+                    noise,
+                    ["process_noise:wg"],
+                    "process noise only where declared"
+                );
+            }
+            let mut row = Vec::new();
+            for n in names.iter().chain(if tag == "fem+gust" {
+                &["M_adot"][..]
+            } else {
+                &[][..]
+            }) {
+                let (v, s) = value(&est, n);
+                let t = truth[n];
+                let z = (v - t) / s;
+                row.push(format!("{n} {v:.2}±{s:.2} ({z:+.1}σ)"));
+                by_method.entry((tag, n)).or_default().push(v);
+                if *n == "M_adot" {
+                    continue;
+                }
+                let moment = n.starts_with("M_");
+                match tag {
+                    "oe" if moment => rel_oe.push(((v - t) / t).powi(2)),
+                    "oe" => {}
+                    "fem+gust" => {
+                        if moment {
+                            rel_gust.push(((v - t) / t).powi(2));
+                        }
+                        within += usize::from(z.abs() <= 3.0);
+                    }
+                    _ => {
+                        if *n == "M_q" && z.abs() > 3.0 {
+                            white_mq_misses += 1;
+                        }
+                    }
+                }
+            }
+            println!("seed {seed} {tag:8}: {}", row.join("  "));
+            if tag == "fem" {
                 let q = &est["nuisance"]["process_noise:alpha_rad"];
                 let (qv, qt) = (q["value"].as_f64().unwrap(), q["t"].as_f64().unwrap());
-                println!("          q_alpha {qv:.3e} (t {qt:.1}), still air {q_still:.3e}");
                 assert!(
                     qv > 10.0 * q_still && qt > 5.0,
-                    "turbulence not detected: {q}"
+                    "turbulence not detected: {q} (still air {q_still:.3e})"
                 );
             }
         }
     }
+    let rms = |x: &[f64]| (x.iter().sum::<f64>() / x.len() as f64).sqrt();
+    let (oe, gust_rms) = (rms(&rel_oe), rms(&rel_gust));
+    println!(
+        "within 3σ of JSBSim's truth (gust model): {within}/16; white-noise M_q beyond 3σ on \
+         {white_mq_misses}/4 seeds; RMS relative error of M_α, M_q, M_δe: oe {:.0} %, fem+gust {:.0} %",
+        100.0 * oe,
+        100.0 * gust_rms
+    );
     for n in ["M_alpha", "M_de"] {
-        let (oe, fem) = (
+        println!(
+            "{n}: seed-to-seed spread oe {:.2}, fem {:.2}, fem+gust {:.2}",
             spread(&by_method[&("oe", n)]),
             spread(&by_method[&("fem", n)]),
-        );
-        println!("{n}: seed-to-seed spread oe {oe:.2}, fem {fem:.2}");
-        assert!(
-            fem < oe,
-            "{n}: filter error scatters more ({fem:.2}) than output error ({oe:.2})"
+            spread(&by_method[&("fem+gust", n)])
         );
     }
+    assert!(
+        within >= 14,
+        "gust model: only {within}/16 within 3σ of JSBSim's truth"
+    );
+    assert!(
+        white_mq_misses >= 3,
+        "the white-noise filter was expected to miss M_q (the gust's pitch rate is not white): \
+         {white_mq_misses}/4"
+    );
+    assert!(
+        oe > 3.0 * gust_rms,
+        "output error ({:.0} %) should miss the moment derivatives by more than three times the \
+         gust model ({:.0} %)",
+        100.0 * oe,
+        100.0 * gust_rms
+    );
 }
 
 /// Runs the generator `name` (in `scripts/`) into `dir` for seeds `first..first+n` (extra

@@ -183,6 +183,15 @@ fn bad_model_files_exit_2_with_file_line_and_name() {
             "bad.toml:4",
             "thrust_n",
         ),
+        // process noise on a name that is not a state (line 21)
+        (
+            good.replace(
+                "output_bias   = [\"alpha_rad\", \"q_rad_s\"]",
+                "output_bias   = [\"alpha_rad\", \"q_rad_s\"]\nprocess_noise = [\"gust\"]",
+            ),
+            "bad.toml:21",
+            "gust",
+        ),
     ];
     for (text, at, name) in cases {
         let (code, err) = bad_model(&text, &csv);

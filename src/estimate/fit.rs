@@ -260,7 +260,11 @@ pub fn fit(
         layout.start = oe.phi;
         let theta = layout.theta(&layout.start);
         let scale = process_noise_scale(sm, &theta, &records[0], options.hold);
-        layout.add_process_noise(&model.signature().states, &scale);
+        layout.add_process_noise(
+            &model.signature().states,
+            nuisance.process_noise.as_deref(),
+            &scale,
+        );
     }
     let problem = problem(layout, options.method);
     let solution = problem.minimise(options)?;

@@ -20,6 +20,9 @@ pub struct Nuisance {
     pub input_bias: Vec<usize>,
     /// Inputs with a time skew shared by all records (the model sees `u_meas(t − τ)`).
     pub input_skew: Vec<usize>,
+    /// States driven by process noise in the filter error method (`None`: every state). A gust
+    /// or drift state written into the model carries the noise alone when it is named here.
+    pub process_noise: Option<Vec<usize>>,
 }
 
 /// Kind of a nuisance term.
@@ -299,10 +302,13 @@ impl Layout {
         self.slot(j).and_then(|s| s.record)
     }
 
-    /// Appends a process-noise variance per state (start 0, bounded below by 0) with the given
-    /// typical magnitudes.
-    pub fn add_process_noise(&mut self, states: &[String], scale: &[f64]) {
+    /// Appends a process-noise variance (start 0, bounded below by 0) for each state in `which`
+    /// (`None`: every state) with the given typical magnitudes (per state).
+    pub fn add_process_noise(&mut self, states: &[String], which: Option<&[usize]>, scale: &[f64]) {
         for (i, (name, sc)) in states.iter().zip(scale).enumerate() {
+            if which.is_some_and(|w| !w.contains(&i)) {
+                continue;
+            }
             self.slots.push(Slot {
                 kind: NuisanceKind::ProcessNoise,
                 record: None,

@@ -330,11 +330,12 @@ impl UserModel {
                 "output_bias" => nuisance.output_bias = list(&outputs, "output")?,
                 "input_bias" => nuisance.input_bias = list(&inputs, "input")?,
                 "input_skew" => nuisance.input_skew = list(&inputs, "input")?,
+                "process_noise" => nuisance.process_noise = Some(list(&states, "state")?),
                 _ => {
                     return Err(err(
                         line,
                         &k,
-                        format!("unknown nuisance term '{k}' (initial_state, output_bias, input_bias, input_skew)"),
+                        format!("unknown nuisance term '{k}' (initial_state, output_bias, input_bias, input_skew, process_noise)"),
                     ))
                 }
             }
