@@ -5,7 +5,9 @@
 //! (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
-//! [--first K] [--out DIR]`
+//! [--first K] [--random-mix] [--out DIR]`
+//! - the mix is stratified by case index (i mod 4 = 0 clean, 3 two or three effects, else one: 40 cases give
+//!   10 clean, 20 single, 10 multiple); `--random-mix` draws it by chance (a quarter clean, a quarter multiple).
 //! - `--clean`: every case clean (the acceptance's maneuver sequence, lengths 30–90 s).
 //! - `--false-alarm`: the false-alarm Monte Carlo: every case clean, a random maneuver plan (the full sequence,
 //!   longitudinal only, lateral only, the 3-2-1-1 alone, the sequence reversed), lengths 15–90 s, noise levels
@@ -28,6 +30,7 @@ struct Args {
     turbulence: bool,
     clean: bool,
     false_alarm: bool,
+    random_mix: bool,
     out: PathBuf,
     first: usize,
 }
@@ -39,6 +42,7 @@ fn args() -> Args {
         turbulence: false,
         clean: false,
         false_alarm: false,
+        random_mix: false,
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
     };
@@ -63,6 +67,11 @@ fn args() -> Args {
             }
             "--false-alarm" => {
                 a.false_alarm = true;
+                i += 1;
+                continue;
+            }
+            "--random-mix" => {
+                a.random_mix = true;
                 i += 1;
                 continue;
             }
@@ -135,6 +144,9 @@ fn generate(a: &Args) {
         .stderr(std::process::Stdio::null());
     if a.turbulence {
         cmd.arg("--turbulence");
+    }
+    if !a.random_mix {
+        cmd.arg("--stratified");
     }
     if a.clean || a.false_alarm {
         cmd.args(["--effects", "[]"]);

@@ -18,7 +18,7 @@ Hidden effects and how they are made:
   aero_derivative: the coefficient function is multiplied by a declared factor property;
   aero_nonlinearity: an added term (Cm_alpha2: dCm = k alpha^2, CL_alpha2: dCL = k alpha^2, alpha in rad).
 
-Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--turbulence] [--clean-share 0.25] [--first K]
+Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--turbulence] [--clean-share 0.25] [--stratified] [--first K]
        [--effects JSON] [--duration S | --min-duration S --max-duration S] [--plan NAME|random] [--max-noise L]
 Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema).
 """
@@ -363,6 +363,9 @@ def main():
     ap.add_argument("--turbulence", action="store_true")
     ap.add_argument("--clean-share", type=float, default=0.25)
     ap.add_argument("--multi-share", type=float, default=0.25)
+    ap.add_argument("--stratified", action="store_true",
+                    help="the mix by case index instead of by chance: i mod 4 = 0 clean, 3 two or three effects, "
+                         "else one (40 cases: 10 clean, 20 single, 10 with two or more)")
     ap.add_argument("--first", type=int, default=0, help="first case index (for splitting work)")
     ap.add_argument("--effects", default=None,
                     help="JSON list of effects for every case instead of random draws ('[]' = clean)")
@@ -391,6 +394,8 @@ def main():
                 effects = json.loads(args.effects)
             else:
                 n = 0 if u < args.clean_share else (1 if u < 1 - args.multi_share else int(rng.integers(2, 4)))
+                if args.stratified:
+                    n = {0: 0, 3: int(rng.integers(2, 4))}.get(i % 4, 1)
                 effects = draw_effects(rng, n)
             cond = {
                 "altitude_ft": float(rng.uniform(2000, 8000)), "speed_kts": float(rng.uniform(85, 115)),

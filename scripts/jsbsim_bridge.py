@@ -27,6 +27,7 @@ Well-behaved simulation (docs/jsbsim.md):
 
 import array
 import json
+import math
 import os
 import shutil
 import signal
@@ -564,6 +565,33 @@ class Sim:
         cond = {k: fdm[k] for k in req.get("condition", [])}
         return {"base": base, "perturbed": out, "condition": cond}
 
+    def reset_state(self, state):
+        """Sets the aircraft's state mid-flight (the start of a multiple-shooting segment): Euler angles phi and
+        theta (rad), body velocities u, v, w (ft/s), body rates p, q, r (rad/s) and altitude h (ft, a shift along
+        the local vertical); with "relative" set, the values are added to the current ones. Every key left out,
+        the heading and the horizontal position keep their current values. Loaded as a version-2 IC file (see restore()), then run_ic(); the engines, actuators and surface
+        drives keep their state."""
+        fdm = self.fdm
+        cur = {k: fdm[k] for k in SNAPSHOT_STATE}
+        keys = {"phi": "attitude/phi-rad", "theta": "attitude/theta-rad", "u": "velocities/u-fps",
+                "v": "velocities/v-fps", "w": "velocities/w-fps", "p": "velocities/p-rad_sec",
+                "q": "velocities/q-rad_sec", "r": "velocities/r-rad_sec"}
+        relative = bool(state.get("relative", False))
+        for k, prop in keys.items():
+            if k in state:
+                cur[prop] = float(state[k]) + (cur[prop] if relative else 0.0)
+        if "h" in state:
+            dh = float(state["h"]) - (0.0 if relative else fdm["position/h-sl-ft"])
+            lat, lon = fdm["position/lat-geod-rad"], fdm["position/long-gc-rad"]
+            up = (math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat))
+            for axis, c in zip("xyz", up):
+                cur[f"position/ecef-{axis}-ft"] += dh * c
+        with open(self.ic_path, "w") as f:
+            f.write(ic_xml(cur))
+        fdm.load_ic(self.ic_path, False)
+        if not fdm.run_ic():
+            raise BridgeError("sim_stopped", "JSBSim rejected a segment's initial state (run_ic failed)")
+
     def fly(self, req, payload):
         """Runs n_steps from the current (trimmed) state; returns the recorded properties, step-major."""
         if not self.trimmed:
@@ -583,7 +611,11 @@ class Sim:
         out = array.array("d")
         get = [n.get_double_value for n in rec_nodes]
         run = self.fdm.run
+        # State resets: after step j (j = 0: before the first) the state is set to the given one, before recording.
+        resets = {int(r["step"]): r["state"] for r in req.get("resets", [])}
         t0 = time.perf_counter()
+        if 0 in resets:
+            self.reset_state(resets[0])
         for g in get:
             out.append(g())
         for k in range(n_steps):
@@ -591,6 +623,8 @@ class Sim:
                 node.set_double_value(u[off + k])
             if not run():
                 raise BridgeError("sim_stopped", f"JSBSim stopped at step {k}")
+            if k + 1 in resets:
+                self.reset_state(resets[k + 1])
             if (k + 1) % record_every == 0:
                 for g in get:
                     out.append(g())

@@ -567,3 +567,71 @@ fn a_restored_trim_flies_like_a_live_one_whatever_the_process_flew_before() {
         }
     }
 }
+
+/// A state reset mid-flight (the start of a multiple-shooting segment): the sample at the reset step holds the
+/// given state, and the flight goes on from it (not from where it was): a 5° bank given to a wings-level
+/// aircraft turns it, as a bank does.
+#[test]
+fn a_state_reset_sets_the_sample_it_starts_and_the_flight_goes_on_from_it() {
+    use flightid::sim::{FlightPlan, StateReset};
+    let mut sim = start("c172x");
+    let trim = sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
+    let plan = FlightPlan {
+        rate_hz: 120.0,
+        n_steps: 600,
+        inputs: Vec::new(),
+    };
+    let v = trim.airspeed_m_s;
+    let reset = StateReset {
+        step: 240,
+        phi_rad: Some(5f64.to_radians()),
+        theta_rad: Some(trim.theta_rad + 0.01),
+        rates_rad_s: Some([0.01, -0.02, 0.005]),
+        airspeed_alpha_beta: Some((v + 1.0, trim.alpha_rad + 0.01, 0.02)),
+        altitude_m: Some(4000.0 * flightid::sim::FT_TO_M + 10.0),
+        ..Default::default()
+    };
+    let rec = sim
+        .fly_with_resets(&plan, std::slice::from_ref(&reset))
+        .unwrap();
+    let at = |c: &str, k: usize| rec.column(c).unwrap()[k];
+    let close = |c: &str, want: f64, tol: f64| {
+        let got = at(c, 240);
+        assert!(
+            (got - want).abs() < tol,
+            "{c} at the reset: {got} vs {want}"
+        );
+    };
+    close("phi_rad", 5f64.to_radians(), 1e-9);
+    close("theta_rad", trim.theta_rad + 0.01, 1e-9);
+    close("p_rad_s", 0.01, 1e-9);
+    close("q_rad_s", -0.02, 1e-9);
+    close("r_rad_s", 0.005, 1e-9);
+    close("airspeed_m_s", v + 1.0, 1e-6);
+    close("alpha_rad", trim.alpha_rad + 0.01, 1e-6);
+    close("beta_rad", 0.02, 1e-6);
+    close("altitude_m", 4000.0 * flightid::sim::FT_TO_M + 10.0, 0.01);
+    // Before the reset the aircraft flew level; after it, the bank persists and the heading turns.
+    assert!(at("phi_rad", 239).abs() < 0.01, "{}", at("phi_rad", 239));
+    assert!(at("phi_rad", 360).abs() > 0.05, "{}", at("phi_rad", 360));
+    let psi = rec.column("psi_rad").unwrap();
+    assert!((psi[600] - psi[240]).abs() > 0.01, "no turn after the bank");
+    // Without the reset the same plan stays level.
+    sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
+    let plain = sim.fly(&plan).unwrap();
+    assert!(plain.column("phi_rad").unwrap()[600].abs() < 0.02);
+    // An increment (relative reset) before the first step: the state is the trim's plus the increment.
+    sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
+    let nudge = StateReset {
+        step: 0,
+        phi_rad: Some(0.01),
+        uvw_m_s: Some([0.0, 0.5, 0.0]),
+        relative: true,
+        ..Default::default()
+    };
+    let nudged = sim.fly_with_resets(&plan, &[nudge]).unwrap();
+    let phi0 = nudged.column("phi_rad").unwrap()[0];
+    assert!((phi0 - (trim.phi_rad + 0.01)).abs() < 1e-9, "{phi0}");
+    let beta0 = nudged.column("beta_rad").unwrap()[0];
+    assert!((beta0 - (trim.beta_rad + 0.5 / v)).abs() < 1e-3, "{beta0}");
+}

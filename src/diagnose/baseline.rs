@@ -63,6 +63,7 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
     let w = Weighted {
         case: &p.case,
         sigma: p.sigma.clone(),
+        nuisance: &p.nuisance,
     };
     let cost = sum_sq(&residuals(worker, &w, &[]).map_err(sim_err("replay"))?);
     let valid_cost = match &p.valid {
@@ -70,6 +71,7 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
             let vw = Weighted {
                 case: v,
                 sigma: sigma.clone(),
+                nuisance: &[],
             };
             let r = residuals(worker, &vw, &[]).map_err(sim_err("validation replay"))?;
             Some(sum_sq(&r))

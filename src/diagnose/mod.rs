@@ -236,8 +236,16 @@ pub fn diagnose(
     // The progress line is cleared when `progress` is dropped, also on an early error return.
     let progress = progress::Progress::new(opts.progress);
     progress.stage("trim, baseline replay", 0);
-    let p = prepare::prepare(first, train, valid)?;
-    let base = baseline::baseline(first, &p)?;
+    let mut p = prepare::prepare(first, train, valid)?;
+    progress.stage("segment initial states", 0);
+    p.nuisance =
+        search::initial_state_basis(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
+    let nuisance_sims = if p.nuisance.is_empty() {
+        0
+    } else {
+        1 + 9 * p.case.segments.len()
+    };
+    let base = baseline::baseline(&mut workers[0], &p)?;
     let sel = select::select(workers, &p, &base, opts, &progress)?;
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
@@ -259,7 +267,10 @@ pub fn diagnose(
         noise_std: p.case.outputs.iter().cloned().zip(p.sigma).collect(),
         n_residuals: p.case.len() * p.case.outputs.len(),
         // + the replays outside the search: probe, baseline (2), training after; validation before, cost, after
-        simulations: progress.simulations() + 4 + 3 * usize::from(p.valid.is_some()),
+        simulations: progress.simulations()
+            + 4
+            + 3 * usize::from(p.valid.is_some())
+            + nuisance_sims,
         wall_s: t0.elapsed().as_secs_f64(),
         simulation_s: workers.iter().map(|w| w.sim_s).sum::<f64>() - sim_s0,
         traces: v.traces,

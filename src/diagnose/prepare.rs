@@ -21,6 +21,8 @@ pub struct Prepared {
     pub skipped: Vec<Skipped>,
     /// Conditions that limit what the verdict can be trusted for.
     pub warnings: Vec<String>,
+    /// The nuisance terms of the training record's fits (`search::initial_state_basis`; set by `diagnose`).
+    pub nuisance: Vec<Vec<f64>>,
 }
 
 impl Prepared {
@@ -143,5 +145,6 @@ pub fn prepare(
         catalogue,
         skipped,
         warnings,
+        nuisance: Vec::new(),
     })
 }

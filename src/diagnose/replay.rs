@@ -7,8 +7,8 @@ use super::extension::{Extension, Stage};
 use super::DiagnoseError;
 use crate::data::FlightRecord;
 use crate::sim::{
-    FlightPlan, JsbsimSim, LinearSim, SimError, Simulator, SurfaceInput, TrimPoint, TrimState,
-    FT_TO_M, KTS_TO_M_S,
+    FlightPlan, JsbsimSim, LinearSim, SimError, Simulator, StateReset, SurfaceInput, TrimPoint,
+    TrimState, FT_TO_M, KTS_TO_M_S,
 };
 use serde::Serialize;
 
@@ -31,6 +31,24 @@ pub trait ReplaySim: Simulator + Send {
     /// The rate the simulation integrates at, Hz (None: it runs at whatever rate the plan asks for).
     fn rate_hz(&self) -> Option<f64> {
         None
+    }
+    /// Whether the simulation can set its state mid-flight ([`ReplaySim::fly_with_resets`]).
+    fn supports_resets(&self) -> bool {
+        false
+    }
+    /// Flies `plan` and sets the state at each reset (multiple shooting); without resets, [`Simulator::fly`].
+    fn fly_with_resets(
+        &mut self,
+        plan: &FlightPlan,
+        resets: &[StateReset],
+    ) -> Result<FlightRecord, SimError> {
+        if resets.is_empty() {
+            self.fly(plan)
+        } else {
+            Err(SimError::Usage(
+                "this simulation cannot set its state mid-flight".into(),
+            ))
+        }
     }
     /// Writes the model with the current coefficient factors and added terms in it to `dir`.
     fn export_model(&mut self, dir: &std::path::Path) -> Result<std::path::PathBuf, SimError> {
@@ -59,6 +77,16 @@ impl ReplaySim for JsbsimSim {
     }
     fn export_model(&mut self, dir: &std::path::Path) -> Result<std::path::PathBuf, SimError> {
         self.export_aircraft(dir)
+    }
+    fn supports_resets(&self) -> bool {
+        true
+    }
+    fn fly_with_resets(
+        &mut self,
+        plan: &FlightPlan,
+        resets: &[StateReset],
+    ) -> Result<FlightRecord, SimError> {
+        JsbsimSim::fly_with_resets(self, plan, resets)
     }
 }
 
@@ -105,6 +133,62 @@ pub struct ReplayCase {
     pub inputs: Vec<(String, Vec<f64>)>,
     /// Output columns compared.
     pub outputs: Vec<String>,
+    /// Sample indices where the record's segments start (the first at 0), see [`segment_starts`]: each
+    /// segment's initial state is a nuisance term of every fit.
+    pub segments: Vec<usize>,
+}
+
+/// Quiet time before a maneuver that lets it start a new segment, s.
+pub const SEGMENT_QUIET_S: f64 = 3.0;
+/// Shortest segment, s.
+pub const SEGMENT_MIN_S: f64 = 5.0;
+/// The segment starts this long before its maneuver's first input movement, s.
+pub const SEGMENT_LEAD_S: f64 = 0.3;
+
+/// Where the record splits into segments: just before every maneuver that follows at least
+/// [`SEGMENT_QUIET_S`] of still inputs, each segment at least [`SEGMENT_MIN_S`] long (sample indices, the first
+/// segment starting at 0 is not listed). An input is moving at sample k when it changed over the last half
+/// second by more than a tenth of its largest deviation from its initial value (robust to sensor noise on the
+/// surface columns). The state at each segment's start is estimated with every fit (a nuisance term, see
+/// `search::initial_state_basis`), so the slow modes (spiral, phugoid) cannot drift apart from the record over
+/// more than one maneuver: drift is not taken for a cause (the idea of multiple shooting, Bock & Plitt 1984;
+/// Jategaonkar, Flight Vehicle System Identification, 2nd ed., on estimating initial conditions per maneuver).
+pub fn segment_starts(inputs: &[(String, Vec<f64>)], dt_s: f64) -> Vec<usize> {
+    let n = inputs.first().map(|(_, d)| d.len()).unwrap_or(0);
+    let lag = ((0.5 / dt_s).round() as usize).max(1);
+    let scales: Vec<f64> = inputs
+        .iter()
+        .map(|(_, d)| d.iter().fold(0.0_f64, |m, v| m.max(v.abs())))
+        .collect();
+    let moving: Vec<bool> = (0..n)
+        .map(|k| {
+            inputs.iter().zip(&scales).any(|((_, d), &scale)| {
+                let before = d[k.saturating_sub(lag)];
+                scale > 1e-6 && (d[k] - before).abs() > 0.1 * scale
+            })
+        })
+        .collect();
+    let quiet = (SEGMENT_QUIET_S / dt_s).round() as usize;
+    let min_len = (SEGMENT_MIN_S / dt_s).round() as usize;
+    let lead = (SEGMENT_LEAD_S / dt_s).round() as usize;
+    let mut starts = Vec::new();
+    let mut last = 0usize;
+    let mut still = 0usize;
+    for (k, &m) in moving.iter().enumerate() {
+        if !m {
+            still += 1;
+            continue;
+        }
+        if still >= quiet && k >= lead {
+            let b = k - lead;
+            if b >= last + min_len && b + min_len <= n {
+                starts.push(b);
+                last = b;
+            }
+        }
+        still = 0;
+    }
+    starts
 }
 
 /// Model trim versus measured initial condition (a trim mismatch is evidence of a model error).
@@ -188,7 +272,7 @@ impl ReplayCase {
             };
             initial.insert(name.clone(), v);
         }
-        let inputs = present_inputs
+        let inputs: Vec<(String, Vec<f64>)> = present_inputs
             .iter()
             .map(|(s, c)| {
                 let x = rec.column(c).unwrap_or(&[]);
@@ -217,6 +301,9 @@ impl ReplayCase {
                 initial["airspeed_m_s"], initial["altitude_m"]
             )));
         }
+        let segments = std::iter::once(0)
+            .chain(segment_starts(&inputs, dt))
+            .collect();
         Ok(ReplayCase {
             rate_hz: 1.0 / dt,
             record: rec,
@@ -224,6 +311,7 @@ impl ReplayCase {
             initial,
             inputs,
             outputs,
+            segments,
         })
     }
 
@@ -295,6 +383,16 @@ pub fn replay(
     case: &ReplayCase,
     extensions: &[(&dyn Extension, &[f64])],
 ) -> Result<(FlightRecord, TrimState), SimError> {
+    replay_with_resets(sim, case, extensions, &[])
+}
+
+/// [`replay`] with state resets at record samples (`StateReset::step` counts the record's samples here).
+pub fn replay_with_resets(
+    sim: &mut dyn ReplaySim,
+    case: &ReplayCase,
+    extensions: &[(&dyn Extension, &[f64])],
+    resets: &[StateReset],
+) -> Result<(FlightRecord, TrimState), SimError> {
     for name in sim.coefficient_names() {
         sim.set_coefficient_scale(&name, 1.0)?;
     }
@@ -350,7 +448,14 @@ pub fn replay(
         n_steps,
         inputs,
     };
-    let mut rec = sim.fly(&plan)?;
+    let resets: Vec<StateReset> = resets
+        .iter()
+        .map(|r| StateReset {
+            step: r.step * m,
+            ..r.clone()
+        })
+        .collect();
+    let mut rec = sim.fly_with_resets(&plan, &resets)?;
     if m > 1 {
         let keep: Vec<usize> = (0..case.len()).map(|k| k * m).collect();
         for (_, col) in rec.columns.iter_mut() {
@@ -462,5 +567,55 @@ impl ReplaySim for LinearReplay {
         Err(SimError::Usage(format!(
             "a linear model has no coefficient knob '{name}'"
         )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::segment_starts;
+
+    /// A record at 10 Hz: `pulses` = (start s, length s, amplitude) on one input.
+    fn input(pulses: &[(f64, f64, f64)], duration_s: f64) -> Vec<(String, Vec<f64>)> {
+        let n = (duration_s * 10.0) as usize;
+        let d = (0..n)
+            .map(|k| {
+                let t = k as f64 / 10.0;
+                pulses
+                    .iter()
+                    .filter(|(s, l, _)| t >= *s && t < s + l)
+                    .map(|(_, _, a)| a)
+                    .sum()
+            })
+            .collect();
+        vec![("elevator".to_string(), d)]
+    }
+
+    #[test]
+    fn a_segment_starts_just_before_each_maneuver_after_a_quiet_stretch() {
+        // Maneuvers at 2 s, 20 s and 40 s: the first is in the first segment (from trim), the other two start
+        // segments 0.3 s before they move.
+        let u = input(
+            &[(2.0, 2.0, 0.05), (20.0, 2.0, -0.05), (40.0, 1.0, 0.03)],
+            60.0,
+        );
+        assert_eq!(segment_starts(&u, 0.1), vec![197, 397]);
+    }
+
+    #[test]
+    fn no_segment_without_quiet_before_or_room_after() {
+        // 1 s of quiet between pulses is not enough; a maneuver 3 s before the end leaves too short a segment.
+        let u = input(
+            &[(2.0, 2.0, 0.05), (5.0, 2.0, -0.05), (27.0, 1.0, 0.05)],
+            30.0,
+        );
+        assert!(segment_starts(&u, 0.1).is_empty());
+        // An input that never moves starts nothing; noise a hundredth of the pulses does not either.
+        let still = vec![("aileron".to_string(), vec![0.0; 300])];
+        assert!(segment_starts(&still, 0.1).is_empty());
+        let mut noisy = input(&[(2.0, 2.0, 0.05), (20.0, 2.0, -0.05)], 40.0);
+        for (k, v) in noisy[0].1.iter_mut().enumerate() {
+            *v += 5e-4 * ((k * 7919 % 13) as f64 / 6.0 - 1.0);
+        }
+        assert_eq!(segment_starts(&noisy, 0.1), vec![197]);
     }
 }

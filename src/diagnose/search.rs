@@ -13,9 +13,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use super::extension::{Extension, Stage};
-use super::replay::{replay, ReplayCase, ReplaySim};
+use super::replay::{replay, replay_with_resets, ReplayCase, ReplaySim};
 use crate::data::FlightRecord;
-use crate::sim::SimError;
+use crate::sim::{SimError, StateReset};
 
 /// A simulation worker: one simulator and a cache of its last simulated record.
 pub struct Worker {
@@ -50,12 +50,15 @@ pub struct Active<'e> {
     pub free: bool,
 }
 
-/// Channel weights (1/σ_c) of a case.
+/// Channel weights (1/σ_c) of a case and the nuisance terms every residual is taken after.
 pub struct Weighted<'c> {
     /// The case.
     pub case: &'c ReplayCase,
     /// Noise standard deviation per output column (same order as `case.outputs`).
     pub sigma: Vec<f64>,
+    /// Orthonormal basis of the residual directions the nuisance terms explain (see [`initial_state_basis`]);
+    /// the residual is projected off it, which estimates the nuisance terms jointly with every fit.
+    pub nuisance: &'c [Vec<f64>],
 }
 
 impl<'c> Weighted<'c> {
@@ -120,7 +123,113 @@ pub fn residuals(
             r.push(if e.is_finite() { e } else { 1e6 });
         }
     }
+    project_off(&mut r, w.nuisance);
     Ok(r)
+}
+
+/// r ← (1 − Q Qᵀ) r for an orthonormal basis Q: the least-squares residual once the nuisance terms, linear in
+/// their effect on the output, are estimated jointly (variable projection, Golub & Pereyra 1973).
+fn project_off(r: &mut [f64], basis: &[Vec<f64>]) {
+    for q in basis {
+        let c: f64 = q.iter().zip(r.iter()).map(|(a, b)| a * b).sum();
+        r.iter_mut().zip(q).for_each(|(x, y)| *x -= c * y);
+    }
+}
+
+/// An orthonormal basis of the span of `columns` by modified Gram–Schmidt; a column that is (nearly) in the
+/// span of the ones before it (norm left below 10⁻⁹ of its own) is dropped.
+pub fn orthonormal_basis(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    for col in columns {
+        let mut u = col.clone();
+        let norm0 = dot(&u, &u).sqrt();
+        for b in &basis {
+            let c = dot(&u, b);
+            u.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
+        }
+        let norm = dot(&u, &u).sqrt();
+        if norm > 1e-9 * norm0.max(1e-300) && norm.is_finite() {
+            u.iter_mut().for_each(|x| *x /= norm);
+            basis.push(u);
+        }
+    }
+    basis
+}
+
+/// State perturbations whose output effect spans a segment's initial-state error: (roll, pitch, body rates,
+/// body velocities, altitude), each a small step of that state alone (SI).
+fn state_perturbations() -> Vec<StateReset> {
+    let one = |f: &dyn Fn(&mut StateReset)| {
+        let mut r = StateReset {
+            relative: true,
+            ..Default::default()
+        };
+        f(&mut r);
+        r
+    };
+    vec![
+        one(&|r| r.phi_rad = Some(0.01)),
+        one(&|r| r.theta_rad = Some(0.005)),
+        one(&|r| r.rates_rad_s = Some([0.005, 0.0, 0.0])),
+        one(&|r| r.rates_rad_s = Some([0.0, 0.005, 0.0])),
+        one(&|r| r.rates_rad_s = Some([0.0, 0.0, 0.005])),
+        one(&|r| r.uvw_m_s = Some([0.5, 0.0, 0.0])),
+        one(&|r| r.uvw_m_s = Some([0.0, 0.5, 0.0])),
+        one(&|r| r.uvw_m_s = Some([0.0, 0.0, 0.3])),
+        one(&|r| r.altitude_m = Some(3.0)),
+    ]
+}
+
+/// The nuisance terms of every fit: the state at the start of each of the case's segments (roll and pitch
+/// angles, body rates and velocities, altitude; `ReplayCase::segments`). Their effect on the noise-normalised
+/// residual is linearised once at the unextended model (one simulation per segment and state, in parallel on
+/// the workers) and returned as an orthonormal basis; [`residuals`] projects it off. Estimating the initial
+/// state per segment keeps the slow modes' drift, grown from small state errors over a long record, from being
+/// taken for a cause (Jategaonkar, Flight Vehicle System Identification, 2nd ed., initial conditions as
+/// unknowns per maneuver; multiple shooting). Empty when the simulation cannot set its state mid-flight.
+pub fn initial_state_basis(
+    workers: &mut [Worker],
+    case: &ReplayCase,
+    sigma: &[f64],
+) -> Result<Vec<Vec<f64>>, SimError> {
+    let Some(first) = workers.first_mut() else {
+        return Ok(Vec::new());
+    };
+    if !first.sim.supports_resets() {
+        return Ok(Vec::new());
+    }
+    let t0 = std::time::Instant::now();
+    let base = replay(first.sim.as_mut(), case, &[]);
+    first.sim_s += t0.elapsed().as_secs_f64();
+    let (base, _) = base?;
+    let items: Vec<StateReset> = case
+        .segments
+        .iter()
+        .flat_map(|&b| {
+            state_perturbations()
+                .into_iter()
+                .map(move |r| StateReset { step: b, ..r })
+        })
+        .collect();
+    let columns = par_map(workers, &items, |wk, reset| {
+        let t0 = std::time::Instant::now();
+        let out = replay_with_resets(wk.sim.as_mut(), case, &[], std::slice::from_ref(reset));
+        wk.sim_s += t0.elapsed().as_secs_f64();
+        let (rec, _) = out?;
+        let mut col = Vec::with_capacity(case.len() * case.outputs.len());
+        for (c, name) in case.outputs.iter().enumerate() {
+            let (Some(y), Some(y0)) = (rec.column(name), base.column(name)) else {
+                return Err(SimError::Protocol(format!(
+                    "the simulation does not produce column {name}"
+                )));
+            };
+            col.extend(y.iter().zip(y0).map(|(a, b)| (a - b) / sigma[c]));
+        }
+        Ok(col)
+    });
+    let columns: Vec<Vec<f64>> = columns.into_iter().collect::<Result<_, _>>()?;
+    Ok(orthonormal_basis(&columns))
 }
 
 fn cost(r: &[f64]) -> f64 {

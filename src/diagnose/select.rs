@@ -364,10 +364,12 @@ pub fn select<'e>(
     let w = Weighted {
         case: &p.case,
         sigma: p.sigma.clone(),
+        nuisance: &p.nuisance,
     };
     let vw = p.valid.as_ref().map(|(v, s)| Weighted {
         case: v,
         sigma: s.clone(),
+        nuisance: &[],
     });
     let Identifiable {
         entries: catalogue,

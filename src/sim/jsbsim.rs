@@ -1,7 +1,9 @@
 //! [`Simulator`] backed by the official JSBSim through the bridge process.
 
 use super::bridge::Bridge;
-use super::{FlightPlan, Linearization, SimError, Simulator, TrimPoint, TrimState, FT_TO_M};
+use super::{
+    FlightPlan, Linearization, SimError, Simulator, StateReset, TrimPoint, TrimState, FT_TO_M,
+};
 use crate::aircraft::{AircraftConfig, Drive};
 use crate::data::FlightRecord;
 use serde_json::{json, Value};
@@ -397,6 +399,18 @@ impl Simulator for JsbsimSim {
     }
 
     fn fly(&mut self, plan: &FlightPlan) -> Result<FlightRecord, SimError> {
+        self.fly_with_resets(plan, &[])
+    }
+}
+
+impl JsbsimSim {
+    /// Flies `plan` from the current trim and sets the state at each of `resets` (multiple shooting: each
+    /// reset starts a segment from a given state). With no resets this is [`Simulator::fly`].
+    pub fn fly_with_resets(
+        &mut self,
+        plan: &FlightPlan,
+        resets: &[StateReset],
+    ) -> Result<FlightRecord, SimError> {
         let trim = self
             .trim
             .take()
@@ -482,7 +496,56 @@ impl Simulator for JsbsimSim {
         let mut record: Vec<String> = SURFACES.iter().map(|s| surface_property(s)).collect();
         record.extend(RECORDED.iter().map(|(_, p, _)| p.to_string()));
         record.extend(self.extra_record.iter().cloned());
-        let req = json!({"cmd": "fly", "n_steps": n, "drives": drives, "record": record, "set_before": set_before});
+        let mut resets_json = Vec::new();
+        for r in resets {
+            if r.step > n || (r.relative && r.airspeed_alpha_beta.is_some()) {
+                return Err(SimError::Usage(format!(
+                    "a state reset after step {} of a {n}-step flight{}",
+                    r.step,
+                    if r.relative {
+                        " (an increment cannot be given as airspeed, alpha, beta)"
+                    } else {
+                        ""
+                    }
+                )));
+            }
+            let mut st = serde_json::Map::new();
+            let mut put = |k: &str, v: f64| {
+                st.insert(k.into(), json!(v));
+            };
+            if let Some(v) = r.phi_rad {
+                put("phi", v);
+            }
+            if let Some(v) = r.theta_rad {
+                put("theta", v);
+            }
+            if let Some([p, q, rr]) = r.rates_rad_s {
+                put("p", p);
+                put("q", q);
+                put("r", rr);
+            }
+            if let Some((v_m_s, alpha, beta)) = r.airspeed_alpha_beta {
+                // Body axes, no wind: u = V cos α cos β, v = V sin β, w = V sin α cos β.
+                let v_fps = v_m_s / FT_TO_M;
+                put("u", v_fps * alpha.cos() * beta.cos());
+                put("v", v_fps * beta.sin());
+                put("w", v_fps * alpha.sin() * beta.cos());
+            }
+            if let Some(h) = r.altitude_m {
+                put("h", h / FT_TO_M);
+            }
+            if let Some([u, v, w]) = r.uvw_m_s {
+                put("u", u / FT_TO_M);
+                put("v", v / FT_TO_M);
+                put("w", w / FT_TO_M);
+            }
+            if r.relative {
+                st.insert("relative".into(), json!(true));
+            }
+            resets_json.push(json!({"step": r.step, "state": st}));
+        }
+        let req = json!({"cmd": "fly", "n_steps": n, "drives": drives, "record": record,
+                         "set_before": set_before, "resets": resets_json});
         let resp = self.bridge.request(req, &payload)?;
         let width = record.len();
         let rows = resp.payload.len() / width;

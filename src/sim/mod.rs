@@ -120,6 +120,29 @@ pub struct SurfaceInput {
     pub deflection_rad: Vec<f64>,
 }
 
+/// The aircraft's state set mid-flight (the start of a multiple-shooting segment, or a perturbation of the
+/// initial state of one): after simulation step `step` (0: before the first) the simulation continues from
+/// these values (SI; a `None` keeps the simulated value, as do the heading and the horizontal position).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StateReset {
+    /// Steps flown before the reset (the state of sample `step` is the reset one).
+    pub step: usize,
+    /// Roll angle, rad.
+    pub phi_rad: Option<f64>,
+    /// Pitch angle, rad.
+    pub theta_rad: Option<f64>,
+    /// Body rates p, q, r, rad/s.
+    pub rates_rad_s: Option<[f64; 3]>,
+    /// Air-relative velocity (no wind): airspeed m/s, angle of attack rad, sideslip rad.
+    pub airspeed_alpha_beta: Option<(f64, f64, f64)>,
+    /// Altitude above sea level, m.
+    pub altitude_m: Option<f64>,
+    /// Body-axis velocity components u, v, w, m/s.
+    pub uvw_m_s: Option<[f64; 3]>,
+    /// The values are increments to the simulated state (`airspeed_alpha_beta` is then not allowed).
+    pub relative: bool,
+}
+
 /// A maneuver to fly from trim.
 #[derive(Debug, Clone)]
 pub struct FlightPlan {
