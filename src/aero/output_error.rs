@@ -514,11 +514,14 @@ fn fit_model(
     })
 }
 
-/// When the α̇ terms were held: the same fit with C_Lα̇, C_mα̇ and C_Lq free, as a note for the engineer
-/// (not applied). C_Lq and C_Lα̇ are nearly collinear in a short-period response, so they are freed together.
-/// Downwash lag at a tail behind the wing makes C_mα̇ negative (Etkin & Reid §5.4; Klein & Morelli §3.5); a
-/// significant negative value with a lower cost suggests `--free alphadot,CL_q`, a positive one is another
-/// unmodelled effect taking the α̇ shape.
+/// When the α̇ terms were held by default: the same fit with C_Lα̇, C_mα̇ and C_Lq free. C_Lq and C_Lα̇ are
+/// nearly collinear in a short-period response, so they are freed together. Downwash lag at a tail behind the
+/// wing makes C_mα̇ negative (Etkin & Reid §5.4; Klein & Morelli §3.5). The wider fit is adopted when C_mα̇ is
+/// negative and significant (|t| > 3) and the likelihood-ratio test passes at 1 % (2 ΔJ > χ²₃ = 11.34,
+/// Klein & Morelli §5.4; J is the negative log-likelihood); a positive value is another unmodelled effect
+/// taking the α̇ shape, and the terms stay held. Without an α vane, or when the wider fit does not converge,
+/// it only reports. When the user named the α̇ terms in `--free`, the check only
+/// reports. Returns the note and the adopted fit.
 fn alphadot_check(
     records: &[&(String, data::FlightRecord)],
     air: &BTreeMap<String, AirData>,
@@ -526,7 +529,7 @@ fn alphadot_check(
     cond: &ReferenceCondition,
     options: &OutputErrorOptions,
     held: &AxisFit,
-) -> Option<String> {
+) -> Option<(String, Option<AxisFit>)> {
     if options.method != Method::Oe
         || !held
             .estimate
@@ -535,27 +538,42 @@ fn alphadot_check(
     {
         return None;
     }
+    let user_chose = options
+        .free
+        .iter()
+        .any(|c| c.names.iter().any(|n| n.ends_with("_alphadot")));
     let mut wider = options.clone();
     wider.free.push(FreeChoice {
         names: vec!["CL_alphadot", "Cm_alphadot", "CL_q"],
         free: true,
     });
-    let f = fit_longitudinal(records, air, airframe, cond, &wider, &mut Vec::new()).ok()?;
+    let mut wider_notes = Vec::new();
+    let f = fit_longitudinal(records, air, airframe, cond, &wider, &mut wider_notes).ok()?;
     let p = f.estimate.parameter("Cm_alphadot")?;
     let drop = held.estimate.cost - f.estimate.cost;
     let t = p.value / p.std_error.max(f64::MIN_POSITIVE);
-    let verdict = if p.value < 0.0 && t.abs() > 3.0 && drop > 0.0 {
-        "negative, as downwash lag at a tail behind the wing makes it: consider --free alphadot,CL_q"
+    // without an α vane the split between α̇ and q rests on the accelerometer alone: report, never adopt
+    let vane = records.iter().all(|(_, r)| r.column("alpha_rad").is_some());
+    let converged = f.estimate.stop == estimate::StopReason::Converged;
+    let supported = p.value < 0.0 && t.abs() > 3.0 && 2.0 * drop > 11.34 && vane && converged;
+    let verdict = if supported && user_chose {
+        "negative, as downwash lag at a tail behind the wing makes it; held as --free asks"
+    } else if supported {
+        "negative, as downwash lag at a tail behind the wing makes it: C_Lα̇, C_mα̇ and C_Lq are estimated \
+         (hold them with --free -alphadot,-CL_q)"
+    } else if p.value < 0.0 && t.abs() > 3.0 && !(vane && converged) {
+        "negative, but the wider fit is not trusted (no α vane, or it did not converge): the α̇ terms stay held"
     } else if p.value > 0.0 {
         "positive, which downwash lag does not produce: another unmodelled effect takes the α̇ shape; the \
          α̇ terms stay held"
     } else {
         "not significant: the α̇ terms stay held"
     };
-    Some(format!(
+    let note = format!(
         "longitudinal: with C_Lα̇, C_mα̇, C_Lq free the cost falls by {drop:.1} and C_mα̇ = {:.2} ± {:.2}: {verdict}",
         p.value, p.std_error
-    ))
+    );
+    Some((note, (supported && !user_chose).then_some(f)))
 }
 
 /// Indices (in θ order) of the free parameters and their covariance block.
@@ -614,9 +632,12 @@ pub fn output_error_report(
     };
     if axis.longitudinal() {
         let recs = records_for(records, true);
-        let f = fit_longitudinal(&recs, &air, airframe, &cond, options, &mut notes)?;
-        if let Some(note) = alphadot_check(&recs, &air, airframe, &cond, options, &f) {
+        let mut f = fit_longitudinal(&recs, &air, airframe, &cond, options, &mut notes)?;
+        if let Some((note, adopted)) = alphadot_check(&recs, &air, airframe, &cond, options, &f) {
             notes.push(note);
+            if let Some(wider) = adopted {
+                f = wider;
+            }
         }
         let (free, cov) = free_block(&f.estimate);
         let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| {
