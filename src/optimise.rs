@@ -96,7 +96,7 @@ pub enum Relaxation {
 /// How the damped step is solved.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum StepSolver {
-    /// `(M + μ diag M) δ = g` by LU on the equilibrated system.
+    /// `(M + μ diag M) δ = g` by partial-pivoting LU.
     Marquardt,
     /// Levenberg's `(SᵀS + μ s_max² I) δ = Sᵀe` through the SVD of `S`, singular values below
     /// `null_tolerance · s_max` left out.

@@ -3,7 +3,7 @@
 
 use flightid::aero::{estimate_derivatives, Assumptions, FitOptions, TfOutput};
 use flightid::aircraft;
-use flightid::sim::jsbsim::AeroTruth;
+use flightid::sim::aero_truth::AeroTruth;
 use flightid::sim::linear::submodel_modes;
 use flightid::sim::{JsbsimSim, Simulator, TrimPoint};
 use flightid::study::default_free;

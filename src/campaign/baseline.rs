@@ -1,7 +1,7 @@
 //! Regression baselines: identified modal parameters and control-derivative proxies per aircraft
 //! configuration, each with its own tolerance `|new − base| ≤ abs_tol + rel_tol·|base|`.
 
-use super::run::CaseResult;
+use super::result::CaseResult;
 use super::CampaignError;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

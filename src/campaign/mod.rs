@@ -3,6 +3,7 @@
 //! regression baselines of identified modal parameters per aircraft configuration.
 
 pub mod baseline;
+pub mod result;
 pub mod run;
 pub mod slurm;
 pub mod spec;
@@ -10,7 +11,8 @@ pub mod store;
 pub mod summary;
 
 pub use baseline::{compare_baseline, quantities, Baseline, BaselineEntry, Deviation};
-pub use run::{run_campaign, run_case, CaseResult, Identification, RunOptions, RunSummary};
+pub use result::{CaseResult, Identification};
+pub use run::{run_campaign, run_case, RunOptions, RunSummary};
 pub use spec::{CampaignSpec, CaseSpec};
 pub use store::{load_results, StorePolicy};
 pub use summary::campaign_report;

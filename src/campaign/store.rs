@@ -23,7 +23,7 @@
 //! store is refused, naming the cases whose results would no longer match it, unless they are to be rerun.
 //! (The aircraft files and the flightid version are not part of the hash.)
 
-use super::run::CaseResult;
+use super::result::CaseResult;
 use super::spec::{CampaignSpec, CaseSpec};
 use super::CampaignError;
 use serde::Serialize;

@@ -1,7 +1,7 @@
 //! `flightid campaign report`: modal parameters and control derivatives across flight conditions, and where each
 //! method fails.
 
-use super::run::CaseResult;
+use super::result::CaseResult;
 use super::store::load_results;
 use super::CampaignError;
 use crate::report::{LinePlot, Report, Section, Series, Table};

@@ -320,7 +320,10 @@ fn load_airframe(args: &DerivativesCmd, arg: &str) -> anyhow::Result<crate::aero
 
 /// The mass, inertia and geometry a JSBSim model uses at its trim (sensors at the CG, no thrust line, the
 /// trim's density).
-fn airframe_of_model(name: &str, truth: &crate::sim::jsbsim::AeroTruth) -> crate::aero::Airframe {
+fn airframe_of_model(
+    name: &str,
+    truth: &crate::sim::aero_truth::AeroTruth,
+) -> crate::aero::Airframe {
     use crate::aero::airframe::{Airframe, FlightDefaults, Inertia, SensorPositions, Wing};
     Airframe {
         name: name.to_string(),

@@ -677,11 +677,11 @@ fn explains(before: f64, after: f64) -> bool {
 }
 
 /// "What the linearization cannot see": the model's coefficient functions with a kink at the trim point
-/// ([`crate::sim::jsbsim::NonSmoothTerm`]), the transfer functions the linearization fits poorly (`gaps`, from
+/// ([`crate::sim::aero_truth::NonSmoothTerm`]), the transfer functions the linearization fits poorly (`gaps`, from
 /// [`linearization_gaps`]), and for each kink the fits measured without it (`shares`), with a verdict per gap.
 /// `None` when the model has no kink there.
 pub fn nonsmooth_section(
-    terms: &[crate::sim::jsbsim::NonSmoothTerm],
+    terms: &[crate::sim::aero_truth::NonSmoothTerm],
     outcome: &CompareOutcome,
     gaps: &[(String, f64)],
     shares: &[KinkShare],

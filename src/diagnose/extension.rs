@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use super::replay::ReplaySim;
+use super::simulator::ReplaySim;
 use super::DiagnoseError;
 use crate::data::FlightRecord;
 use crate::sim::SimError;

@@ -17,6 +17,7 @@ pub mod report;
 pub mod residual;
 pub mod search;
 pub mod select;
+pub mod simulator;
 pub mod validate;
 
 use std::collections::BTreeMap;

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use super::extension::{BuiltEffects, ExtensionFile, FittedEffect, Stage};
-use super::replay::ReplaySim;
+use super::simulator::ReplaySim;
 use super::DiagnoseError;
 use crate::aircraft::AircraftConfig;
 use crate::data::FlightRecord;

@@ -4,91 +4,14 @@
 use std::collections::BTreeMap;
 
 use super::extension::{Extension, Stage};
+pub use super::simulator::ReplaySim;
 use super::DiagnoseError;
 use crate::data::FlightRecord;
 use crate::sim::{
-    FlightPlan, JsbsimSim, LinearSim, SimError, Simulator, StateReset, SurfaceInput, TrimPoint,
-    TrimState, FT_TO_M, KTS_TO_M_S,
+    FlightPlan, LinearSim, SimError, Simulator, StateReset, SurfaceInput, TrimPoint, TrimState,
+    FT_TO_M, KTS_TO_M_S,
 };
 use serde::Serialize;
-
-/// A simulation that can be replayed: JSBSim or a linear model (no coefficient knobs).
-pub trait ReplaySim: Simulator + Send {
-    /// Names of the aerodynamic coefficient functions that can be scaled.
-    fn coefficient_names(&self) -> Vec<String>;
-    /// Sets the factor on a coefficient function from the next trim on.
-    fn set_coefficient_scale(&mut self, name: &str, factor: f64) -> Result<(), SimError>;
-    /// Names of the added aerodynamic terms the simulation offers (e.g. `Cm_alpha2`).
-    fn added_term_names(&self) -> Vec<String> {
-        Vec::new()
-    }
-    /// Sets the coefficient of an added term from the next trim on.
-    fn set_added_term(&mut self, name: &str, _coefficient: f64) -> Result<(), SimError> {
-        Err(SimError::Usage(format!(
-            "this simulation has no added aerodynamic term '{name}'"
-        )))
-    }
-    /// The rate the simulation integrates at, Hz (None: it runs at whatever rate the plan asks for).
-    fn rate_hz(&self) -> Option<f64> {
-        None
-    }
-    /// Whether the simulation can set its state mid-flight ([`ReplaySim::fly_with_resets`]).
-    fn supports_resets(&self) -> bool {
-        false
-    }
-    /// Flies `plan` and sets the state at each reset (multiple shooting); without resets, [`Simulator::fly`].
-    fn fly_with_resets(
-        &mut self,
-        plan: &FlightPlan,
-        resets: &[StateReset],
-    ) -> Result<FlightRecord, SimError> {
-        if resets.is_empty() {
-            self.fly(plan)
-        } else {
-            Err(SimError::Usage(
-                "this simulation cannot set its state mid-flight".into(),
-            ))
-        }
-    }
-    /// Writes the model with the current coefficient factors and added terms in it to `dir`.
-    fn export_model(&mut self, dir: &std::path::Path) -> Result<std::path::PathBuf, SimError> {
-        Err(SimError::Usage(format!(
-            "this simulation cannot be exported as a model ({})",
-            dir.display()
-        )))
-    }
-}
-
-impl ReplaySim for JsbsimSim {
-    fn rate_hz(&self) -> Option<f64> {
-        Some(JsbsimSim::rate_hz(self))
-    }
-    fn coefficient_names(&self) -> Vec<String> {
-        self.coefficient_knobs.clone()
-    }
-    fn set_coefficient_scale(&mut self, name: &str, factor: f64) -> Result<(), SimError> {
-        JsbsimSim::set_coefficient_scale(self, name, factor)
-    }
-    fn added_term_names(&self) -> Vec<String> {
-        self.added_terms.clone()
-    }
-    fn set_added_term(&mut self, name: &str, coefficient: f64) -> Result<(), SimError> {
-        JsbsimSim::set_added_term(self, name, coefficient)
-    }
-    fn export_model(&mut self, dir: &std::path::Path) -> Result<std::path::PathBuf, SimError> {
-        self.export_aircraft(dir)
-    }
-    fn supports_resets(&self) -> bool {
-        true
-    }
-    fn fly_with_resets(
-        &mut self,
-        plan: &FlightPlan,
-        resets: &[StateReset],
-    ) -> Result<FlightRecord, SimError> {
-        JsbsimSim::fly_with_resets(self, plan, resets)
-    }
-}
 
 /// Surface inputs of the CSV schema: (surface name, column).
 pub const INPUTS: [(&str, &str); 4] = [

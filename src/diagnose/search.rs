@@ -13,7 +13,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use super::extension::{Extension, Stage};
-use super::replay::{replay, replay_with_resets, ReplayCase, ReplaySim};
+use super::replay::{replay, replay_with_resets, ReplayCase};
+use super::simulator::ReplaySim;
 use crate::data::FlightRecord;
 use crate::optimise;
 use crate::sim::{SimError, StateReset};

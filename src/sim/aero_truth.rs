@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use serde_json::json;
 
-use super::jsbsim::{values_map, JsbsimSim};
+use super::jsbsim::{probe_steps, values_map, JsbsimSim};
 use super::{SimError, FT_TO_M};
 
 /// Slug to kilogram.
@@ -79,14 +79,6 @@ pub struct NonSmoothTerm {
     pub slope_below: f64,
     /// The same just above it.
     pub slope_above: f64,
-}
-
-/// Perturbation of each aero input in the bridge's probe: rad for angles and surfaces, rad/s for rates.
-pub(super) fn probe_steps() -> serde_json::Value {
-    json!({
-        "alpha": 1e-3, "beta": 1e-3, "p": 1e-2, "q": 1e-2, "r": 1e-2, "alphadot": 1e-2, "betadot": 1e-2,
-        "surface:elevator": 1e-3, "surface:aileron": 1e-3, "surface:rudder": 1e-3,
-    })
 }
 
 /// The property of an aerodynamic coefficient function, `aero/coefficient/NAME`.

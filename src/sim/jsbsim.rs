@@ -9,8 +9,13 @@ use crate::data::FlightRecord;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 
-use super::aero_truth::probe_steps;
-pub use super::aero_truth::{coefficient_property, AeroTruth, NonSmoothTerm};
+/// Perturbation of each aero input in the bridge's probe: rad for angles and surfaces, rad/s for rates.
+pub(super) fn probe_steps() -> Value {
+    json!({
+        "alpha": 1e-3, "beta": 1e-3, "p": 1e-2, "q": 1e-2, "r": 1e-2, "alphadot": 1e-2, "betadot": 1e-2,
+        "surface:elevator": 1e-3, "surface:aileron": 1e-3, "surface:rudder": 1e-3,
+    })
+}
 
 /// Recorded channels: (CSV column, JSBSim property, factor to SI). Surfaces are added per aircraft.
 const RECORDED: &[(&str, &str, f64)] = &[

@@ -24,7 +24,7 @@ use crate::aero::regression::{EquationErrorOptions, EquationErrorResult};
 use crate::aero::AeroError;
 use crate::data;
 use crate::report::{Report, Section, Table};
-use crate::sim::jsbsim::AeroTruth;
+use crate::sim::aero_truth::AeroTruth;
 use crate::sim::linear::{paper_transfer_functions, submodel_modes};
 use crate::sim::Linearization;
 use crate::sim::{JsbsimSim, Simulator, TrimPoint};

@@ -13,7 +13,7 @@ use crate::aero::params::{
     Assumptions, Derivative, Derivatives, FlightCondition, Geometry, MassProperties,
 };
 use crate::aero::AeroError;
-use crate::sim::jsbsim::AeroTruth;
+use crate::sim::aero_truth::AeroTruth;
 
 /// Which model structure the transfer-function route fits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

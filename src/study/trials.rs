@@ -15,7 +15,7 @@ use crate::aero::AeroError;
 use crate::data;
 use crate::ident::{self, IdentOptions, IdentResult, Method};
 use crate::signal::{self, Maneuver};
-use crate::sim::jsbsim::AeroTruth;
+use crate::sim::aero_truth::AeroTruth;
 use crate::sim::{FlightPlan, Simulator, SurfaceInput, TrimPoint};
 use crate::study::spec::{truth_geometry, truth_mass_body};
 use faer::Mat;
