@@ -15,6 +15,7 @@ pub mod exit;
 pub mod ident;
 pub mod limits;
 pub mod lti;
+pub mod optimise;
 pub mod paper;
 pub mod report;
 pub mod signal;

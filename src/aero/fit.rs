@@ -18,6 +18,7 @@ use super::identifiability::{analyse_with_weights, assess_estimate, Identifiabil
 use super::model::{AeroModel, Axis, TfOutput};
 use super::params::Derivative;
 use super::AeroError;
+use crate::optimise;
 
 /// One identified continuous-time transfer function, descending powers of s.
 #[derive(Debug, Clone)]
@@ -263,6 +264,59 @@ pub(crate) fn scaled_jacobian(
     Ok(jac)
 }
 
+/// The whitened coefficient residual in the scaled parameters `z` (values = start + scale ⊙ z)
+/// for [`optimise::levenberg_marquardt`].
+struct Coefficients<'a> {
+    prior: &'a AeroModel,
+    target: &'a Target,
+    free: &'a [Derivative],
+    start: &'a [f64],
+    scale: &'a [f64],
+}
+
+impl Coefficients<'_> {
+    fn values(&self, z: &[f64]) -> Vec<f64> {
+        self.start
+            .iter()
+            .zip(z)
+            .zip(self.scale)
+            .map(|((p, z), s)| p + z * s)
+            .collect()
+    }
+}
+
+impl optimise::Problem for Coefficients<'_> {
+    type Point = Vec<f64>;
+    type Error = AeroError;
+
+    fn evaluate(&mut self, z: &[f64]) -> Result<Option<Vec<f64>>, AeroError> {
+        residual(self.prior, self.target, self.free, &self.values(z)).map(Some)
+    }
+
+    fn cost(&self, r: &Vec<f64>) -> f64 {
+        r.iter().map(|x| x * x).sum()
+    }
+
+    /// The residual's own Jacobian as the sensitivities, the negated residual as `e`.
+    fn linearise(
+        &mut self,
+        z: &[f64],
+        r: &Vec<f64>,
+    ) -> Result<Option<optimise::Linearised>, AeroError> {
+        let jac = scaled_jacobian(
+            self.prior,
+            self.target,
+            self.free,
+            &self.values(z),
+            self.scale,
+        )?;
+        Ok(Some(optimise::Linearised {
+            sensitivities: jac,
+            residuals: r.iter().map(|v| -v).collect(),
+        }))
+    }
+}
+
 /// Estimate the `free` derivatives of `prior` from identified transfer functions (see the module doc).
 ///
 /// `prior` supplies the flight condition, mass, geometry, assumptions, the fixed derivatives and the
@@ -282,65 +336,33 @@ pub fn estimate_derivatives(
     }
     let target = prepare(tfs)?;
     let scale = scales(prior, free);
-    let mut values: Vec<f64> = free.iter().map(|&d| prior.derivatives.get(d)).collect();
-    let mut r = residual(prior, &target, free, &values)?;
-    let mut cost: f64 = r.iter().map(|x| x * x).sum();
-    let mut lambda = f64::NAN;
-    let mut iterations = 0;
-    while iterations < options.max_iterations {
-        iterations += 1;
-        let jac = scaled_jacobian(prior, &target, free, &values, &scale)?;
-        let svd = jac
-            .thin_svd()
-            .map_err(|_| AeroError::Numerical("SVD of the Jacobian"))?;
-        let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-        let s_max = s.first().copied().unwrap_or(0.0);
-        if s_max == 0.0 {
-            break;
-        }
-        if lambda.is_nan() {
-            lambda = 1e-6 * s_max * s_max;
-        }
-        let (u, v) = (svd.U(), svd.V());
-        let utr: Vec<f64> = (0..s.len())
-            .map(|i| (0..r.len()).map(|k| u[(k, i)] * r[k]).sum())
-            .collect();
-        let mut improved = false;
-        for _ in 0..30 {
-            let mut step = vec![0.0; free.len()];
-            for i in 0..s.len() {
-                if s[i] <= options.null_tolerance * s_max {
-                    continue;
-                }
-                let f = -s[i] / (s[i] * s[i] + lambda) * utr[i];
-                for (k, st) in step.iter_mut().enumerate() {
-                    *st += f * v[(k, i)];
-                }
-            }
-            let trial: Vec<f64> = values
-                .iter()
-                .zip(&step)
-                .zip(&scale)
-                .map(|((p, dz), sc)| p + dz * sc)
-                .collect();
-            let r_trial = residual(prior, &target, free, &trial)?;
-            let c_trial: f64 = r_trial.iter().map(|x| x * x).sum();
-            if c_trial < cost {
-                let step_norm = step.iter().map(|x| x * x).sum::<f64>().sqrt();
-                let rel_drop = (cost - c_trial) / cost.max(f64::MIN_POSITIVE);
-                values = trial;
-                r = r_trial;
-                cost = c_trial;
-                lambda = (lambda / 10.0).max(1e-16 * s_max * s_max);
-                improved = step_norm > 1e-13 && rel_drop > 1e-14;
-                break;
-            }
-            lambda *= 10.0;
-        }
-        if !improved || cost < 1e-30 {
-            break;
-        }
-    }
+    let start: Vec<f64> = free.iter().map(|&d| prior.derivatives.get(d)).collect();
+    let mut problem = Coefficients {
+        prior,
+        target: &target,
+        free,
+        start: &start,
+        scale: &scale,
+    };
+    let r = residual(prior, &target, free, &start)?;
+    let lm = optimise::Options {
+        max_iterations: options.max_iterations,
+        tolerance: 1e-14,
+        damping: optimise::Damping {
+            initial: 1e-6,
+            min: 1e-16,
+            decrease: 10.0,
+            increase: 10.0,
+            tries: 30,
+        },
+        solver: optimise::StepSolver::TruncatedSvd {
+            null_tolerance: options.null_tolerance,
+        },
+    };
+    let min = optimise::levenberg_marquardt(&mut problem, vec![0.0; free.len()], r, &lm)?;
+    let values = problem.values(&min.x);
+    let (r, iterations) = (min.point, min.iterations);
+    let cost: f64 = r.iter().map(|x| x * x).sum();
 
     let model = with_values(prior, free, &values);
     let identifiability = analyse_with_weights(

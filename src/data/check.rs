@@ -27,6 +27,8 @@ use serde::Serialize;
 
 use super::error::DataError;
 use super::record::{FlightRecord, G0_M_S2};
+use crate::optimise;
+use faer::Mat;
 
 /// Options of [`check_compatibility`].
 #[derive(Debug, Clone)]
@@ -477,80 +479,106 @@ struct Fit {
     converged: bool,
 }
 
-/// Output-error Gauss–Newton with Levenberg–Marquardt damping; the diagonal residual covariance
-/// is re-estimated from the residuals at every iteration (Klein & Morelli §6.2).
+/// Output-error Gauss–Newton with Levenberg–Marquardt damping ([`optimise::levenberg_marquardt`]);
+/// the diagonal residual covariance is re-estimated from the residuals after every step (Klein &
+/// Morelli §6.2).
 fn fit(data: &Data, params: &[Param], start: Vec<f64>, max_iterations: usize) -> Fit {
     let outputs: Vec<usize> = (0..6).filter(|&j| data.out[j].is_some()).collect();
-    let n = data.t.len();
-    let variances = |r: &[Vec<f64>]| -> Vec<f64> {
-        r.iter()
-            .map(|rj| (rj.iter().map(|x| x * x).sum::<f64>() / n as f64).max(1e-24))
-            .collect()
-    };
-    let cost = |r: &[Vec<f64>], var: &[f64]| -> f64 {
-        r.iter()
-            .zip(var)
-            .map(|(rj, v)| rj.iter().map(|x| x * x).sum::<f64>() / v)
-            .sum::<f64>()
-    };
+    let r = residuals(data, params, &start, &outputs);
     let np = params.len();
-    let mut theta_p = start;
-    let mut r = residuals(data, params, &theta_p, &outputs);
-    let mut lambda = 1e-3;
-    let mut iterations = 0;
-    let mut converged = false;
-    let mut fisher = vec![0.0; np * np];
-    for it in 0..max_iterations {
-        iterations = it + 1;
-        let var = variances(&r);
-        let j = jacobian(data, params, &theta_p, &outputs, &r);
-        let (m, g) = normal_equations(&j, &r, &var, np);
-        fisher = m.clone();
-        let c0 = cost(&r, &var);
-        let mut accepted = false;
-        for _ in 0..12 {
-            let mut a = m.clone();
-            for k in 0..np {
-                a[k * np + k] += lambda * m[k * np + k].max(1e-30);
-            }
-            let Some(delta) = solve(&a, &g, np) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let trial: Vec<f64> = theta_p.iter().zip(&delta).map(|(t, d)| t + d).collect();
-            let rt = residuals(data, params, &trial, &outputs);
-            let c1 = cost(&rt, &var);
-            if c1.is_finite() && c1 <= c0 {
-                let rel = (c0 - c1) / c0.max(1e-300);
-                theta_p = trial;
-                r = rt;
-                lambda = (lambda / 10.0).max(1e-9);
-                accepted = true;
-                if rel < 1e-9 {
-                    converged = true;
-                }
-                break;
-            }
-            lambda *= 10.0;
-        }
-        if !accepted || converged {
-            converged = converged || !accepted;
-            break;
-        }
-    }
+    let mut problem = Reconstruction {
+        data,
+        params,
+        variances: variances(&r),
+        outputs,
+        fisher: vec![0.0; np * np],
+    };
+    let options = optimise::Options {
+        max_iterations,
+        tolerance: 1e-9,
+        damping: optimise::Damping {
+            tries: 12,
+            ..optimise::Damping::default()
+        },
+        solver: optimise::StepSolver::Marquardt,
+    };
+    let Ok(min) = optimise::levenberg_marquardt(&mut problem, start, r, &options);
     // Fisher information at the final point with the final residual covariance.
+    let r = min.point;
     let var = variances(&r);
-    let j = jacobian(data, params, &theta_p, &outputs, &r);
+    let j = jacobian(data, params, &min.x, &problem.outputs, &r);
     let (m, _) = normal_equations(&j, &r, &var, np);
-    if m.iter().all(|x| x.is_finite()) {
-        fisher = m;
-    }
     Fit {
-        theta: theta_p,
-        fisher,
+        theta: min.x,
+        fisher: if m.iter().all(|x| x.is_finite()) {
+            m
+        } else {
+            problem.fisher
+        },
         residuals: r,
-        iterations,
-        converged,
+        iterations: min.iterations,
+        converged: min.stop != optimise::Stop::MaxIterations,
+    }
+}
+
+/// Per-output residual variance (the diagonal R of the relaxation algorithm).
+fn variances(r: &[Vec<f64>]) -> Vec<f64> {
+    r.iter()
+        .map(|rj| (rj.iter().map(|x| x * x).sum::<f64>() / rj.len().max(1) as f64).max(1e-24))
+        .collect()
+}
+
+/// The flight-path reconstruction for [`optimise::levenberg_marquardt`], with the current
+/// residual variances.
+struct Reconstruction<'a> {
+    data: &'a Data,
+    params: &'a [Param],
+    outputs: Vec<usize>,
+    variances: Vec<f64>,
+    /// Information matrix of the last linearisation.
+    fisher: Vec<f64>,
+}
+
+impl optimise::Problem for Reconstruction<'_> {
+    type Point = Vec<Vec<f64>>;
+    type Error = std::convert::Infallible;
+
+    fn evaluate(&mut self, th: &[f64]) -> Result<Option<Self::Point>, Self::Error> {
+        Ok(Some(residuals(self.data, self.params, th, &self.outputs)))
+    }
+
+    fn cost(&self, r: &Self::Point) -> f64 {
+        r.iter()
+            .zip(&self.variances)
+            .map(|(rj, v)| rj.iter().map(|x| x * x).sum::<f64>() / v)
+            .sum()
+    }
+
+    fn linearise(
+        &mut self,
+        th: &[f64],
+        r: &Self::Point,
+    ) -> Result<Option<optimise::Linearised>, Self::Error> {
+        let j = jacobian(self.data, self.params, th, &self.outputs, r);
+        let np = self.params.len();
+        self.fisher = normal_equations(&j, r, &self.variances, np).0;
+        let n = r.first().map_or(0, Vec::len);
+        let w: Vec<f64> = self.variances.iter().map(|v| 1.0 / v.sqrt()).collect();
+        Ok(Some(optimise::Linearised {
+            sensitivities: Mat::from_fn(r.len() * n, np, |i, a| j[a][i / n][i % n] * w[i / n]),
+            residuals: (0..r.len() * n)
+                .map(|i| r[i / n][i % n] * w[i / n])
+                .collect(),
+        }))
+    }
+
+    fn relax(
+        &mut self,
+        _th: &mut Vec<f64>,
+        r: &mut Self::Point,
+    ) -> Result<optimise::Relaxation, Self::Error> {
+        self.variances = variances(r);
+        Ok(optimise::Relaxation::Steady)
     }
 }
 

@@ -15,7 +15,9 @@ use std::sync::Mutex;
 use super::extension::{Extension, Stage};
 use super::replay::{replay, replay_with_resets, ReplayCase, ReplaySim};
 use crate::data::FlightRecord;
+use crate::optimise;
 use crate::sim::{SimError, StateReset};
+use faer::Mat;
 
 /// A simulation worker: one simulator and a cache of its last simulated record.
 pub struct Worker {
@@ -299,6 +301,90 @@ fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     )
 }
 
+/// Residual sensitivities ∂r/∂θ of the `free` parameters by forward differences from `r` (a
+/// backward one at the upper bound).
+fn residual_jacobian(
+    worker: &mut Worker,
+    w: &Weighted,
+    active: &mut [Active],
+    free: &[(usize, usize)],
+    r: &[f64],
+) -> Result<Vec<Vec<f64>>, SimError> {
+    let mut cols = Vec::new();
+    for &(i, j) in free {
+        let spec = active[i].ext.params()[j];
+        let p0 = active[i].params[j];
+        let h = if p0 + spec.fd_step <= spec.max {
+            spec.fd_step
+        } else {
+            -spec.fd_step
+        };
+        active[i].params[j] = p0 + h;
+        let rh = residuals(worker, w, active);
+        active[i].params[j] = p0;
+        let rh = rh?;
+        cols.push(rh.iter().zip(r).map(|(a, b)| (a - b) / h).collect());
+    }
+    Ok(cols)
+}
+
+/// The replayed case for [`optimise::levenberg_marquardt`]: `x` holds the free parameters.
+struct Replayed<'a, 'c, 'e> {
+    worker: &'a mut Worker,
+    w: &'a Weighted<'c>,
+    active: &'a mut [Active<'e>],
+    free: Vec<(usize, usize)>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    evaluations: usize,
+    /// ∂r/∂θ of the last linearisation.
+    last_cols: Vec<Vec<f64>>,
+}
+
+impl Replayed<'_, '_, '_> {
+    fn set(&mut self, x: &[f64]) {
+        for (k, &(i, j)) in self.free.iter().enumerate() {
+            self.active[i].params[j] = x[k];
+        }
+    }
+}
+
+impl optimise::Problem for Replayed<'_, '_, '_> {
+    type Point = Vec<f64>;
+    type Error = SimError;
+
+    fn evaluate(&mut self, x: &[f64]) -> Result<Option<Vec<f64>>, SimError> {
+        self.set(x);
+        self.evaluations += 1;
+        residuals(self.worker, self.w, self.active).map(Some)
+    }
+
+    fn cost(&self, r: &Vec<f64>) -> f64 {
+        cost(r)
+    }
+
+    fn linearise(
+        &mut self,
+        x: &[f64],
+        r: &Vec<f64>,
+    ) -> Result<Option<optimise::Linearised>, SimError> {
+        self.set(x);
+        let cols = residual_jacobian(self.worker, self.w, self.active, &self.free, r)?;
+        self.evaluations += cols.len();
+        // ŷ moves against r = (y − ŷ)/σ: S = −∂r/∂θ
+        let sensitivities = Mat::from_fn(r.len(), cols.len(), |k, j| -cols[j][k]);
+        self.last_cols = cols;
+        Ok(Some(optimise::Linearised {
+            sensitivities,
+            residuals: r.clone(),
+        }))
+    }
+
+    fn bounds(&self) -> (&[f64], &[f64]) {
+        (&self.lower, &self.upper)
+    }
+}
+
 /// Levenberg–Marquardt output-error fit of the free parameters of `active` (updated in place).
 pub fn fit(
     worker: &mut Worker,
@@ -314,102 +400,64 @@ pub fn fit(
         .filter(|(_, a)| a.free)
         .flat_map(|(i, a)| (0..a.params.len()).map(move |j| (i, j)))
         .collect();
-    let mut evaluations = 1;
-    let mut r = residuals(worker, w, active)?;
+    let r = residuals(worker, w, active)?;
     let cost_before = cost(&r);
-    let mut c = cost_before;
-    let mut lambda = 1e-3;
-    let jacobian = |worker: &mut Worker,
-                    active: &mut [Active],
-                    r: &[f64],
-                    evaluations: &mut usize|
-     -> Result<Vec<Vec<f64>>, SimError> {
-        let mut cols = Vec::new();
-        for &(i, j) in &free {
-            let spec = active[i].ext.params()[j];
-            let p0 = active[i].params[j];
-            let h = if p0 + spec.fd_step <= spec.max {
-                spec.fd_step
-            } else {
-                -spec.fd_step
-            };
-            active[i].params[j] = p0 + h;
-            let rh = residuals(worker, w, active);
-            active[i].params[j] = p0;
-            *evaluations += 1;
-            let rh = rh?;
-            cols.push(rh.iter().zip(r).map(|(a, b)| (a - b) / h).collect());
-        }
-        Ok(cols)
+    let x: Vec<f64> = free.iter().map(|&(i, j)| active[i].params[j]).collect();
+    let specs: Vec<_> = free
+        .iter()
+        .map(|&(i, j)| active[i].ext.params()[j])
+        .collect();
+    let mut problem = Replayed {
+        worker,
+        w,
+        active,
+        lower: specs.iter().map(|s| s.min).collect(),
+        upper: specs.iter().map(|s| s.max).collect(),
+        free,
+        evaluations: 1,
+        last_cols: Vec::new(),
     };
-    let normal = |cols: &[Vec<f64>], r: &[f64]| {
-        let m = cols.len();
-        let mut a = vec![vec![0.0; m]; m];
-        let mut g = vec![0.0; m];
-        for i in 0..m {
-            for j in i..m {
-                let v: f64 = cols[i].iter().zip(&cols[j]).map(|(x, y)| x * y).sum();
-                a[i][j] = v;
-                a[j][i] = v;
-            }
-            g[i] = cols[i].iter().zip(r).map(|(x, y)| x * y).sum();
-        }
-        (a, g)
+    let options = optimise::Options {
+        max_iterations: max_iter,
+        tolerance: 1e-5,
+        damping: optimise::Damping {
+            initial: 1e-3,
+            min: 1e-6,
+            decrease: 5.0,
+            increase: 8.0,
+            tries: 5,
+        },
+        solver: optimise::StepSolver::Marquardt,
     };
-    let mut last_cols: Vec<Vec<f64>> = Vec::new();
-    for _ in 0..max_iter {
-        let cols = jacobian(worker, active, &r, &mut evaluations)?;
-        last_cols = cols.clone();
-        let (a, g) = normal(&cols, &r);
-        if a.iter().enumerate().all(|(i, row)| row[i] <= 0.0) {
-            break;
-        }
-        let mut accepted = false;
-        for _ in 0..5 {
-            let mut damped = a.clone();
-            for (i, row) in damped.iter_mut().enumerate() {
-                row[i] += lambda * a[i][i].max(1e-12);
-            }
-            let Some(step) = solve(damped, g.iter().map(|v| -v).collect()) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let old: Vec<f64> = free.iter().map(|&(i, j)| active[i].params[j]).collect();
-            for (k, &(i, j)) in free.iter().enumerate() {
-                let spec = active[i].ext.params()[j];
-                active[i].params[j] = (old[k] + step[k]).clamp(spec.min, spec.max);
-            }
-            evaluations += 1;
-            let r_new = residuals(worker, w, active)?;
-            let c_new = cost(&r_new);
-            if c_new < c {
-                accepted = true;
-                let gain = (c - c_new) / c.max(1e-300);
-                r = r_new;
-                c = c_new;
-                lambda = (lambda / 5.0).max(1e-6);
-                if gain < 1e-5 {
-                    lambda = -1.0; // converged marker
-                }
-                break;
-            }
-            for (k, &(i, j)) in free.iter().enumerate() {
-                active[i].params[j] = old[k];
-            }
-            lambda *= 8.0;
-        }
-        if !accepted || lambda < 0.0 {
-            break;
-        }
-    }
+    let min = optimise::levenberg_marquardt(&mut problem, x, r, &options)?;
+    problem.set(&min.x);
+    let r = min.point;
+    let c = cost(&r);
+    let Replayed {
+        worker,
+        active,
+        free,
+        mut evaluations,
+        last_cols,
+        ..
+    } = problem;
     // Cramér–Rao bound at the fitted values with the residual variance estimate s² = J / (n − p).
     // (The cheap pass uses the last iteration's sensitivities instead of new ones.)
     let cols = if final_jacobian || last_cols.is_empty() {
-        jacobian(worker, active, &r, &mut evaluations)?
+        let cols = residual_jacobian(worker, w, active, &free, &r)?;
+        evaluations += free.len();
+        cols
     } else {
         last_cols
     };
-    let (a, _) = normal(&cols, &r);
+    let a: Vec<Vec<f64>> = cols
+        .iter()
+        .map(|ci| {
+            cols.iter()
+                .map(|cj| ci.iter().zip(cj).map(|(x, y)| x * y).sum())
+                .collect()
+        })
+        .collect();
     let n = r.len() as f64;
     let s2 = c / (n - free.len() as f64).max(1.0);
     let m = w.case.len();

@@ -26,7 +26,6 @@
 use std::sync::RwLock;
 use std::time::Instant;
 
-use faer::prelude::*;
 use faer::{Mat, Side};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -38,6 +37,7 @@ use super::model::{Model, Parameter, SimError, StateModel};
 use super::record::{InputHold, InputSignal, Record, Run};
 use super::EstimateError;
 use crate::ident::nrmse_fit as fit_percent;
+use crate::optimise;
 
 mod result;
 mod sensitivity;
@@ -538,153 +538,44 @@ impl Problem<'_> {
 
     /// Bounded Levenberg–Marquardt with R relaxation (module doc).
     fn minimise(&self, options: &Options) -> Result<Solution, EstimateError> {
-        let layout = &self.layout;
-        let p = layout.len();
-        let mut phi = layout.start.clone();
-        layout.clamp(&mut phi);
-        let mut pred =
-            self.predict_all(&phi)
-                .map_err(|(r, source)| EstimateError::StartDiverges {
-                    record: self.records[r].name.clone(),
-                    source,
-                })?;
+        let mut phi = self.layout.start.clone();
+        self.layout.clamp(&mut phi);
+        let start_diverges = |(r, source): (usize, SimError)| EstimateError::StartDiverges {
+            record: self.records[r].name.clone(),
+            source,
+        };
+        let mut pred = self.predict_all(&phi).map_err(start_diverges)?;
         let mut res = self.residuals(&pred);
-        let mut noise = self.noise(&res);
+        let noise = self.noise(&res);
         self.set_gain_noise(&noise);
         if self.method == Method::Fem {
             // q = 0 at the start: the filter is the simulation, the first R is the output-error R
-            pred = self
-                .predict_all(&phi)
-                .map_err(|(r, source)| EstimateError::StartDiverges {
-                    record: self.records[r].name.clone(),
-                    source,
-                })?;
+            pred = self.predict_all(&phi).map_err(start_diverges)?;
             res = self.residuals(&pred);
         }
-        let mut history = vec![self.cost(&res, &noise)];
-        let mut mu = 1e-3;
-        let mut stop = StopReason::MaxIterations;
-        let mut iterations = 0;
-        while iterations < options.max_iterations {
-            iterations += 1;
-            let cols = match self.jacobian(&phi, &pred, false) {
-                Ok(c) => c,
-                Err(_) => {
-                    stop = StopReason::NoDescent;
-                    break;
-                }
-            };
-            let (x, e) = self.weighted(&cols, &res, &noise);
-            let h: Mat<f64> = x.transpose() * &x;
-            let g: Vec<f64> = (0..p)
-                .map(|j| (0..e.len()).map(|i| x[(i, j)] * e[i]).sum())
-                .collect();
-            // active set: at a bound with the gradient pointing out of the box
-            let active: Vec<usize> = (0..p)
-                .filter(|&j| {
-                    let at_lo = phi[j] <= layout.lower[j] && g[j] < 0.0;
-                    let at_hi = phi[j] >= layout.upper[j] && g[j] > 0.0;
-                    !(at_lo || at_hi)
-                })
-                .collect();
-            let q = Self::weighted_sse(&res, &noise);
-            let mut accepted = None;
-            let mut first_decrement = None;
-            for _ in 0..16 {
-                let Some(step) = damped_step(&h, &g, &active, mu) else {
-                    mu *= 10.0;
-                    continue;
-                };
-                let decrement: f64 = step.iter().zip(&g).map(|(a, b)| a * b).sum();
-                first_decrement.get_or_insert(decrement);
-                let mut trial: Vec<f64> = phi.iter().zip(&step).map(|(a, b)| a + b).collect();
-                layout.clamp(&mut trial);
-                // filter error: a step whose gain breaks diag(KC) ≤ 1 is shortened towards φ
-                // (the constraint is a boundary in q; halving keeps the direction)
-                let mut shrink = 0;
-                while shrink < 8 && !self.constraint_holds(&trial) {
-                    for (t, p) in trial.iter_mut().zip(&phi) {
-                        *t = p + 0.5 * (*t - p);
-                    }
-                    shrink += 1;
-                }
-                if shrink == 8 {
-                    mu *= 10.0;
-                    continue;
-                }
-                if let Ok(tp) = self.predict_all(&trial) {
-                    let tr = self.residuals(&tp);
-                    let tq = Self::weighted_sse(&tr, &noise);
-                    if tq.is_finite() && tq < q {
-                        accepted = Some((trial, tp, tr, tq));
-                        break;
-                    }
-                }
-                mu *= 10.0;
-            }
-            let Some((trial, tp, tr, tq)) = accepted else {
-                let small = first_decrement.is_none_or(|d| d <= 10.0 * options.tolerance * q);
-                stop = if small {
-                    StopReason::Converged
-                } else {
-                    StopReason::NoDescent
-                };
-                break;
-            };
-            mu = (mu / 10.0).max(1e-9);
-            let gain = (q - tq) / q;
-            phi = trial;
-            pred = tp;
-            res = tr;
-            let new_noise = self.noise(&res);
-            let noise_change = new_noise
-                .iter()
-                .zip(&noise)
-                .map(|(a, b)| (a / b - 1.0).abs())
-                .fold(0.0, f64::max);
-            if self.method == Method::Fem {
-                let mut compensated = phi.clone();
-                self.compensate(&mut compensated, &noise, &new_noise);
-                self.set_gain_noise(&new_noise);
-                // with the new R the gain may break diag(KC) ≤ 1: reduce the process noise
-                let entries = self.layout.process_noise_entries();
-                for _ in 0..30 {
-                    if self.constraint_holds(&compensated) {
-                        break;
-                    }
-                    entries.iter().for_each(|&j| compensated[j] *= 0.5);
-                }
-                match self.predict_all(&compensated) {
-                    Ok(p) => {
-                        phi = compensated;
-                        pred = p;
-                    }
-                    // the compensated gain breaks the constraint: keep F, re-filter with new R
-                    Err(_) => match self.predict_all(&phi) {
-                        Ok(p) => pred = p,
-                        Err(_) => {
-                            self.set_gain_noise(&noise);
-                            stop = StopReason::NoDescent;
-                            break;
-                        }
-                    },
-                }
-                res = self.residuals(&pred);
-            }
-            noise = new_noise;
-            history.push(self.cost(&res, &noise));
-            if gain < options.tolerance && noise_change < 1e-3 {
-                stop = StopReason::Converged;
-                break;
-            }
-        }
-        Ok(Solution {
-            phi,
-            predictions: pred,
+        let mut relaxed = Relaxed {
+            history: vec![self.cost(&res, &noise)],
+            problem: self,
             noise,
-            iterations,
-            stop,
-            cost_history: history,
+        };
+        let lm = optimise::Options {
+            max_iterations: options.max_iterations,
+            tolerance: options.tolerance,
+            ..optimise::Options::default()
+        };
+        let Ok(min) =
+            optimise::levenberg_marquardt(&mut relaxed, phi, Evaluated { pred, res }, &lm);
+        Ok(Solution {
+            phi: min.x,
+            predictions: min.point.pred,
+            noise: relaxed.noise,
+            iterations: min.iterations,
+            stop: match min.stop {
+                optimise::Stop::Converged => StopReason::Converged,
+                optimise::Stop::MaxIterations => StopReason::MaxIterations,
+                optimise::Stop::NoDescent => StopReason::NoDescent,
+            },
+            cost_history: relaxed.history,
         })
     }
 
@@ -696,27 +587,118 @@ impl Problem<'_> {
     }
 }
 
-/// Solves `(M + μ diag M) δ = g` over the `active` entries (the others stay 0).
-fn damped_step(h: &Mat<f64>, g: &[f64], active: &[usize], mu: f64) -> Option<Vec<f64>> {
-    let n = active.len();
-    let p = g.len();
-    if n == 0 {
-        return None;
+/// Predictions and residuals at one φ.
+struct Evaluated {
+    pred: Predictions,
+    res: Predictions,
+}
+
+/// The fitted problem for [`optimise::levenberg_marquardt`], with the R of the relaxation
+/// algorithm held between steps and the likelihood cost after each.
+struct Relaxed<'p, 'a> {
+    problem: &'p Problem<'a>,
+    noise: Vec<f64>,
+    history: Vec<f64>,
+}
+
+impl optimise::Problem for Relaxed<'_, '_> {
+    type Point = Evaluated;
+    type Error = std::convert::Infallible;
+
+    fn evaluate(&mut self, phi: &[f64]) -> Result<Option<Evaluated>, Self::Error> {
+        Ok(self.problem.predict_all(phi).ok().map(|pred| Evaluated {
+            res: self.problem.residuals(&pred),
+            pred,
+        }))
     }
-    let dmax = active.iter().map(|&j| h[(j, j)]).fold(0.0_f64, f64::max);
-    let a = Mat::from_fn(n, n, |i, k| {
-        let v = h[(active[i], active[k])];
-        if i == k {
-            v + mu * v.max(1e-12 * dmax).max(f64::MIN_POSITIVE)
-        } else {
-            v
+
+    fn cost(&self, at: &Evaluated) -> f64 {
+        Problem::weighted_sse(&at.res, &self.noise)
+    }
+
+    fn linearise(
+        &mut self,
+        phi: &[f64],
+        at: &Evaluated,
+    ) -> Result<Option<optimise::Linearised>, Self::Error> {
+        Ok(self
+            .problem
+            .jacobian(phi, &at.pred, false)
+            .ok()
+            .map(|cols| {
+                let (sensitivities, residuals) = self.problem.weighted(&cols, &at.res, &self.noise);
+                optimise::Linearised {
+                    sensitivities,
+                    residuals,
+                }
+            }))
+    }
+
+    fn bounds(&self) -> (&[f64], &[f64]) {
+        (&self.problem.layout.lower, &self.problem.layout.upper)
+    }
+
+    /// Filter error: a step whose gain breaks diag(KC) ≤ 1 is shortened towards φ (the
+    /// constraint is a boundary in q; halving keeps the direction).
+    fn admit(&mut self, phi: &[f64], trial: &mut [f64]) -> bool {
+        for _ in 0..8 {
+            if self.problem.constraint_holds(trial) {
+                return true;
+            }
+            for (t, p) in trial.iter_mut().zip(phi) {
+                *t = p + 0.5 * (*t - p);
+            }
         }
-    });
-    let b = Mat::from_fn(n, 1, |i, _| g[active[i]]);
-    let x = a.partial_piv_lu().solve(&b);
-    let mut step = vec![0.0; p];
-    for (i, &j) in active.iter().enumerate() {
-        step[j] = x[(i, 0)];
+        false
     }
-    step.iter().all(|v| v.is_finite()).then_some(step)
+
+    /// The new R (Jategaonkar eq. 4.15); filter error: the process noise compensated for it.
+    fn relax(
+        &mut self,
+        phi: &mut Vec<f64>,
+        at: &mut Evaluated,
+    ) -> Result<optimise::Relaxation, Self::Error> {
+        let problem = self.problem;
+        let new_noise = problem.noise(&at.res);
+        let noise_change = new_noise
+            .iter()
+            .zip(&self.noise)
+            .map(|(a, b)| (a / b - 1.0).abs())
+            .fold(0.0, f64::max);
+        if problem.method == Method::Fem {
+            let mut compensated = phi.clone();
+            problem.compensate(&mut compensated, &self.noise, &new_noise);
+            problem.set_gain_noise(&new_noise);
+            // with the new R the gain may break diag(KC) ≤ 1: reduce the process noise
+            let entries = problem.layout.process_noise_entries();
+            for _ in 0..30 {
+                if problem.constraint_holds(&compensated) {
+                    break;
+                }
+                entries.iter().for_each(|&j| compensated[j] *= 0.5);
+            }
+            match problem.predict_all(&compensated) {
+                Ok(p) => {
+                    *phi = compensated;
+                    at.pred = p;
+                }
+                // the compensated gain breaks the constraint: keep F, re-filter with new R
+                Err(_) => match problem.predict_all(phi) {
+                    Ok(p) => at.pred = p,
+                    Err(_) => {
+                        problem.set_gain_noise(&self.noise);
+                        return Ok(optimise::Relaxation::Stop);
+                    }
+                },
+            }
+            at.res = problem.residuals(&at.pred);
+        }
+        self.noise = new_noise;
+        self.history.push(problem.cost(&at.res, &self.noise));
+        Ok(if noise_change < 1e-3 {
+            optimise::Relaxation::Steady
+        } else {
+            optimise::Relaxation::Moving
+        })
+    }
 }

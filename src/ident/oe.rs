@@ -20,9 +20,11 @@
 //! residuals are correlated (see [`coloured_covariance`]).
 
 use super::filter::{simulate, Hold, Svf};
-use super::linalg::{inverse, poly_mul, solve_square};
+use super::linalg::{inverse, poly_mul};
 use super::{ContinuousModel, IdentError};
 use crate::estimate::covariance::coloured_covariance;
+use crate::optimise;
+use faer::Mat;
 
 const MAX_ITER: usize = 100;
 
@@ -32,10 +34,6 @@ fn sim(theta: &[f64], m: usize, u: &[f64], dt_s: f64, delay_s: f64) -> Vec<f64> 
     let mut den = vec![1.0];
     den.extend_from_slice(&theta[m + 1..]);
     simulate(num, &den, u, dt_s, delay_s)
-}
-
-fn sse(y: &[f64], y_hat: &[f64]) -> f64 {
-    y.iter().zip(y_hat).map(|(a, b)| (a - b) * (a - b)).sum()
 }
 
 /// Sensitivity matrix (N × p, row-major) at `theta`; a last column for τ when `with_delay`.
@@ -159,6 +157,96 @@ fn with_offset_column(s: &[f64], p: usize) -> Vec<f64> {
     out
 }
 
+/// The damping schedule and stopping rule of the transfer-function output-error fits: a step
+/// that lowers the cost by less than 1e-12 of it ends the iterations.
+pub(super) fn lm_options(max_iterations: usize) -> optimise::Options {
+    optimise::Options {
+        max_iterations,
+        tolerance: 1e-12,
+        damping: optimise::Damping {
+            initial: 1e-3,
+            min: 1e-12,
+            decrease: 10.0,
+            increase: 10.0,
+            tries: 12,
+        },
+        solver: optimise::StepSolver::Marquardt,
+    }
+}
+
+/// One record's output error for [`optimise::levenberg_marquardt`]: `x = [b…, a…, (τ), c]`.
+struct OutputError<'a> {
+    u: &'a [f64],
+    y: &'a [f64],
+    dt_s: f64,
+    m: usize,
+    with_delay: bool,
+    /// τ when it is not estimated.
+    fixed_delay_s: f64,
+    lower: Vec<f64>,
+}
+
+impl OutputError<'_> {
+    /// `y − ŷ(x)`.
+    fn residuals(&self, x: &[f64]) -> Vec<f64> {
+        let np = x.len() - 1 - usize::from(self.with_delay);
+        let delay_s = if self.with_delay {
+            x[np]
+        } else {
+            self.fixed_delay_s
+        };
+        let c = x[x.len() - 1];
+        let y_hat = sim(&x[..np], self.m, self.u, self.dt_s, delay_s);
+        self.y.iter().zip(&y_hat).map(|(a, b)| a - b - c).collect()
+    }
+}
+
+impl optimise::Problem for OutputError<'_> {
+    type Point = Vec<f64>;
+    type Error = std::convert::Infallible;
+
+    fn evaluate(&mut self, x: &[f64]) -> Result<Option<Vec<f64>>, Self::Error> {
+        Ok(Some(self.residuals(x)))
+    }
+
+    fn cost(&self, r: &Vec<f64>) -> f64 {
+        r.iter().map(|v| v * v).sum()
+    }
+
+    fn linearise(
+        &mut self,
+        x: &[f64],
+        r: &Vec<f64>,
+    ) -> Result<Option<optimise::Linearised>, Self::Error> {
+        let np = x.len() - 1 - usize::from(self.with_delay);
+        let delay_s = if self.with_delay {
+            x[np]
+        } else {
+            self.fixed_delay_s
+        };
+        let p = x.len() - 1;
+        let s = with_offset_column(
+            &sensitivities(
+                &x[..np],
+                self.m,
+                self.u,
+                self.dt_s,
+                delay_s,
+                self.with_delay,
+            ),
+            p,
+        );
+        Ok(Some(optimise::Linearised {
+            sensitivities: Mat::from_fn(r.len(), p + 1, |k, j| s[k * (p + 1) + j]),
+            residuals: r.clone(),
+        }))
+    }
+
+    fn bounds(&self) -> (&[f64], &[f64]) {
+        (&self.lower, &[])
+    }
+}
+
 /// Output-error estimate from `start` (usually SRIVC); `with_delay` adds τ as a parameter.
 ///
 /// A constant output offset `c` (ŷ = B/A·u + c) is always estimated beside the model: the trim
@@ -175,73 +263,46 @@ pub(crate) fn oe(
 ) -> Result<ContinuousModel, IdentError> {
     let m = start.num.len() - 1;
     let n = start.den.len() - 1;
-    let mut theta: Vec<f64> = start.num.clone();
-    theta.extend_from_slice(&start.den[1..]);
-    let mut delay_s = start.delay_s;
-    let mut c = start.y_bias;
     let np = m + 1 + n;
     let p = np + usize::from(with_delay);
     let pf = p + 1;
-    let sim_c = |theta: &[f64], delay_s: f64, c: f64| {
-        let mut v = sim(theta, m, u, dt_s, delay_s);
-        v.iter_mut().for_each(|x| *x += c);
-        v
+    // x = [b…, a…, (τ), c]; τ ≥ 0
+    let mut x: Vec<f64> = start.num.clone();
+    x.extend_from_slice(&start.den[1..]);
+    if with_delay {
+        x.push(start.delay_s);
+    }
+    x.push(start.y_bias);
+    let mut lower = vec![f64::NEG_INFINITY; pf];
+    if with_delay {
+        lower[np] = 0.0;
+    }
+    let mut problem = OutputError {
+        u,
+        y,
+        dt_s,
+        m,
+        with_delay,
+        fixed_delay_s: start.delay_s,
+        lower,
     };
-    let mut cost = sse(y, &sim_c(&theta, delay_s, c));
-    if !cost.is_finite() {
+    let r0 = problem.residuals(&x);
+    if !optimise::Problem::cost(&problem, &r0).is_finite() {
         return Err(IdentError::Failed {
             method: "oe".into(),
             reason: "the starting model's simulation overflows".into(),
         });
     }
-    let mut mu = 1e-3;
-    for _ in 0..MAX_ITER {
-        let s = with_offset_column(&sensitivities(&theta, m, u, dt_s, delay_s, with_delay), p);
-        let y_hat = sim_c(&theta, delay_s, c);
-        let r: Vec<f64> = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
-        let (h, g) = normal(&s, &r, pf);
-        let mut accepted = false;
-        let mut last_gain = 0.0;
-        for _ in 0..12 {
-            let mut hm = h.clone();
-            for a in 0..pf {
-                hm[a * pf + a] += mu * h[a * pf + a].max(1e-300);
-            }
-            let Some(delta) = solve_square(&hm, &g) else {
-                mu *= 10.0;
-                continue;
-            };
-            let trial: Vec<f64> = theta.iter().zip(&delta).map(|(t, d)| t + d).collect();
-            let trial_delay = if with_delay {
-                (delay_s + delta[np]).max(0.0)
-            } else {
-                delay_s
-            };
-            let trial_c = c + delta[p];
-            let cost_trial = sse(y, &sim_c(&trial[..np], trial_delay, trial_c));
-            if cost_trial.is_finite() && cost_trial < cost {
-                last_gain = (cost - cost_trial) / cost;
-                theta = trial[..np].to_vec();
-                delay_s = trial_delay;
-                c = trial_c;
-                cost = cost_trial;
-                mu = (mu / 10.0).max(1e-12);
-                accepted = true;
-                break;
-            }
-            mu *= 10.0;
-        }
-        if !accepted || last_gain < 1e-12 {
-            break;
-        }
-    }
+    let Ok(min) = optimise::levenberg_marquardt(&mut problem, x, r0, &lm_options(MAX_ITER));
+    let theta = min.x[..np].to_vec();
+    let delay_s = if with_delay { min.x[np] } else { start.delay_s };
+    let c = min.x[p];
     // covariance at the optimum, from central-difference sensitivities of the exact simulation
     let s = with_offset_column(
         &fd_sensitivities(&theta, m, u, dt_s, delay_s, with_delay),
         p,
     );
-    let y_hat = sim_c(&theta, delay_s, c);
-    let r: Vec<f64> = y.iter().zip(&y_hat).map(|(a, b)| a - b).collect();
+    let r = problem.residuals(&min.x);
     let (mmat, _) = normal(&s, &r, pf);
     let cov = inverse(&mmat, pf).map(|minv| {
         let full = coloured_covariance(&s, &r, &minv, pf);

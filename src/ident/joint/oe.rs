@@ -2,8 +2,10 @@
 //! the method table in [`super`]).
 
 use super::{linear_system, sse, Centered, Nuisance};
-use crate::ident::linalg::{inverse, lstsq_qr, solve_square};
+use crate::ident::linalg::{inverse, lstsq_qr};
 use crate::ident::{ContinuousModel, IdentError};
+use crate::optimise;
+use faer::Mat;
 
 /// Variable-projection output error (Golub & Pereyra): Levenberg–Marquardt on `a₁…a_n` of the
 /// projected cost `min over (B, x_r, c_r)` of the joint simulation error; forward-difference
@@ -31,74 +33,71 @@ pub(super) fn oe_joint(
             .collect();
         r.iter().all(|v| v.is_finite()).then_some((r, theta))
     };
-    let mut a = start.den[1..].to_vec();
-    let Some((mut r, mut theta)) = residual(&a) else {
+    let a = start.den[1..].to_vec();
+    let Some(at_start) = residual(&a) else {
         return Err(IdentError::Failed {
             method: "oe (joint)".into(),
             reason: "the starting model cannot be simulated".into(),
         });
     };
-    let mut cost: f64 = r.iter().map(|v| v * v).sum();
-    let mut mu = 1e-3;
-    for _ in 0..MAX_ITER {
-        // Jacobian of the projected residual by forward differences.
-        let mut jac = vec![0.0; r.len() * n];
-        for i in 0..n {
-            let h = 1e-6 * a[i].abs().max(1e-3);
-            let mut ap = a.clone();
-            ap[i] += h;
-            let Some((rp, _)) = residual(&ap) else {
-                continue;
-            };
-            for k in 0..r.len() {
-                jac[k * n + i] = (rp[k] - r[k]) / h;
-            }
-        }
-        let mut jtj = vec![0.0; n * n];
-        let mut jtr = vec![0.0; n];
-        for k in 0..r.len() {
-            let row = &jac[k * n..(k + 1) * n];
-            for i in 0..n {
-                jtr[i] -= row[i] * r[k];
-                for j in 0..n {
-                    jtj[i * n + j] += row[i] * row[j];
-                }
-            }
-        }
-        let mut accepted = false;
-        let mut gain = 0.0;
-        for _ in 0..12 {
-            let mut h = jtj.clone();
-            for i in 0..n {
-                h[i * n + i] += mu * jtj[i * n + i].max(1e-300);
-            }
-            let Some(delta) = solve_square(&h, &jtr) else {
-                mu *= 10.0;
-                continue;
-            };
-            let trial: Vec<f64> = a.iter().zip(&delta).map(|(x, d)| x + d).collect();
-            if let Some((rt, tt)) = residual(&trial) {
-                let ct: f64 = rt.iter().map(|v| v * v).sum();
-                if ct < cost {
-                    gain = (cost - ct) / cost;
-                    a = trial;
-                    r = rt;
-                    theta = tt;
-                    cost = ct;
-                    mu = (mu / 10.0).max(1e-12);
-                    accepted = true;
-                    break;
-                }
-            }
-            mu *= 10.0;
-        }
-        if !accepted || gain < 1e-12 {
-            break;
-        }
-    }
+    let mut problem = Projected { residual, n };
+    let Ok(min) = optimise::levenberg_marquardt(
+        &mut problem,
+        a,
+        at_start,
+        &crate::ident::oe::lm_options(MAX_ITER),
+    );
+    let (a, theta) = (min.x, min.point.1);
     let mut den = vec![1.0];
     den.extend_from_slice(&a);
     Ok(ContinuousModel::new(theta[..=m].to_vec(), den, delay_s))
+}
+
+/// The projected residual `r(a)` (with the eliminated linear parameters) for
+/// [`optimise::levenberg_marquardt`], its Jacobian by forward differences.
+struct Projected<F> {
+    residual: F,
+    n: usize,
+}
+
+impl<F> optimise::Problem for Projected<F>
+where
+    F: Fn(&[f64]) -> Option<(Vec<f64>, Vec<f64>)>,
+{
+    type Point = (Vec<f64>, Vec<f64>);
+    type Error = std::convert::Infallible;
+
+    fn evaluate(&mut self, a: &[f64]) -> Result<Option<Self::Point>, Self::Error> {
+        Ok((self.residual)(a))
+    }
+
+    fn cost(&self, (r, _): &Self::Point) -> f64 {
+        r.iter().map(|v| v * v).sum()
+    }
+
+    fn linearise(
+        &mut self,
+        a: &[f64],
+        (r, _): &Self::Point,
+    ) -> Result<Option<optimise::Linearised>, Self::Error> {
+        // ∂ŷ/∂a = −∂r/∂a; a column whose perturbed model cannot be simulated stays 0
+        let mut s = Mat::<f64>::zeros(r.len(), self.n);
+        for i in 0..self.n {
+            let h = 1e-6 * a[i].abs().max(1e-3);
+            let mut ap = a.to_vec();
+            ap[i] += h;
+            let Some((rp, _)) = (self.residual)(&ap) else {
+                continue;
+            };
+            for k in 0..r.len() {
+                s[(k, i)] = (r[k] - rp[k]) / h;
+            }
+        }
+        Ok(Some(optimise::Linearised {
+            sensitivities: s,
+            residuals: r.clone(),
+        }))
+    }
 }
 
 /// White-residual Cramér–Rao bound of `[b…, a…]` for the joint output-error model: `σ²(JᵀJ)⁻¹`
