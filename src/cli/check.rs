@@ -54,9 +54,8 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     let from = args.from_s.unwrap_or(f64::NEG_INFINITY);
     let to = args.to_s.unwrap_or(f64::INFINITY);
     if args.from_s.is_some() || args.to_s.is_some() {
-        let start = rec.time_s.partition_point(|&t| t < from);
-        let end = rec.time_s.partition_point(|&t| t <= to);
-        if end <= start {
+        let window = rec.between(from, to);
+        if window.is_empty() {
             return Err(UsageError(format!(
                 "{}: no sample lies within --from-s {} .. --to-s {} (the record spans {} .. {} s)",
                 args.file.display(),
@@ -67,7 +66,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
             ))
             .into());
         }
-        rec = rec.slice(start, end);
+        rec = window;
     }
     let opts = CheckOptions {
         scale_factors: !args.no_scale_factors,

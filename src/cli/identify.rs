@@ -109,28 +109,17 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         ))
     })?;
     // uniform sampling is assumed by every estimator: resample jittery records onto the median step
-    let worst_jitter = rec
-        .time_s
-        .windows(2)
-        .map(|w| ((w[1] - w[0]) - dt_s).abs())
-        .fold(0.0, f64::max);
-    let (u, y): (Vec<f64>, Vec<f64>) = if worst_jitter > 0.01 * dt_s {
-        let t0 = rec.time_s[0];
-        let n = ((rec.time_s[rec.len() - 1] - t0) / dt_s).floor() as usize + 1;
-        let grid: Vec<f64> = (0..n).map(|k| t0 + k as f64 * dt_s).collect();
+    let (uy, jitter_s) = crate::signal::on_uniform_step(&rec.time_s, &[u, y], dt_s);
+    if let Some(worst) = jitter_s {
         eprintln!(
             "note: {} is not uniformly sampled (step varies by up to {:.3} ms); resampled at {:.4} s",
             data_path.display(),
-            1e3 * worst_jitter,
+            1e3 * worst,
             dt_s
         );
-        (
-            crate::signal::resample_linear(&rec.time_s, u, &grid),
-            crate::signal::resample_linear(&rec.time_s, y, &grid),
-        )
-    } else {
-        (u.to_vec(), y.to_vec())
-    };
+    }
+    let mut uy = uy.into_iter();
+    let (u, y) = (uy.next().unwrap_or_default(), uy.next().unwrap_or_default());
     let (poles, zeros) = given_order(args);
     let opts = IdentOptions {
         method,
