@@ -533,23 +533,31 @@ mod tests {
         (a - b).abs() / b.abs()
     }
 
-    #[test]
-    fn round_trip_with_lift_known_returns_all_six_pitch_derivatives_to_1e_6() {
-        // Specification: derivatives → θ/δe → derivatives, identifiable ones to 1e-6 relative.
-        let truth = c172x_model(Assumptions::paper());
-        let free = [D::CD0, D::CDCL2, D::Cmalpha, D::Cmalphadot, D::Cmq, D::Cmde];
-        let tfs = IdentifiedTfs::paper(
-            Some(exact_tf(&truth, TfOutput::THETA_ELEVATOR, 3)),
+    /// The paper's derivatives of one axis.
+    fn paper_set(longitudinal: bool) -> Vec<D> {
+        D::PAPER
+            .iter()
+            .copied()
+            .filter(|d| d.is_longitudinal() == longitudinal)
+            .collect()
+    }
+
+    /// The paper's θ/δe alone, exact.
+    fn theta_elevator_only(truth: &AeroModel) -> IdentifiedTfs {
+        IdentifiedTfs::paper(
+            Some(exact_tf(truth, TfOutput::THETA_ELEVATOR, 3)),
             None,
             None,
-        );
-        let est = estimate_derivatives(
-            &perturbed(&truth, &free),
-            &tfs,
-            &free,
-            FitOptions::default(),
         )
-        .unwrap();
+    }
+
+    /// The fit of `free` to `tfs` started from [`perturbed`].
+    fn fit_from_perturbed(truth: &AeroModel, tfs: &IdentifiedTfs, free: &[D]) -> DerivativeEstimate {
+        estimate_derivatives(&perturbed(truth, free), tfs, free, FitOptions::default()).unwrap()
+    }
+
+    /// Every free derivative back to 1e-6 relative.
+    fn assert_all_recovered(est: &DerivativeEstimate, truth: &AeroModel, free: &[D]) {
         for (k, &d) in free.iter().enumerate() {
             assert!(
                 rel(est.values[k], truth.derivatives.get(d)) < 1e-6,
@@ -558,6 +566,23 @@ mod tests {
                 truth.derivatives.get(d)
             );
         }
+    }
+
+    /// The message of a fit of `free` to `tfs` that must fail.
+    fn fit_error(truth: &AeroModel, tfs: &IdentifiedTfs, free: &[D]) -> String {
+        estimate_derivatives(truth, tfs, free, FitOptions::default())
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn round_trip_with_lift_known_returns_all_six_pitch_derivatives_to_1e_6() {
+        // Specification: derivatives → θ/δe → derivatives, identifiable ones to 1e-6 relative.
+        let truth = c172x_model(Assumptions::paper());
+        let free = [D::CD0, D::CDCL2, D::Cmalpha, D::Cmalphadot, D::Cmq, D::Cmde];
+        let tfs = theta_elevator_only(&truth);
+        let est = fit_from_perturbed(&truth, &tfs, &free);
+        assert_all_recovered(&est, &truth, &free);
         assert!(est.identifiability.null_space.is_empty());
     }
 
@@ -567,23 +592,9 @@ mod tests {
         // the one flagged direction. The direction is local (the solution set is curved), so from an 8 %
         // start the error's component off the flagged direction is second order: < 5 % of its length.
         let truth = c172x_model(Assumptions::paper());
-        let free: Vec<D> = D::PAPER
-            .iter()
-            .copied()
-            .filter(|d| d.is_longitudinal())
-            .collect();
-        let tfs = IdentifiedTfs::paper(
-            Some(exact_tf(&truth, TfOutput::THETA_ELEVATOR, 3)),
-            None,
-            None,
-        );
-        let est = estimate_derivatives(
-            &perturbed(&truth, &free),
-            &tfs,
-            &free,
-            FitOptions::default(),
-        )
-        .unwrap();
+        let free = paper_set(true);
+        let tfs = theta_elevator_only(&truth);
+        let est = fit_from_perturbed(&truth, &tfs, &free);
         let k_alpha = free.iter().position(|&d| d == D::Cmalpha).unwrap();
         assert!(rel(est.values[k_alpha], truth.derivatives.get(D::Cmalpha)) < 1e-6);
         assert!(
@@ -631,11 +642,7 @@ mod tests {
     #[test]
     fn round_trip_lateral_with_sideslip_and_yaw_rate_returns_all_twelve_to_1e_6() {
         let truth = c172x_model(Assumptions::paper());
-        let free: Vec<D> = D::PAPER
-            .iter()
-            .copied()
-            .filter(|d| !d.is_longitudinal())
-            .collect();
+        let free = paper_set(false);
         let mut tfs = IdentifiedTfs::paper(
             None,
             Some(exact_tf(&truth, TfOutput::PHI_AILERON, 3)),
@@ -651,21 +658,8 @@ mod tests {
                 tfs.tfs.push((o, exact_tf(&truth, o, 4)));
             }
         }
-        let est = estimate_derivatives(
-            &perturbed(&truth, &free),
-            &tfs,
-            &free,
-            FitOptions::default(),
-        )
-        .unwrap();
-        for (k, &d) in free.iter().enumerate() {
-            assert!(
-                rel(est.values[k], truth.derivatives.get(d)) < 1e-6,
-                "{d}: {} vs {}",
-                est.values[k],
-                truth.derivatives.get(d)
-            );
-        }
+        let est = fit_from_perturbed(&truth, &tfs, &free);
+        assert_all_recovered(&est, &truth, &free);
     }
 
     #[test]
@@ -713,14 +707,7 @@ mod tests {
             den: vec![1.0, 2.0, 3.0, 4.0],
             covariance: None,
         };
-        let err = estimate_derivatives(
-            &truth,
-            &IdentifiedTfs::paper(Some(third_order), None, None),
-            &free,
-            FitOptions::default(),
-        )
-        .unwrap_err()
-        .to_string();
+        let err = fit_error(&truth, &IdentifiedTfs::paper(Some(third_order), None, None), &free);
         assert!(
             err.contains("theta_rad/elevator_rad")
                 && err.contains("degree 3")
@@ -729,25 +716,12 @@ mod tests {
         );
         let mut tf = exact_tf(&truth, TfOutput::THETA_ELEVATOR, 3);
         tf.covariance = Some(Mat::identity(3, 3));
-        let err = estimate_derivatives(
-            &truth,
-            &IdentifiedTfs::paper(Some(tf), None, None),
-            &free,
-            FitOptions::default(),
-        )
-        .unwrap_err()
-        .to_string();
+        let err = fit_error(&truth, &IdentifiedTfs::paper(Some(tf), None, None), &free);
         assert!(
             err.contains("covariance") && err.contains("7 entries"),
             "{err}"
         );
-        let err = estimate_derivatives(
-            &truth,
-            &IdentifiedTfs::default(),
-            &free,
-            FitOptions::default(),
-        )
-        .unwrap_err();
-        assert!(err.to_string().contains("no identified transfer function"));
+        let err = fit_error(&truth, &IdentifiedTfs::default(), &free);
+        assert!(err.contains("no identified transfer function"));
     }
 }

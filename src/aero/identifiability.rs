@@ -309,18 +309,35 @@ fn verdict_of(core: &Core, k: usize, derivatives: &[Derivative], scale: &[f64]) 
         .map(|i| (core.v[(k, i)] / core.singular_values[i]).powi(2))
         .sum::<f64>()
         .sqrt();
-    if relative_std > WEAK_RELATIVE_STD {
+    let weak = relative_std > WEAK_RELATIVE_STD;
+    let partner = if weak {
         // Correlation of the estimates from (JᵀJ)⁺ = V Σ⁻² Vᵀ over the determined subspace.
         let cov = |a: usize, b: usize| -> f64 {
             (0..core.rank)
                 .map(|i| core.v[(a, i)] * core.v[(b, i)] / core.singular_values[i].powi(2))
                 .sum()
         };
-        let correlated_with = (0..p)
+        (0..p)
             .filter(|&j| j != k)
             .map(|j| (j, cov(k, j) / (cov(k, k) * cov(j, j)).sqrt()))
             .filter(|(_, rho)| rho.is_finite())
             .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+    } else {
+        None
+    };
+    weak_or_determined(weak, relative_std, partner, derivatives)
+}
+
+/// [`Verdict::Weak`] (naming the most correlated estimate `partner` = (index, ρ) when |ρ| is above
+/// [`HIGH_CORRELATION`]) or [`Verdict::Determined`].
+fn weak_or_determined(
+    weak: bool,
+    relative_std: f64,
+    partner: Option<(usize, f64)>,
+    derivatives: &[Derivative],
+) -> Verdict {
+    if weak {
+        let correlated_with = partner
             .filter(|(_, rho)| rho.abs() > HIGH_CORRELATION)
             .map(|(j, rho)| (derivatives[j], rho));
         Verdict::Weak {
@@ -401,17 +418,12 @@ fn data_verdict(
             };
         }
     }
-    if relative_std > WEAK_RELATIVE_SE {
-        let correlated_with = partner
-            .filter(|(_, rho)| rho.abs() > HIGH_CORRELATION)
-            .map(|(j, rho)| (derivatives[j], rho));
-        Verdict::Weak {
-            relative_std,
-            correlated_with,
-        }
-    } else {
-        Verdict::Determined { relative_std }
-    }
+    weak_or_determined(
+        relative_std > WEAK_RELATIVE_SE,
+        relative_std,
+        partner,
+        derivatives,
+    )
 }
 
 /// Re-judges the verdicts of `report` at an estimate, from the estimate's own covariance: the honest
@@ -448,20 +460,7 @@ pub(crate) fn assess_estimate(
                 .collect()
         })
         .collect();
-    let axes: Vec<Axis> = {
-        let mut a: Vec<Axis> = report.outputs.iter().map(|o| o.axis).collect();
-        a.dedup();
-        a
-    };
-    let candidates: Vec<TfOutput> = axes
-        .iter()
-        .flat_map(|&axis| {
-            (0..4).flat_map(move |state| {
-                (0..axis.input_names().len()).map(move |input| TfOutput { axis, state, input })
-            })
-        })
-        .filter(|o| !report.outputs.contains(o))
-        .collect();
+    let candidates = unused_outputs(&report.outputs);
     // Whitened Jacobian of each candidate's coefficients, z units, weights 1/(ε |c|).
     let h = 1e-6;
     let mut extra_info = Vec::with_capacity(candidates.len());
@@ -604,6 +603,20 @@ pub(crate) fn assess_estimate(
     Ok(())
 }
 
+/// Candidate extra measurements: every output/input pair of the axes in `outputs` that is not used yet.
+fn unused_outputs(outputs: &[TfOutput]) -> Vec<TfOutput> {
+    let mut axes: Vec<Axis> = outputs.iter().map(|o| o.axis).collect();
+    axes.dedup();
+    axes.iter()
+        .flat_map(|&axis| {
+            (0..4).flat_map(move |state| {
+                (0..axis.input_names().len()).map(move |input| TfOutput { axis, state, input })
+            })
+        })
+        .filter(|o| !outputs.contains(o))
+        .collect()
+}
+
 fn rse_of(v: &Verdict) -> f64 {
     match v {
         Verdict::Determined { relative_std }
@@ -667,21 +680,7 @@ pub(crate) fn analyse_with_weights(
         })
         .collect();
 
-    // Candidate extra measurements: every output/input pair of the axes in play that is not used yet.
-    let axes: Vec<Axis> = {
-        let mut a: Vec<Axis> = outputs.iter().map(|o| o.axis).collect();
-        a.dedup();
-        a
-    };
-    let candidates: Vec<TfOutput> = axes
-        .iter()
-        .flat_map(|&axis| {
-            (0..4).flat_map(move |state| {
-                (0..axis.input_names().len()).map(move |input| TfOutput { axis, state, input })
-            })
-        })
-        .filter(|o| !outputs.contains(o))
-        .collect();
+    let candidates = unused_outputs(outputs);
 
     let mut verdicts = Vec::with_capacity(p);
     for k in 0..p {

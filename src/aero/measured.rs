@@ -166,30 +166,6 @@ pub struct MeasuredEquationError {
 /// One coefficient's regression over all records: term names, regressor columns, response.
 type Stacked = (Vec<String>, Vec<Vec<f64>>, Vec<f64>);
 
-/// The equation-error channels of a record already moved to the CG.
-fn channels(rec: &data::FlightRecord) -> Channels<'_> {
-    let col = |c: &str| rec.column(c);
-    Channels {
-        time_s: &rec.time_s,
-        alpha_rad: col("alpha_rad"),
-        beta_rad: col("beta_rad"),
-        p_rad_s: col("p_rad_s"),
-        q_rad_s: col("q_rad_s"),
-        r_rad_s: col("r_rad_s"),
-        phi_rad: col("phi_rad"),
-        theta_rad: col("theta_rad"),
-        airspeed_m_s: col("airspeed_m_s"),
-        elevator_rad: col("elevator_rad"),
-        aileron_rad: col("aileron_rad"),
-        rudder_rad: col("rudder_rad"),
-        ay_m_s2: col("ay_m_s2"),
-        az_m_s2: col("az_m_s2"),
-        ax_m_s2: col("ax_m_s2"),
-        qbar_pa: col("qbar_pa"),
-        thrust_n: col("thrust_n"),
-    }
-}
-
 /// Equation error (Morelli & Klein §5.1, [`equation_error`]) over several measured records: each record's
 /// coefficients are reconstructed with its own airspeed, dynamic pressure and density and its sensors moved
 /// to the CG; the regressions of all records are stacked into one least-squares problem per coefficient.
@@ -282,7 +258,7 @@ pub fn equation_error_measured(
             ..EquationErrorOptions::default()
         };
         let res =
-            equation_error(&channels(&rec), &mass, &geometry, &options).map_err(|e| match e {
+            equation_error(&Channels::from_columns(&rec), &mass, &geometry, &options).map_err(|e| match e {
                 AeroError::BadRecord(m) => bad(m),
                 other => MeasuredError::Aero(other),
             })?;

@@ -208,13 +208,8 @@ impl AeroModel {
     /// The longitudinal submodel (states u, α, q, θ; input δe).
     pub fn longitudinal(&self) -> Result<LinearModel, AeroError> {
         self.validate()?;
-        let (f, m, g, d, a) = (
-            &self.flight,
-            &self.mass,
-            &self.geometry,
-            &self.derivatives,
-            &self.assumptions,
-        );
+        let (f, m, g) = (&self.flight, &self.mass, &self.geometry);
+        let (d, a) = (&self.derivatives, &self.assumptions);
         let v = f.airspeed_m_s;
         let qs = f.dynamic_pressure_pa() * g.wing_area_m2;
         let kc = g.chord_m / (2.0 * v);
@@ -283,13 +278,8 @@ impl AeroModel {
     /// The lateral-directional submodel (states β, p, r, φ; inputs δa, δr).
     pub fn lateral(&self) -> Result<LinearModel, AeroError> {
         self.validate()?;
-        let (f, m, g, d, a) = (
-            &self.flight,
-            &self.mass,
-            &self.geometry,
-            &self.derivatives,
-            &self.assumptions,
-        );
+        let (f, m, g) = (&self.flight, &self.mass, &self.geometry);
+        let (d, a) = (&self.derivatives, &self.assumptions);
         let v = f.airspeed_m_s;
         let qs = f.dynamic_pressure_pa() * g.wing_area_m2;
         let kb = g.span_m / (2.0 * v);

@@ -47,7 +47,7 @@ use crate::data::{self, G0_M_S2};
 use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signature, StateModel};
 
 mod free;
-use free::{equation_error_starts, parameters, LAT_FREE, LON_FREE};
+use free::{equation_error_starts, parameters, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
 
 /// Column of the air density input (a constant per record).
@@ -380,7 +380,7 @@ fn fit_longitudinal(
     }
     let params = parameters(
         &LONGITUDINAL_PARAMETERS,
-        &LON_FREE,
+        &LON_HELD,
         &starts,
         &fallback,
         &still,
@@ -472,7 +472,7 @@ fn fit_lateral(
     }
     let params = parameters(
         &LATERAL_PARAMETERS,
-        &LAT_FREE,
+        &LAT_HELD,
         &starts,
         &fallback,
         &still,

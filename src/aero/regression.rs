@@ -67,6 +67,32 @@ pub struct FlightRecord<'a> {
     pub thrust_n: Option<&'a [f64]>,
 }
 
+impl<'a> FlightRecord<'a> {
+    /// The channels of a schema record (docs/data.md), borrowed by column name; absent columns `None`.
+    pub fn from_columns(rec: &'a crate::data::FlightRecord) -> Self {
+        let col = |c: &str| rec.column(c);
+        Self {
+            time_s: &rec.time_s,
+            alpha_rad: col("alpha_rad"),
+            beta_rad: col("beta_rad"),
+            p_rad_s: col("p_rad_s"),
+            q_rad_s: col("q_rad_s"),
+            r_rad_s: col("r_rad_s"),
+            phi_rad: col("phi_rad"),
+            theta_rad: col("theta_rad"),
+            airspeed_m_s: col("airspeed_m_s"),
+            elevator_rad: col("elevator_rad"),
+            aileron_rad: col("aileron_rad"),
+            rudder_rad: col("rudder_rad"),
+            ay_m_s2: col("ay_m_s2"),
+            az_m_s2: col("az_m_s2"),
+            ax_m_s2: col("ax_m_s2"),
+            qbar_pa: col("qbar_pa"),
+            thrust_n: col("thrust_n"),
+        }
+    }
+}
+
 /// Tuning of the equation-error regression.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EquationErrorOptions {

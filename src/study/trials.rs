@@ -330,20 +330,7 @@ pub fn equation_error_with(
     include_alphadot: bool,
     simulated: bool,
 ) -> Result<EquationErrorResult, AeroError> {
-    let col = |c: &str| rec.column(c);
     let record = FlightRecord {
-        time_s: &rec.time_s,
-        alpha_rad: col("alpha_rad"),
-        beta_rad: col("beta_rad"),
-        p_rad_s: col("p_rad_s"),
-        q_rad_s: col("q_rad_s"),
-        r_rad_s: col("r_rad_s"),
-        phi_rad: col("phi_rad"),
-        theta_rad: col("theta_rad"),
-        airspeed_m_s: col("airspeed_m_s"),
-        elevator_rad: col("elevator_rad"),
-        aileron_rad: col("aileron_rad"),
-        rudder_rad: col("rudder_rad"),
         // The recorded specific forces are at the pilot/IMU, not the CG: let the regression use the
         // differentiated body velocities instead.
         ay_m_s2: None,
@@ -351,6 +338,7 @@ pub fn equation_error_with(
         ax_m_s2: None,
         qbar_pa: None,
         thrust_n: None,
+        ..FlightRecord::from_columns(rec)
     };
     let options = EquationErrorOptions {
         air_density_kg_m3: truth.rho_kg_m3,

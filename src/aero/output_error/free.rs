@@ -64,50 +64,34 @@ pub fn parse_free(entries: &[String]) -> Result<Vec<FreeChoice>, String> {
         .collect()
 }
 
-/// Parameters free by default (module doc).
-pub(super) const LON_FREE: [&str; 10] = [
-    "CL_0",
-    "CL_alpha",
-    "CL_de",
-    "CD_0",
-    "CD_alpha",
-    "Cm_0",
-    "Cm_alpha",
-    "Cm_q",
-    "Cm_de",
-    "tau_alpha_s",
+/// Parameters held by default (module doc); every other parameter of the axis starts free.
+pub(super) const LON_HELD: [&str; 7] = [
+    "CL_q",
+    "CL_alphadot",
+    "CL_V",
+    "CD_de",
+    "CD_V",
+    "Cm_alphadot",
+    "Cm_V",
 ];
-pub(super) const LAT_FREE: [&str; 16] = [
-    "CY_0",
-    "CY_beta",
-    "CY_dr",
-    "Cl_0",
-    "Cl_beta",
-    "Cl_p",
-    "Cl_r",
-    "Cl_da",
-    "Cl_dr",
-    "Cn_0",
-    "Cn_beta",
-    "Cn_p",
-    "Cn_r",
-    "Cn_da",
-    "Cn_dr",
-    "tau_beta_s",
-];
+pub(super) const LAT_HELD: [&str; 3] = ["CY_p", "CY_r", "CY_da"];
 
 /// Start value and free flag of every parameter of a model (module doc), with the choices applied.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn parameters(
     names: &[&'static str],
-    default_free: &[&str],
+    default_held: &[&str],
     starts: &BTreeMap<String, f64>,
     fallback: &BTreeMap<&'static str, f64>,
     still: &BTreeSet<&'static str>,
     options: &OutputErrorOptions,
     notes: &mut Vec<String>,
 ) -> Vec<Parameter> {
-    let mut free: BTreeSet<&str> = default_free.iter().copied().collect();
+    let mut free: BTreeSet<&str> = names
+        .iter()
+        .copied()
+        .filter(|n| !default_held.contains(n))
+        .collect();
     if options.alphadot {
         free.extend(["CL_alphadot", "Cm_alphadot"]);
     }

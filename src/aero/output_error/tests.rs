@@ -139,7 +139,7 @@ fn longitudinal_output_error_recovers_the_derivatives_it_simulated() {
         .collect();
     let params = parameters(
         &LONGITUDINAL_PARAMETERS,
-        &LON_FREE,
+        &LON_HELD,
         &starts,
         &BTreeMap::new(),
         &BTreeSet::new(),

@@ -1,0 +1,267 @@
+//! The output-error fit of the compatibility check: Gauss–Newton with Levenberg–Marquardt damping and the
+//! diagonal residual covariance re-estimated every iteration (Klein & Morelli §6.2, eq. 6.51–6.56), and the
+//! Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein, J. Aircraft 1997).
+
+use faer::Mat;
+
+use super::kinematics::{residuals, Data, Param};
+use crate::optimise;
+
+/// `M⁻¹ S M⁻¹`, `S_ab = Σ_o Σ_k Σ_l J_a[o][k] ρ_o(l) J_b[o][k+l] / σ_o⁴`, with ρ_o the biased
+/// residual autocovariance of output o for |l| ≤ 2 s (Morelli & Klein 1997, eq. 20).
+pub(super) fn coloured_residual_covariance(
+    m_inv: &[f64],
+    j: &[Vec<Vec<f64>>],
+    r: &[Vec<f64>],
+    np: usize,
+    n: usize,
+) -> Vec<f64> {
+    let max_lag = (n / 4).min(100);
+    let mut s = vec![0.0; np * np];
+    for (o, ro) in r.iter().enumerate() {
+        let rho: Vec<f64> = (0..=max_lag)
+            .map(|l| (0..n - l).map(|k| ro[k] * ro[k + l]).sum::<f64>() / n as f64)
+            .collect();
+        let var = rho[0].max(1e-300);
+        // z_b[k] = Σ_l ρ(l) J_b[k+l], l = −L..L.
+        let z: Vec<Vec<f64>> = (0..np)
+            .map(|b| {
+                let jb = &j[b][o];
+                (0..n)
+                    .map(|k| {
+                        let lo = k.saturating_sub(max_lag);
+                        let hi = (k + max_lag).min(n - 1);
+                        (lo..=hi).map(|m| rho[m.abs_diff(k)] * jb[m]).sum::<f64>()
+                    })
+                    .collect()
+            })
+            .collect();
+        for a in 0..np {
+            for b in 0..np {
+                s[a * np + b] +=
+                    j[a][o].iter().zip(&z[b]).map(|(x, y)| x * y).sum::<f64>() / (var * var);
+            }
+        }
+    }
+    // M⁻¹ S M⁻¹
+    let mut tmp = vec![0.0; np * np];
+    for a in 0..np {
+        for b in 0..np {
+            tmp[a * np + b] = (0..np).map(|k| m_inv[a * np + k] * s[k * np + b]).sum();
+        }
+    }
+    let mut cov = vec![0.0; np * np];
+    for a in 0..np {
+        for b in 0..np {
+            cov[a * np + b] = (0..np).map(|k| tmp[a * np + k] * m_inv[k * np + b]).sum();
+        }
+    }
+    cov
+}
+
+/// Outcome of one output-error fit.
+pub(super) struct Fit {
+    pub(super) theta: Vec<f64>,
+    pub(super) fisher: Vec<f64>,
+    pub(super) residuals: Vec<Vec<f64>>,
+    pub(super) iterations: usize,
+    pub(super) converged: bool,
+}
+
+/// Output-error Gauss–Newton with Levenberg–Marquardt damping ([`optimise::levenberg_marquardt`]);
+/// the diagonal residual covariance is re-estimated from the residuals after every step (Klein &
+/// Morelli §6.2).
+pub(super) fn fit(data: &Data, params: &[Param], start: Vec<f64>, max_iterations: usize) -> Fit {
+    let outputs: Vec<usize> = (0..6).filter(|&j| data.out[j].is_some()).collect();
+    let r = residuals(data, params, &start, &outputs);
+    let np = params.len();
+    let mut problem = Reconstruction {
+        data,
+        params,
+        variances: variances(&r),
+        outputs,
+        fisher: vec![0.0; np * np],
+    };
+    let options = optimise::Options {
+        max_iterations,
+        tolerance: 1e-9,
+        damping: optimise::Damping {
+            tries: 12,
+            ..optimise::Damping::default()
+        },
+        solver: optimise::StepSolver::Marquardt,
+    };
+    let Ok(min) = optimise::levenberg_marquardt(&mut problem, start, r, &options);
+    // Fisher information at the final point with the final residual covariance.
+    let r = min.point;
+    let var = variances(&r);
+    let j = jacobian(data, params, &min.x, &problem.outputs, &r);
+    let m = information(&j, &var, np);
+    Fit {
+        theta: min.x,
+        fisher: if m.iter().all(|x| x.is_finite()) {
+            m
+        } else {
+            problem.fisher
+        },
+        residuals: r,
+        iterations: min.iterations,
+        converged: min.stop != optimise::Stop::MaxIterations,
+    }
+}
+
+/// Per-output residual variance (the diagonal R of the relaxation algorithm).
+fn variances(r: &[Vec<f64>]) -> Vec<f64> {
+    r.iter()
+        .map(|rj| (rj.iter().map(|x| x * x).sum::<f64>() / rj.len().max(1) as f64).max(1e-24))
+        .collect()
+}
+
+/// The flight-path reconstruction for [`optimise::levenberg_marquardt`], with the current
+/// residual variances.
+struct Reconstruction<'a> {
+    data: &'a Data,
+    params: &'a [Param],
+    outputs: Vec<usize>,
+    variances: Vec<f64>,
+    /// Information matrix of the last linearisation.
+    fisher: Vec<f64>,
+}
+
+impl optimise::Problem for Reconstruction<'_> {
+    type Point = Vec<Vec<f64>>;
+    type Error = std::convert::Infallible;
+
+    fn evaluate(&mut self, th: &[f64]) -> Result<Option<Self::Point>, Self::Error> {
+        Ok(Some(residuals(self.data, self.params, th, &self.outputs)))
+    }
+
+    fn cost(&self, r: &Self::Point) -> f64 {
+        r.iter()
+            .zip(&self.variances)
+            .map(|(rj, v)| rj.iter().map(|x| x * x).sum::<f64>() / v)
+            .sum()
+    }
+
+    fn linearise(
+        &mut self,
+        th: &[f64],
+        r: &Self::Point,
+    ) -> Result<Option<optimise::Linearised>, Self::Error> {
+        let j = jacobian(self.data, self.params, th, &self.outputs, r);
+        let np = self.params.len();
+        self.fisher = information(&j, &self.variances, np);
+        let n = r.first().map_or(0, Vec::len);
+        let w: Vec<f64> = self.variances.iter().map(|v| 1.0 / v.sqrt()).collect();
+        Ok(Some(optimise::Linearised {
+            sensitivities: Mat::from_fn(r.len() * n, np, |i, a| j[a][i / n][i % n] * w[i / n]),
+            residuals: (0..r.len() * n)
+                .map(|i| r[i / n][i % n] * w[i / n])
+                .collect(),
+        }))
+    }
+
+    fn relax(
+        &mut self,
+        _th: &mut Vec<f64>,
+        r: &mut Self::Point,
+    ) -> Result<optimise::Relaxation, Self::Error> {
+        self.variances = variances(r);
+        Ok(optimise::Relaxation::Steady)
+    }
+}
+
+/// Sensitivities of the residuals by forward differences: J[p][j][k] = ∂model/∂θ_p (= −∂r/∂θ).
+pub(super) fn jacobian(
+    data: &Data,
+    params: &[Param],
+    th: &[f64],
+    outputs: &[usize],
+    r0: &[Vec<f64>],
+) -> Vec<Vec<Vec<f64>>> {
+    use rayon::prelude::*;
+    (0..params.len())
+        .into_par_iter()
+        .map(|p| {
+            let (step, _) = params[p].step_and_floor();
+            let h = step * th[p].abs().max(1.0);
+            let mut tp = th.to_vec();
+            tp[p] += h;
+            let rp = residuals(data, params, &tp, outputs);
+            rp.iter()
+                .zip(r0)
+                .map(|(a, b)| a.iter().zip(b).map(|(x, y)| (y - x) / h).collect())
+                .collect()
+        })
+        .collect()
+}
+
+/// Information matrix M = Σ Jᵀ R⁻¹ J of the Gauss–Newton normal equations (Klein & Morelli eq. 6.56).
+fn information(j: &[Vec<Vec<f64>>], var: &[f64], np: usize) -> Vec<f64> {
+    let mut m = vec![0.0; np * np];
+    for a in 0..np {
+        for b in a..np {
+            let mut s = 0.0;
+            for (o, v) in var.iter().enumerate() {
+                s += j[a][o]
+                    .iter()
+                    .zip(&j[b][o])
+                    .map(|(x, y)| x * y)
+                    .sum::<f64>()
+                    / v;
+            }
+            m[a * np + b] = s;
+            m[b * np + a] = s;
+        }
+    }
+    m
+}
+
+/// Solves A x = b (Gaussian elimination with partial pivoting on an equilibrated copy).
+fn solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+    // Symmetric scaling D A D to cope with parameters of very different units.
+    let d: Vec<f64> = (0..n)
+        .map(|i| 1.0 / a[i * n + i].abs().sqrt().max(1e-300))
+        .collect();
+    let mut m: Vec<f64> = (0..n * n).map(|k| a[k] * d[k / n] * d[k % n]).collect();
+    let mut x: Vec<f64> = (0..n).map(|i| b[i] * d[i]).collect();
+    for c in 0..n {
+        let piv = (c..n).max_by(|&i, &j| m[i * n + c].abs().total_cmp(&m[j * n + c].abs()))?;
+        if m[piv * n + c].abs() < 1e-14 {
+            return None;
+        }
+        if piv != c {
+            for k in 0..n {
+                m.swap(c * n + k, piv * n + k);
+            }
+            x.swap(c, piv);
+        }
+        for i in c + 1..n {
+            let f = m[i * n + c] / m[c * n + c];
+            if f != 0.0 {
+                for k in c..n {
+                    m[i * n + k] -= f * m[c * n + k];
+                }
+                x[i] -= f * x[c];
+            }
+        }
+    }
+    for c in (0..n).rev() {
+        let s: f64 = (c + 1..n).map(|k| m[c * n + k] * x[k]).sum();
+        x[c] = (x[c] - s) / m[c * n + c];
+    }
+    Some(x.iter().zip(&d).map(|(xi, di)| xi * di).collect())
+}
+
+/// Inverse of a symmetric positive-definite matrix (column by column through [`solve`]).
+pub(super) fn invert(a: &[f64], n: usize) -> Option<Vec<f64>> {
+    let mut inv = vec![0.0; n * n];
+    for c in 0..n {
+        let e: Vec<f64> = (0..n).map(|i| f64::from(u8::from(i == c))).collect();
+        let col = solve(a, &e, n)?;
+        for r in 0..n {
+            inv[r * n + c] = col[r];
+        }
+    }
+    Some(inv)
+}
