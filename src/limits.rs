@@ -40,23 +40,83 @@ pub enum LimitError {
         high_name: String,
         high: f64,
     },
-    /// A record that would exceed [`MAX_RECORD_SAMPLES`].
-    #[error("{what}: {samples:.0} samples exceed the limit of {max} per record (each sample holds every \
-             channel in memory, ~{bytes_per_sample} bytes; the limit keeps a record under ~{max_mb} MB); \
-             cut the record (e.g. `flightid segments`) or lower the rate")]
+    /// More samples than a [`SampleBudget`] allows.
+    #[error("{what}: {samples:.0} samples exceed the limit of {max} per {scope} (each sample holds {holds}, \
+             ~{bytes_per_sample} bytes; the limit keeps it under ~{max_mb} MB); {advice}")]
     TooManySamples {
         what: String,
         samples: f64,
         max: usize,
+        scope: &'static str,
+        holds: &'static str,
         bytes_per_sample: usize,
         max_mb: usize,
+        advice: &'static str,
     },
 }
 
 /// Most samples (rows) one record may hold: 2.3 h at 120 Hz. A record holds ~40 channels of f64 and the
 /// estimators keep a few copies, so this keeps one record's working set under ~2 GB.
-pub const MAX_RECORD_SAMPLES: usize = 1_000_000;
-const BYTES_PER_SAMPLE: usize = 40 * 8;
+pub const MAX_RECORD_SAMPLES: usize = RECORD.max;
+
+/// How many samples one piece of work may hold, and why: the memory per sample and what it is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampleBudget {
+    /// Most samples.
+    pub max: usize,
+    /// Memory per sample, bytes.
+    pub bytes_per_sample: usize,
+    /// What is bounded (`record`, `flight-path reconstruction`).
+    pub scope: &'static str,
+    /// What each sample holds in memory.
+    pub holds: &'static str,
+    /// What the user can do instead.
+    pub advice: &'static str,
+}
+
+impl SampleBudget {
+    /// `samples` (a count, or an estimate before allocating) within the budget, else
+    /// [`LimitError::TooManySamples`] naming `what`.
+    pub fn check(&self, what: &str, samples: f64) -> Result<(), LimitError> {
+        if samples.is_finite() && samples >= 0.0 && samples <= self.max as f64 {
+            Ok(())
+        } else {
+            Err(LimitError::TooManySamples {
+                what: what.to_string(),
+                samples,
+                max: self.max,
+                scope: self.scope,
+                holds: self.holds,
+                bytes_per_sample: self.bytes_per_sample,
+                max_mb: self.max * self.bytes_per_sample / 1_000_000,
+                advice: self.advice,
+            })
+        }
+    }
+}
+
+/// A record held in memory: every channel as f64, and the few copies the estimators keep.
+pub const RECORD: SampleBudget = SampleBudget {
+    max: 1_000_000,
+    bytes_per_sample: 40 * 8,
+    scope: "record",
+    holds: "every channel",
+    advice: "cut the record (e.g. `flightid segments`) or lower the rate",
+};
+
+/// The flight-path reconstruction of `check`: per sample the six reconstructed outputs' sensitivities
+/// to every parameter (~20), once as the fit's Jacobian and once weighted for the step (measured: 144 MB
+/// for 60 000 samples, 1.6 GB for 1 000 000), and a few seconds of computing per 10 000 samples. A
+/// compatibility check is meant for maneuver segments of tens of seconds to minutes; 250 000 samples are
+/// 42 min at 100 Hz.
+pub const RECONSTRUCTION: SampleBudget = SampleBudget {
+    max: 250_000,
+    bytes_per_sample: 2_000,
+    scope: "flight-path reconstruction",
+    holds: "the six reconstructed outputs' sensitivities to every parameter",
+    advice: "check a stretch of it (--from-s/--to-s; `flightid segments` lists the maneuvers) or resample \
+             it to a lower rate (--resample-hz)",
+};
 
 impl Range {
     /// A range for `name` in `unit`.
@@ -124,33 +184,14 @@ pub fn check_order(low_name: &str, low: f64, high_name: &str, high: f64) -> Resu
 /// [`MAX_RECORD_SAMPLES`] before anything of that length is allocated.
 pub fn check_samples(what: &str, duration_s: f64, rate_hz: f64) -> Result<usize, LimitError> {
     let samples = duration_s * rate_hz + 1.0;
-    if samples.is_finite() && samples >= 0.0 && samples <= MAX_RECORD_SAMPLES as f64 {
-        Ok(samples as usize)
-    } else {
-        Err(LimitError::TooManySamples {
-            what: what.to_string(),
-            samples,
-            max: MAX_RECORD_SAMPLES,
-            bytes_per_sample: BYTES_PER_SAMPLE,
-            max_mb: MAX_RECORD_SAMPLES * BYTES_PER_SAMPLE / 1_000_000,
-        })
-    }
+    RECORD.check(what, samples)?;
+    Ok(samples as usize)
 }
 
 /// A record read from a file, refused above [`MAX_RECORD_SAMPLES`] rows before the work on it starts (the
 /// commands that hold several copies of a record: check, diagnose, replay).
 pub fn check_rows(what: &str, rows: usize) -> Result<(), LimitError> {
-    if rows <= MAX_RECORD_SAMPLES {
-        Ok(())
-    } else {
-        Err(LimitError::TooManySamples {
-            what: what.to_string(),
-            samples: rows as f64,
-            max: MAX_RECORD_SAMPLES,
-            bytes_per_sample: BYTES_PER_SAMPLE,
-            max_mb: MAX_RECORD_SAMPLES * BYTES_PER_SAMPLE / 1_000_000,
-        })
-    }
+    RECORD.check(what, rows as f64)
 }
 
 /// Record length, s: up to 10 h (with [`MAX_RECORD_SAMPLES`] bounding length × rate).

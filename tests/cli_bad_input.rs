@@ -149,6 +149,38 @@ fn out_of_range_numbers_exit_2_naming_the_allowed_range() {
     assert!(!tmp.path().join("o.csv").exists());
 }
 
+/// A record longer than the flight-path reconstruction's memory budget (250 000 samples, ~2 kB each) is refused
+/// by `check` before the reconstruction starts, with the way out; a window of it within the budget is accepted
+/// (it gets past the limit to the reconstruction, which then reports what the record lacks).
+#[test]
+fn check_refuses_a_record_beyond_the_reconstruction_budget_and_names_the_way_out() {
+    use std::io::Write;
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = tmp.path().join("long.csv");
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&csv).unwrap());
+    writeln!(f, "time_s,p_rad_s,q_rad_s,r_rad_s").unwrap();
+    for k in 0..260_000 {
+        writeln!(f, "{:.2},0,0,0", k as f64 * 0.01).unwrap();
+    }
+    f.flush().unwrap();
+    drop(f);
+    let o = run(tmp.path(), &["check", "long.csv"]);
+    assert_bad_input(
+        &o,
+        &[
+            "260000 samples exceed the limit of 250000 per flight-path reconstruction",
+            "--from-s/--to-s",
+            "--resample-hz",
+        ],
+    );
+    let o = run(tmp.path(), &["check", "long.csv", "--from-s", "0", "--to-s", "60"]);
+    assert!(
+        !stderr(&o).contains("exceed the limit"),
+        "a 60 s window is within the budget: {}",
+        stderr(&o)
+    );
+}
+
 #[test]
 fn out_of_range_numbers_in_files_exit_2() {
     let tmp = tempfile::tempdir().unwrap();

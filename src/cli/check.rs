@@ -46,11 +46,6 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         crate::limits::check_order("--from-s", from_s, "--to-s", to_s)?;
     }
     let mut rec = args.columns.read(&args.file)?;
-    crate::limits::check_rows(&args.file.display().to_string(), rec.len())?;
-    if let Some(hz) = args.resample_hz {
-        rec = data::resample_uniform(&rec, hz)
-            .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;
-    }
     let from = args.from_s.unwrap_or(f64::NEG_INFINITY);
     let to = args.to_s.unwrap_or(f64::INFINITY);
     if args.from_s.is_some() || args.to_s.is_some() {
@@ -68,12 +63,24 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         }
         rec = window;
     }
+    if let Some(hz) = args.resample_hz {
+        rec = data::resample_uniform(&rec, hz)
+            .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;
+    }
+    let what = args.file.display().to_string();
+    crate::limits::RECONSTRUCTION.check(&what, rec.len() as f64)?;
     let opts = CheckOptions {
         scale_factors: !args.no_scale_factors,
         time_skews: !args.no_time_skews,
         max_iterations: args.max_iterations,
     };
-    let report = data::check_compatibility(&rec, &opts).map_err(|e| UsageError(e.to_string()))?;
+    let progress = super::common::spinner(&format!(
+        "check: reconstructing the flight path over {} samples",
+        rec.len()
+    ));
+    let report = data::check_compatibility(&rec, &opts);
+    progress.finish_and_clear();
+    let report = report.map_err(|e| UsageError(e.to_string()))?;
     let not_converged = || {
         anyhow::anyhow!(
             "the flight-path reconstruction of {} did not converge in {} iterations: its biases, \

@@ -307,7 +307,7 @@ pub fn check_compatibility(
     let cov = match invert(&fisher, np) {
         Some(m_inv) => {
             let j = jacobian(&data, &params, &theta_p, &outputs, &r);
-            coloured_residual_covariance(&m_inv, &j, &r, np, data.t.len())
+            coloured_residual_covariance(&m_inv, &j, &r, np)
         }
         None => vec![f64::NAN; np * np],
     };

@@ -5,58 +5,31 @@
 use faer::Mat;
 
 use super::kinematics::{residuals, Data, Param};
+use crate::estimate::covariance;
 use crate::optimise;
 
-/// `M⁻¹ S M⁻¹`, `S_ab = Σ_o Σ_k Σ_l J_a[o][k] ρ_o(l) J_b[o][k+l] / σ_o⁴`, with ρ_o the biased
-/// residual autocovariance of output o for |l| ≤ 2 s (Morelli & Klein 1997, eq. 20).
+/// Cramér–Rao bounds corrected for coloured residuals by the estimation core's rule
+/// ([`covariance`], Morelli & Klein §6.6, eq. 6.86): `M⁻¹ W M⁻¹`, `W = Σ_o W_o / σ_o⁴`, with `W_o` the
+/// products of output o's sensitivities weighted by its Bartlett-windowed residual autocorrelation over the
+/// lags where it is correlated; outputs mutually uncorrelated. `j[a][o]` is ∂ŷ_o/∂θ_a per sample.
 pub(super) fn coloured_residual_covariance(
     m_inv: &[f64],
     j: &[Vec<Vec<f64>>],
     r: &[Vec<f64>],
     np: usize,
-    n: usize,
 ) -> Vec<f64> {
-    let max_lag = (n / 4).min(100);
-    let mut s = vec![0.0; np * np];
+    let mut w = vec![0.0; np * np];
     for (o, ro) in r.iter().enumerate() {
-        let rho: Vec<f64> = (0..=max_lag)
-            .map(|l| (0..n - l).map(|k| ro[k] * ro[k + l]).sum::<f64>() / n as f64)
-            .collect();
-        let var = rho[0].max(1e-300);
-        // z_b[k] = Σ_l ρ(l) J_b[k+l], l = −L..L.
-        let z: Vec<Vec<f64>> = (0..np)
-            .map(|b| {
-                let jb = &j[b][o];
-                (0..n)
-                    .map(|k| {
-                        let lo = k.saturating_sub(max_lag);
-                        let hi = (k + max_lag).min(n - 1);
-                        (lo..=hi).map(|m| rho[m.abs_diff(k)] * jb[m]).sum::<f64>()
-                    })
-                    .collect()
-            })
-            .collect();
-        for a in 0..np {
-            for b in 0..np {
-                s[a * np + b] +=
-                    j[a][o].iter().zip(&z[b]).map(|(x, y)| x * y).sum::<f64>() / (var * var);
-            }
+        let acf = covariance::lag_weights(ro);
+        let var = acf[0].max(1e-300);
+        let cols: Vec<&[f64]> = (0..np).map(|a| j[a][o].as_slice()).collect();
+        let w_o = covariance::lag_weighted_products(&cols, &acf);
+        // lag_weights' R(0) is Bartlett weight 1 times the residual power
+        for (acc, v) in w.iter_mut().zip(&w_o) {
+            *acc += v / (var * var);
         }
     }
-    // M⁻¹ S M⁻¹
-    let mut tmp = vec![0.0; np * np];
-    for a in 0..np {
-        for b in 0..np {
-            tmp[a * np + b] = (0..np).map(|k| m_inv[a * np + k] * s[k * np + b]).sum();
-        }
-    }
-    let mut cov = vec![0.0; np * np];
-    for a in 0..np {
-        for b in 0..np {
-            cov[a * np + b] = (0..np).map(|k| tmp[a * np + k] * m_inv[k * np + b]).sum();
-        }
-    }
-    cov
+    covariance::sandwich(m_inv, &w, np)
 }
 
 /// Outcome of one output-error fit.
