@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use super::common::ColumnsArg;
+use super::common::{resample, RecordArgs};
 use super::UsageError;
 use crate::data::{self, CheckOptions};
 
@@ -33,11 +33,8 @@ pub struct CheckArgs {
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
-    #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
-    pub resample_hz: Option<f64>,
     #[command(flatten)]
-    pub columns: ColumnsArg,
+    pub record: RecordArgs,
 }
 
 /// Runs `flightid check`.
@@ -45,13 +42,12 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     if let (Some(from_s), Some(to_s)) = (args.from_s, args.to_s) {
         crate::limits::check_order("--from-s", from_s, "--to-s", to_s)?;
     }
-    let mut rec = args.columns.read(&args.file)?;
+    let mut rec = args.record.columns.read(&args.file)?;
     let from = args.from_s.unwrap_or(f64::NEG_INFINITY);
     let to = args.to_s.unwrap_or(f64::INFINITY);
     if args.from_s.is_some() || args.to_s.is_some() {
-        let start = rec.time_s.partition_point(|&t| t < from);
-        let end = rec.time_s.partition_point(|&t| t <= to);
-        if end <= start {
+        let window = rec.between(from, to);
+        if window.is_empty() {
             return Err(UsageError(format!(
                 "{}: no sample lies within --from-s {} .. --to-s {} (the record spans {} .. {} s)",
                 args.file.display(),
@@ -62,12 +58,9 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
             ))
             .into());
         }
-        rec = rec.slice(start, end);
+        rec = window;
     }
-    if let Some(hz) = args.resample_hz {
-        rec = data::resample_uniform(&rec, hz)
-            .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;
-    }
+    let rec = resample(rec, args.record.resample_hz, &args.file)?;
     let what = args.file.display().to_string();
     crate::limits::RECONSTRUCTION.check(&what, rec.len() as f64)?;
     let opts = CheckOptions {

@@ -131,3 +131,23 @@ impl ColumnsArg {
         Ok(rec)
     }
 }
+
+/// `rec` from `path` resampled onto a uniform grid at `resample_hz` when given; a rate the record cannot take
+/// is a usage error (exit 2).
+pub fn resample(rec: FlightRecord, resample_hz: Option<f64>, path: &Path) -> anyhow::Result<FlightRecord> {
+    match resample_hz {
+        Some(hz) => Ok(data::resample_uniform(&rec, hz)
+            .map_err(|e| UsageError(format!("{}: {e}", path.display())))?),
+        None => Ok(rec),
+    }
+}
+
+/// How `check` and `segments` read their record: through the column map, optionally resampled.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct RecordArgs {
+    /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
+    #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
+    pub resample_hz: Option<f64>,
+    #[command(flatten)]
+    pub columns: ColumnsArg,
+}

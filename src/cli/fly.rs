@@ -3,8 +3,8 @@
 use super::common::{emit_json, TrimArgs};
 use crate::cli::UsageError;
 use crate::data;
-use crate::signal::{self, Maneuver};
-use crate::sim::{FlightPlan, Simulator, SurfaceInput};
+use crate::signal::Maneuver;
+use crate::sim::{FlightPlan, Simulator};
 use std::path::PathBuf;
 
 /// Input shapes.
@@ -79,16 +79,7 @@ impl ManeuverArgs {
                 pulse_s: self.pulse_s,
             },
             ManeuverKind::Multisine => {
-                let period_s = active_s.min(1.0 / self.f_min_hz);
-                let f_low = 1.0 / period_s;
-                let n_harmonics =
-                    ((self.f_max_hz - f_low) * period_s).floor().max(1.0) as usize + 1;
-                Maneuver::Multisine {
-                    f_min_hz: f_low,
-                    f_max_hz: self.f_max_hz,
-                    n_harmonics,
-                    period_s,
-                }
+                Maneuver::multisine_in_band(self.f_min_hz, self.f_max_hz, active_s)
             }
             ManeuverKind::Chirp => Maneuver::Chirp {
                 f0_hz: self.f_min_hz,
@@ -135,12 +126,7 @@ impl ManeuverArgs {
             ))
             .into());
         }
-        let dt_s = 1.0 / rate_hz;
-        let n_steps = (self.duration_s * rate_hz).round() as usize;
-        let mut unit = signal::generate(&m, dt_s, self.duration_s, self.start_s);
-        unit.resize(n_steps, 0.0);
-        let amp = self.amplitude_deg.to_radians();
-        let mut inputs = Vec::new();
+        let mut surfaces: Vec<&str> = Vec::new();
         for s in &self.surfaces {
             if !["elevator", "aileron", "rudder"].contains(&s.as_str()) {
                 return Err(UsageError(format!(
@@ -148,19 +134,19 @@ impl ManeuverArgs {
                 ))
                 .into());
             }
-            if inputs.iter().any(|i: &SurfaceInput| &i.surface == s) {
+            if surfaces.contains(&s.as_str()) {
                 return Err(UsageError(format!("surface '{s}' given twice")).into());
             }
-            inputs.push(SurfaceInput {
-                surface: s.clone(),
-                deflection_rad: unit.iter().map(|u| amp * u).collect(),
-            });
+            surfaces.push(s);
         }
-        Ok(FlightPlan {
+        Ok(FlightPlan::maneuver(
+            &surfaces,
+            &m,
+            self.amplitude_deg.to_radians(),
+            self.start_s,
+            self.duration_s,
             rate_hz,
-            n_steps,
-            inputs,
-        })
+        ))
     }
 }
 
@@ -195,10 +181,8 @@ pub struct FlyCmd {
     pub model: Option<PathBuf>,
 }
 
-/// Lowest integration rate `fly` uses by default, Hz.
-pub const MIN_SIM_RATE_HZ: f64 = 120.0;
-
-/// The simulation rate for a logging rate and the number of simulation steps per logged sample.
+/// The simulation rate for a logging rate and the number of simulation steps per logged sample
+/// ([`crate::sim::simulation_rate`]), with the flags checked.
 pub fn simulation_rate(log_rate_hz: f64, sim_rate_hz: Option<f64>) -> anyhow::Result<(f64, usize)> {
     let bad = |msg: String| anyhow::Error::from(UsageError(msg));
     if !(log_rate_hz.is_finite() && (10.0..=2000.0).contains(&log_rate_hz)) {
@@ -206,27 +190,12 @@ pub fn simulation_rate(log_rate_hz: f64, sim_rate_hz: Option<f64>) -> anyhow::Re
             "--rate-hz must be within 10..2000, got {log_rate_hz}"
         )));
     }
-    let sim_hz = sim_rate_hz
-        .unwrap_or_else(|| log_rate_hz * (MIN_SIM_RATE_HZ / log_rate_hz).ceil().max(1.0));
-    let ratio = sim_hz / log_rate_hz;
-    let step = ratio.round();
-    if !(sim_hz.is_finite() && sim_hz <= 2000.0 && step >= 1.0 && (ratio - step).abs() < 1e-9) {
-        return Err(bad(format!(
+    crate::sim::simulation_rate(log_rate_hz, sim_rate_hz).ok_or_else(|| {
+        let sim_hz = sim_rate_hz.map_or_else(|| "the default".into(), |h| h.to_string());
+        bad(format!(
             "--sim-rate-hz ({sim_hz}) must be a whole multiple of --rate-hz ({log_rate_hz}) and at most 2000"
-        )));
-    }
-    Ok((sim_hz, step as usize))
-}
-
-/// Keeps every `step`-th sample of a record (the first one included), with its metadata.
-fn every_nth(rec: &data::FlightRecord, step: usize) -> data::FlightRecord {
-    let keep = |v: &[f64]| v.iter().step_by(step).copied().collect::<Vec<_>>();
-    let mut out = data::FlightRecord::new(keep(&rec.time_s));
-    for (name, values) in &rec.columns {
-        out.push_column(name, keep(values));
-    }
-    out.metadata = rec.metadata.clone();
-    out
+        ))
+    })
 }
 
 /// Runs `flightid fly`.
@@ -243,7 +212,7 @@ pub fn run(args: &FlyCmd) -> anyhow::Result<()> {
         }
         Some(dir) => fly_model(&sim_args, dir, &mut plan)?,
     };
-    let mut rec = if step > 1 { every_nth(&rec, step) } else { rec };
+    let mut rec = if step > 1 { rec.every_nth(step) } else { rec };
     if step > 1 {
         rec.metadata.push(format!(
             "logged at {log_rate_hz} Hz: one sample in {step} of a {sim_rate_hz} Hz simulation"

@@ -1,7 +1,7 @@
 //! `flightid identify`: identify a continuous transfer function from one input column to one output column of
 //! a flight-data CSV.
 
-use super::common::{emit_json, ColumnsArg};
+use super::common::{emit_json, resample, ColumnsArg};
 use super::paper::text_table;
 use crate::cli::UsageError;
 use crate::data::{self, FlightRecord};
@@ -109,35 +109,19 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         ))
     })?;
     // uniform sampling is assumed by every estimator: resample jittery records onto the median step
-    let worst_jitter = rec
-        .time_s
-        .windows(2)
-        .map(|w| ((w[1] - w[0]) - dt_s).abs())
-        .fold(0.0, f64::max);
-    let (u, y): (Vec<f64>, Vec<f64>) = if worst_jitter > 0.01 * dt_s {
-        let t0 = rec.time_s[0];
-        let n = ((rec.time_s[rec.len() - 1] - t0) / dt_s).floor() as usize + 1;
-        let grid: Vec<f64> = (0..n).map(|k| t0 + k as f64 * dt_s).collect();
+    let (uy, jitter_s) = crate::signal::on_uniform_step(&rec.time_s, &[u, y], dt_s);
+    if let Some(worst) = jitter_s {
         eprintln!(
             "note: {} is not uniformly sampled (step varies by up to {:.3} ms); resampled at {:.4} s",
             data_path.display(),
-            1e3 * worst_jitter,
+            1e3 * worst,
             dt_s
         );
-        (
-            crate::signal::resample_linear(&rec.time_s, u, &grid),
-            crate::signal::resample_linear(&rec.time_s, y, &grid),
-        )
-    } else {
-        (u.to_vec(), y.to_vec())
-    };
-    let (poles, zeros) = given_order(args);
-    let opts = IdentOptions {
-        method,
-        poles,
-        zeros,
-        estimate_delay: args.delay,
-    };
+    }
+    let mut uy = uy.into_iter();
+    let (u, y) = (uy.next().unwrap_or_default(), uy.next().unwrap_or_default());
+    let opts = given_options(args, method);
+    let (poles, zeros) = (opts.poles, opts.zeros);
     let bad_input = |e: &IdentError| {
         matches!(
             e,
@@ -210,10 +194,15 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `(poles, zeros)` as given, with their defaults (4 poles; 2 zeros, fewer than the poles).
-fn given_order(args: &IdentifyCmd) -> (usize, usize) {
+/// The options as given: the order with its defaults (4 poles; 2 zeros, fewer than the poles).
+fn given_options(args: &IdentifyCmd, method: Method) -> IdentOptions {
     let poles = args.poles.unwrap_or(4);
-    (poles, args.zeros.unwrap_or(2.min(poles.saturating_sub(1))))
+    IdentOptions {
+        method,
+        poles,
+        zeros: args.zeros.unwrap_or(2.min(poles.saturating_sub(1))),
+        estimate_delay: args.delay,
+    }
 }
 
 /// The orders tried and the one chosen.
@@ -365,12 +354,7 @@ fn print_result(
 
 /// Reads a flight-data CSV through the column map, resampled at `--resample-hz` when given.
 fn read_record(path: &std::path::Path, args: &IdentifyCmd) -> anyhow::Result<FlightRecord> {
-    let rec = args.columns.read(path)?;
-    match args.resample_hz {
-        Some(hz) => Ok(data::resample_uniform(&rec, hz)
-            .map_err(|e| UsageError(format!("{}: {e}", path.display())))?),
-        None => Ok(rec),
-    }
+    resample(args.columns.read(path)?, args.resample_hz, path)
 }
 
 /// The records a joint identification runs on: every `--data` file whole, or the `--segment`s.
@@ -462,13 +446,8 @@ fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
             dt_s,
         });
     }
-    let (poles, zeros) = given_order(args);
-    let opts = IdentOptions {
-        method,
-        poles,
-        zeros,
-        estimate_delay: args.delay,
-    };
+    let opts = given_options(args, method);
+    let (poles, zeros) = (opts.poles, opts.zeros);
     let joint = match ident::identify_joint(&records, &opts) {
         Ok(j) => j,
         Err(e @ (IdentError::InvalidOptions(_) | IdentError::TooFewSamples { .. })) => {

@@ -2,8 +2,7 @@
 
 use std::path::PathBuf;
 
-use super::common::ColumnsArg;
-use super::UsageError;
+use super::common::{resample, RecordArgs};
 use crate::data::{self, SegmentOptions};
 
 /// Find maneuvers in a flight-data CSV.
@@ -20,20 +19,14 @@ pub struct SegmentsArgs {
     /// Print the segments as JSON on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Resample onto a uniform grid at this rate first (linear interpolation, no filtering).
-    #[arg(long = "resample-hz", value_name = "HZ", value_parser = crate::limits::RESAMPLE_HZ.parser())]
-    pub resample_hz: Option<f64>,
     #[command(flatten)]
-    pub columns: ColumnsArg,
+    pub record: RecordArgs,
 }
 
 /// Runs `flightid segments`.
 pub fn run(args: &SegmentsArgs) -> anyhow::Result<()> {
-    let mut rec = args.columns.read(&args.file)?;
-    if let Some(hz) = args.resample_hz {
-        rec = data::resample_uniform(&rec, hz)
-            .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;
-    }
+    let rec = args.record.columns.read(&args.file)?;
+    let rec = resample(rec, args.record.resample_hz, &args.file)?;
     let opts = SegmentOptions {
         min_amplitude_rad: args.min_amplitude_deg.to_radians(),
         ..SegmentOptions::default()

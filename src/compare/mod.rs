@@ -5,9 +5,9 @@
 use crate::ident::{self, IdentOptions, IdentResult, Method};
 use crate::lti::{self, Mode, TransferFunction};
 use crate::report::{LinePlot, Report, Section, Series, Table};
-use crate::signal::{self, Maneuver};
+use crate::signal::Maneuver;
 use crate::sim::linear::{paper_transfer_functions, tf_json, PAPER_TFS};
-use crate::sim::{FlightPlan, SimError, Simulator, SurfaceInput, TrimPoint};
+use crate::sim::{FlightPlan, SimError, Simulator, TrimPoint};
 use serde::Serialize;
 
 pub mod kinks;
@@ -61,18 +61,14 @@ pub fn single_surface_plan(
     duration_s: f64,
     rate_hz: f64,
 ) -> FlightPlan {
-    let n_steps = (duration_s * rate_hz).round() as usize;
-    let mut unit = signal::generate(maneuver, 1.0 / rate_hz, duration_s, start_s);
-    unit.resize(n_steps, 0.0);
-    let amp_rad = amplitude_deg.to_radians();
-    FlightPlan {
+    FlightPlan::maneuver(
+        &[surface],
+        maneuver,
+        amplitude_deg.to_radians(),
+        start_s,
+        duration_s,
         rate_hz,
-        n_steps,
-        inputs: vec![SurfaceInput {
-            surface: surface.to_string(),
-            deflection_rad: unit.iter().map(|u| u * amp_rad).collect(),
-        }],
-    }
+    )
 }
 
 /// Surface deflection and output state of a record as perturbations from the first (trim) sample, rad.

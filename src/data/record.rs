@@ -50,6 +50,18 @@ impl FlightRecord {
         }
     }
 
+    /// Every `step`-th sample (the first one included), with the metadata: a record logged at a fraction of
+    /// the rate it was simulated at. No anti-alias filter (docs/data.md: the logger samples, it does not filter).
+    pub fn every_nth(&self, step: usize) -> FlightRecord {
+        let keep = |v: &[f64]| v.iter().step_by(step.max(1)).copied().collect::<Vec<_>>();
+        let mut out = FlightRecord::new(keep(&self.time_s));
+        for (name, values) in &self.columns {
+            out.push_column(name, keep(values));
+        }
+        out.metadata = self.metadata.clone();
+        out
+    }
+
     /// Adds a column, or replaces the values of an existing column of the same name.
     pub fn push_column(&mut self, name: &str, values: Vec<f64>) {
         if let Some(slot) = self.columns.iter_mut().find(|(n, _)| n == name) {
@@ -103,6 +115,13 @@ impl FlightRecord {
             return None;
         }
         Some(median_in_place(&mut steps))
+    }
+
+    /// The samples with `from_s ≤ t ≤ to_s` (empty when none lies there).
+    pub fn between(&self, from_s: f64, to_s: f64) -> FlightRecord {
+        let start = self.time_s.partition_point(|&t| t < from_s);
+        let end = self.time_s.partition_point(|&t| t <= to_s);
+        self.slice(start, end)
     }
 
     /// The samples in `[start, end)` as a new record (metadata kept).

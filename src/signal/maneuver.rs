@@ -46,6 +46,20 @@ impl Maneuver {
         }
     }
 
+    /// A multisine over `f_min_hz..=f_max_hz` that fits `active_s`: period 1/`f_min_hz`, cut to `active_s`
+    /// when that is shorter, and every harmonic of 1/period up to `f_max_hz` (at least two).
+    pub fn multisine_in_band(f_min_hz: f64, f_max_hz: f64, active_s: f64) -> Maneuver {
+        let period_s = active_s.min(1.0 / f_min_hz);
+        let f_low = 1.0 / period_s;
+        let n_harmonics = ((f_max_hz - f_low) * period_s).floor().max(1.0) as usize + 1;
+        Maneuver::Multisine {
+            f_min_hz: f_low,
+            f_max_hz,
+            n_harmonics,
+            period_s,
+        }
+    }
+
     /// Length of the maneuver itself in seconds; `None` for a multisine, which runs to the record end.
     pub fn duration_s(&self) -> Option<f64> {
         match *self {

@@ -8,7 +8,9 @@ mod maneuver;
 mod ops;
 
 pub use maneuver::{generate, multisine_design, peak_factor, time_grid, Maneuver, MultisineDesign};
-pub use ops::{add_white_noise, heading_from_zero_rad, noise_std, resample_linear, unwrap_rad};
+pub use ops::{
+    add_white_noise, heading_from_zero_rad, noise_std, on_uniform_step, resample_linear, unwrap_rad,
+};
 
 /// What can be wrong with a maneuver definition.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

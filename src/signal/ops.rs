@@ -15,6 +15,28 @@ pub fn add_white_noise(x: &[f64], std: f64, seed: u64) -> Vec<f64> {
     x.iter().map(|&v| v + normal.sample(&mut rng)).collect()
 }
 
+/// Series sampled at `time_s` on the uniform step `dt_s`, which every estimator assumes: unchanged when no
+/// sample step departs from `dt_s` by more than 1 % of it, otherwise interpolated ([`resample_linear`]) onto
+/// `t0 + k dt_s` up to the last sample. Returns the series and, when they were resampled, the largest step
+/// departure, s.
+pub fn on_uniform_step(time_s: &[f64], series: &[&[f64]], dt_s: f64) -> (Vec<Vec<f64>>, Option<f64>) {
+    let worst_jitter_s = time_s
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) - dt_s).abs())
+        .fold(0.0, f64::max);
+    if worst_jitter_s <= 0.01 * dt_s || time_s.is_empty() {
+        return (series.iter().map(|x| x.to_vec()).collect(), None);
+    }
+    let t0 = time_s[0];
+    let n = ((time_s[time_s.len() - 1] - t0) / dt_s).floor() as usize + 1;
+    let grid: Vec<f64> = (0..n).map(|k| t0 + k as f64 * dt_s).collect();
+    let resampled = series
+        .iter()
+        .map(|x| resample_linear(time_s, x, &grid))
+        .collect();
+    (resampled, Some(worst_jitter_s))
+}
+
 /// Linear interpolation of the samples `(t, x)` at the times `t_new`.
 ///
 /// `t` must be increasing. Times before `t[0]` take `x[0]` and times after the last sample take the

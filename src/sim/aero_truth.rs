@@ -86,6 +86,26 @@ pub fn coefficient_property(name: &str) -> String {
     format!("aero/coefficient/{name}")
 }
 
+/// JSBSim properties that place the aerodynamic reference point and the CG (structural frame, inches).
+pub const ARM_PROPERTIES: [&str; 6] = [
+    "metrics/aero-rp-x-in",
+    "metrics/aero-rp-y-in",
+    "metrics/aero-rp-z-in",
+    "inertia/cg-x-in",
+    "inertia/cg-y-in",
+    "inertia/cg-z-in",
+];
+
+/// The arm from the CG to the aerodynamic reference point in body axes (x forward, y right, z down), ft, from
+/// the values of [`ARM_PROPERTIES`] (structural frame: x aft, y right, z up, inches).
+pub fn reference_arm_ft(value: impl Fn(&str) -> f64) -> [f64; 3] {
+    [
+        -(value("metrics/aero-rp-x-in") - value("inertia/cg-x-in")) / 12.0,
+        (value("metrics/aero-rp-y-in") - value("inertia/cg-y-in")) / 12.0,
+        -(value("metrics/aero-rp-z-in") - value("inertia/cg-z-in")) / 12.0,
+    ]
+}
+
 /// Smallest jump between one-sided slopes reported as a kink, nondimensional per rad: smaller ones change no
 /// response a report could show (CDbeta's is 0.34).
 const NONSMOOTH_MIN_JUMP: f64 = 0.01;
@@ -169,13 +189,10 @@ impl JsbsimSim {
             "metrics/cbarw-ft",
             "aero/beta-rad",
             "accelerations/gravity-ft_sec2",
-            "metrics/aero-rp-x-in",
-            "metrics/aero-rp-y-in",
-            "metrics/aero-rp-z-in",
-            "inertia/cg-x-in",
-            "inertia/cg-y-in",
-            "inertia/cg-z-in",
-        ];
+        ]
+        .into_iter()
+        .chain(ARM_PROPERTIES)
+        .collect::<Vec<_>>();
         // the CG moments, and every coefficient function on its own (for its one-sided slopes: kinks)
         let extra: Vec<String> = [
             "moments/m-aero-lbsft",
@@ -241,11 +258,7 @@ impl JsbsimSim {
         // the force vector turning with α (β) about the CG. In flight the lift vector turns with α; with the
         // c172x reference point ~2 ft above the CG that is worth −0.19 in Cm_α (−1.345 without, −1.535 with,
         // the value `scripts/oracle_aero.py` gets from run_ic states). Add r × (∂T_w2b/∂x) F_w.
-        let arm_ft = [
-            -(c("metrics/aero-rp-x-in") - c("inertia/cg-x-in")) / 12.0,
-            (c("metrics/aero-rp-y-in") - c("inertia/cg-y-in")) / 12.0,
-            -(c("metrics/aero-rp-z-in") - c("inertia/cg-z-in")) / 12.0,
-        ];
+        let arm_ft = reference_arm_ft(c);
         let force_wind_lbs = [
             -base.get("DRAG").copied().unwrap_or(0.0),
             base.get("SIDE").copied().unwrap_or(0.0),

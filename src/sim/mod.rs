@@ -143,6 +143,22 @@ pub struct StateReset {
     pub relative: bool,
 }
 
+/// Lowest integration rate a flight uses by default, Hz.
+pub const MIN_SIM_RATE_HZ: f64 = 120.0;
+
+/// The integration rate for a logging rate `log_rate_hz` and the number of integration steps per logged
+/// sample: `requested_hz` when given, else the logging rate if it is at least [`MIN_SIM_RATE_HZ`], else its
+/// smallest whole multiple at or above it. `None` when the rate is not a whole multiple of the logging rate or
+/// is above 2000 Hz.
+pub fn simulation_rate(log_rate_hz: f64, requested_hz: Option<f64>) -> Option<(f64, usize)> {
+    let sim_hz = requested_hz
+        .unwrap_or_else(|| log_rate_hz * (MIN_SIM_RATE_HZ / log_rate_hz).ceil().max(1.0));
+    let ratio = sim_hz / log_rate_hz;
+    let step = ratio.round();
+    (sim_hz.is_finite() && sim_hz <= 2000.0 && step >= 1.0 && (ratio - step).abs() < 1e-9)
+        .then_some((sim_hz, step as usize))
+}
+
 /// A maneuver to fly from trim.
 #[derive(Debug, Clone)]
 pub struct FlightPlan {
@@ -152,6 +168,34 @@ pub struct FlightPlan {
     pub n_steps: usize,
     /// Surface inputs (several at once are allowed).
     pub inputs: Vec<SurfaceInput>,
+}
+
+impl FlightPlan {
+    /// The unit-peak `maneuver` ([`crate::signal::generate`], from `start_s`) scaled to `amplitude_rad` on each
+    /// of `surfaces`, for `duration_s` at `rate_hz`.
+    pub fn maneuver(
+        surfaces: &[&str],
+        maneuver: &crate::signal::Maneuver,
+        amplitude_rad: f64,
+        start_s: f64,
+        duration_s: f64,
+        rate_hz: f64,
+    ) -> FlightPlan {
+        let n_steps = (duration_s * rate_hz).round() as usize;
+        let mut unit = crate::signal::generate(maneuver, 1.0 / rate_hz, duration_s, start_s);
+        unit.resize(n_steps, 0.0);
+        FlightPlan {
+            rate_hz,
+            n_steps,
+            inputs: surfaces
+                .iter()
+                .map(|s| SurfaceInput {
+                    surface: s.to_string(),
+                    deflection_rad: unit.iter().map(|u| u * amplitude_rad).collect(),
+                })
+                .collect(),
+        }
+    }
 }
 
 /// A linear model from the simulator: ẋ = A x + B u, y = C x + D u.

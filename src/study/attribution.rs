@@ -24,7 +24,9 @@ use crate::aero::regression::{
 };
 use crate::aero::AeroError;
 use crate::data;
-use crate::sim::aero_truth::{coefficient_property, cross, wind_to_body};
+use crate::sim::aero_truth::{
+    coefficient_property, cross, reference_arm_ft, wind_to_body, ARM_PROPERTIES,
+};
 use crate::sim::JsbsimSim;
 use crate::study::score::{Scorecard, TermShare, CMQ_SUM};
 use crate::study::spec::full_assumptions;
@@ -368,13 +370,7 @@ pub fn probe_coefficients(sim: &mut JsbsimSim) -> Result<CoefficientProbe, AeroE
     let axes = sim.coefficient_axes.clone();
     let props: Vec<String> = axes.keys().map(|k| coefficient_property(k)).collect();
     let (base, slopes) = sim.probe_slopes(&props)?;
-    let names = [
-        "metrics/aero-rp-x-in",
-        "metrics/aero-rp-y-in",
-        "metrics/aero-rp-z-in",
-        "inertia/cg-x-in",
-        "inertia/cg-y-in",
-        "inertia/cg-z-in",
+    let names: Vec<&str> = [
         "metrics/Sw-sqft",
         "metrics/bw-ft",
         "metrics/cbarw-ft",
@@ -382,7 +378,10 @@ pub fn probe_coefficients(sim: &mut JsbsimSim) -> Result<CoefficientProbe, AeroE
         "aero/beta-rad",
         "velocities/vt-fps",
         "aero/qbar-psf",
-    ];
+    ]
+    .into_iter()
+    .chain(ARM_PROPERTIES)
+    .collect();
     let c = sim.get_properties(&names)?;
     let g = |k: &str| c.get(k).copied().unwrap_or(f64::NAN);
     let strip = |m: BTreeMap<String, f64>| -> BTreeMap<String, f64> {
@@ -394,13 +393,8 @@ pub fn probe_coefficients(sim: &mut JsbsimSim) -> Result<CoefficientProbe, AeroE
         base: strip(base),
         slopes: slopes.into_iter().map(|(v, m)| (v, strip(m))).collect(),
         axes,
-        // Structural frame (x aft, y right, z up, inches) to body axes (x forward, y right, z down), ft; the
-        // same arm `JsbsimSim::aero_truth` uses.
-        arm_ft: [
-            -(g("metrics/aero-rp-x-in") - g("inertia/cg-x-in")) / 12.0,
-            (g("metrics/aero-rp-y-in") - g("inertia/cg-y-in")) / 12.0,
-            -(g("metrics/aero-rp-z-in") - g("inertia/cg-z-in")) / 12.0,
-        ],
+        // the same arm `JsbsimSim::aero_truth` uses
+        arm_ft: reference_arm_ft(g),
         wing_area_ft2: g("metrics/Sw-sqft"),
         span_ft: g("metrics/bw-ft"),
         chord_ft: g("metrics/cbarw-ft"),
