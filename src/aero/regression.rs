@@ -528,13 +528,30 @@ pub fn equation_error(
     let thrust = record.thrust_n.filter(|x| x.len() == n);
     let thrust_moment = |i: usize| thrust.map_or(0.0, |t| t[i] * options.thrust_moment_arm_m);
 
+    // The channels each axis's equations regress on (a missing one skips the equation).
+    let longitudinal_channels = |eq: &str| -> Result<[&[f64]; 4], String> {
+        Ok([
+            channel("airspeed_m_s", v_ch, n, eq)?,
+            channel("alpha_rad", record.alpha_rad, n, eq)?,
+            channel("q_rad_s", record.q_rad_s, n, eq)?,
+            channel("elevator_rad", record.elevator_rad, n, eq)?,
+        ])
+    };
+    let lateral_channels = |eq: &str| -> Result<[&[f64]; 6], String> {
+        Ok([
+            channel("airspeed_m_s", v_ch, n, eq)?,
+            channel("beta_rad", record.beta_rad, n, eq)?,
+            channel("p_rad_s", record.p_rad_s, n, eq)?,
+            channel("r_rad_s", record.r_rad_s, n, eq)?,
+            channel("aileron_rad", record.aileron_rad, n, eq)?,
+            channel("rudder_rad", record.rudder_rad, n, eq)?,
+        ])
+    };
+
     // ---- C_m
-    let cm = (|| -> Result<Result<RegressionResult, AeroError>, String> {
+    let cm = (|| -> Outcome {
         let eq = "Cm";
-        let v = channel("airspeed_m_s", v_ch, n, eq)?;
-        let alpha = channel("alpha_rad", record.alpha_rad, n, eq)?;
-        let q = channel("q_rad_s", record.q_rad_s, n, eq)?;
-        let de = channel("elevator_rad", record.elevator_rad, n, eq)?;
+        let [v, alpha, q, de] = longitudinal_channels(eq)?;
         let p = record.p_rad_s.filter(|x| x.len() == n).unwrap_or(&zeros);
         let r = record.r_rad_s.filter(|x| x.len() == n).unwrap_or(&zeros);
         Ok((|| {
@@ -559,23 +576,12 @@ pub fn equation_error(
             lesq_smoothed("Cm", &names, &cols, &z, options)
         })())
     })();
-    match cm {
-        Ok(Ok(res)) => equations.push(res),
-        // Collinear regressors (a flight that does not excite this axis): skipped, not fatal.
-        Ok(Err(AeroError::BadRecord(why))) => skipped.push(("Cm", why)),
-        Ok(Err(e)) => return Err(e),
-        Err(why) => skipped.push(("Cm", why)),
-    }
+    file_outcome("Cm", cm, &mut equations, &mut skipped)?;
 
     // ---- C_l and C_n
     for eq in ["Cl", "Cn"] {
-        let res = (|| -> Result<Result<RegressionResult, AeroError>, String> {
-            let v = channel("airspeed_m_s", v_ch, n, eq)?;
-            let beta = channel("beta_rad", record.beta_rad, n, eq)?;
-            let p = channel("p_rad_s", record.p_rad_s, n, eq)?;
-            let r = channel("r_rad_s", record.r_rad_s, n, eq)?;
-            let da = channel("aileron_rad", record.aileron_rad, n, eq)?;
-            let dr = channel("rudder_rad", record.rudder_rad, n, eq)?;
+        let res = (|| -> Outcome {
+            let [v, beta, p, r, da, dr] = lateral_channels(eq)?;
             let q = record.q_rad_s.filter(|x| x.len() == n).unwrap_or(&zeros);
             Ok((|| {
                 let pdot = diff(p)?;
@@ -596,15 +602,7 @@ pub fn equation_error(
                 lateral_regression(eq, v, beta, p, r, da, dr, b, &z, options)
             })())
         })();
-        match res {
-            Ok(Ok(res)) => equations.push(res),
-            // Collinear regressors (a flight that does not excite this axis): skipped, not fatal.
-            Ok(Err(AeroError::BadRecord(why))) => {
-                skipped.push((if eq == "Cl" { "Cl" } else { "Cn" }, why))
-            }
-            Ok(Err(e)) => return Err(e),
-            Err(why) => skipped.push((if eq == "Cl" { "Cl" } else { "Cn" }, why)),
-        }
+        file_outcome(eq, res, &mut equations, &mut skipped)?;
     }
 
     // Body velocities for the force equations.
@@ -621,14 +619,9 @@ pub fn equation_error(
     let g = options.g_m_s2;
 
     // ---- C_Y
-    let cy = (|| -> Result<Result<RegressionResult, AeroError>, String> {
+    let cy = (|| -> Outcome {
         let eq = "CY";
-        let v = channel("airspeed_m_s", v_ch, n, eq)?;
-        let beta = channel("beta_rad", record.beta_rad, n, eq)?;
-        let p = channel("p_rad_s", record.p_rad_s, n, eq)?;
-        let r = channel("r_rad_s", record.r_rad_s, n, eq)?;
-        let da = channel("aileron_rad", record.aileron_rad, n, eq)?;
-        let dr = channel("rudder_rad", record.rudder_rad, n, eq)?;
+        let [v, beta, p, r, da, dr] = lateral_channels(eq)?;
         let specific: Vec<f64> = match record.ay_m_s2.filter(|x| x.len() == n) {
             Some(ay) => ay.to_vec(),
             None => {
@@ -654,21 +647,12 @@ pub fn equation_error(
             "CY", v, beta, p, r, da, dr, b, &z, options,
         ))
     })();
-    match cy {
-        Ok(Ok(res)) => equations.push(res),
-        // Collinear regressors (a flight that does not excite this axis): skipped, not fatal.
-        Ok(Err(AeroError::BadRecord(why))) => skipped.push(("CY", why)),
-        Ok(Err(e)) => return Err(e),
-        Err(why) => skipped.push(("CY", why)),
-    }
+    file_outcome("CY", cy, &mut equations, &mut skipped)?;
 
     // ---- C_L
-    let cl = (|| -> Result<Result<RegressionResult, AeroError>, String> {
+    let cl = (|| -> Outcome {
         let eq = "CL";
-        let v = channel("airspeed_m_s", v_ch, n, eq)?;
-        let alpha = channel("alpha_rad", record.alpha_rad, n, eq)?;
-        let q = channel("q_rad_s", record.q_rad_s, n, eq)?;
-        let de = channel("elevator_rad", record.elevator_rad, n, eq)?;
+        let [v, alpha, q, de] = longitudinal_channels(eq)?;
         let specific: Vec<f64> = match record.az_m_s2.filter(|x| x.len() == n) {
             Some(az) => az.to_vec(),
             None => {
@@ -718,13 +702,7 @@ pub fn equation_error(
             options,
         ))
     })();
-    match cl {
-        Ok(Ok(res)) => equations.push(res),
-        // Collinear regressors (a flight that does not excite this axis): skipped, not fatal.
-        Ok(Err(AeroError::BadRecord(why))) => skipped.push(("CL", why)),
-        Ok(Err(e)) => return Err(e),
-        Err(why) => skipped.push(("CL", why)),
-    }
+    file_outcome("CL", cl, &mut equations, &mut skipped)?;
 
     if equations.is_empty() {
         return Err(AeroError::BadRecord(format!(
@@ -737,6 +715,26 @@ pub fn equation_error(
         )));
     }
     Ok(EquationErrorResult { equations, skipped })
+}
+
+/// How one coefficient equation ended: its regression (or the regression's error), or the missing channel
+/// that kept it from being formed.
+type Outcome = Result<Result<RegressionResult, AeroError>, String>;
+
+/// Files one equation's [`Outcome`]: a regression into `equations`; a missing channel or collinear regressors
+/// (a flight that does not excite this axis) into `skipped`, not fatal; any other error ends the regression.
+fn file_outcome(
+    eq: &'static str,
+    outcome: Outcome,
+    equations: &mut Vec<RegressionResult>,
+    skipped: &mut Vec<(&'static str, String)>,
+) -> Result<(), AeroError> {
+    match outcome {
+        Ok(Ok(res)) => equations.push(res),
+        Ok(Err(AeroError::BadRecord(why))) | Err(why) => skipped.push((eq, why)),
+        Ok(Err(e)) => return Err(e),
+    }
+    Ok(())
 }
 
 #[allow(clippy::too_many_arguments)]
