@@ -18,7 +18,8 @@
 //! every iteration (Klein & Morelli §6.2, eq. 6.51–6.56). Standard errors are Cramér–Rao bounds
 //! corrected for coloured residuals (Morelli & Klein, "Accounting for the effects of colored
 //! residuals", J. Aircraft 1997; Klein & Morelli §6.5): `Cov = M⁻¹ S M⁻¹` with
-//! `M = Σ Jᵀ R⁻¹ J` and `S` built from the residual autocorrelation up to a 2 s lag. The plain
+//! `M = Σ Jᵀ R⁻¹ J` and `S` built from the Bartlett-windowed residual autocorrelation over the lags
+//! where it is correlated (the estimation core's rule, `estimate::covariance`). The plain
 //! bound `M⁻¹` (white residuals) is optimistic by factors of 2–5 on flight data.
 //!
 //! Integration: classical Runge–Kutta 4 over each sample interval, measured inputs linear in time.

@@ -23,8 +23,9 @@
 //! with the joint simulation error as criterion; the fractional delay of the single-record
 //! `srivc`/`oe` is not implemented here.
 //!
-//! Standard errors (`oe` only): the white-residual Cramér–Rao bound `σ²(JᵀJ)⁻¹` of the full
-//! parameter vector, marginalised to `[B, A]`; it is optimistic when residuals are coloured.
+//! Standard errors (`oe` only): the Cramér–Rao bound of the full parameter vector corrected for
+//! coloured residuals by the estimation core's rule (`estimate::covariance`), marginalised to
+//! `[B, A]`: the same rule as the single-record `oe`.
 
 use faer::Mat;
 use serde::{Deserialize, Serialize};

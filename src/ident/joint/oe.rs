@@ -1,7 +1,8 @@
-//! Joint output error by variable projection and its white-residual Cramér–Rao bound (the `oe` row of
-//! the method table in [`super`]).
+//! Joint output error by variable projection and its Cramér–Rao bound corrected for coloured residuals
+//! (the `oe` row of the method table in [`super`]).
 
-use super::{linear_system, sse, Centered, Nuisance};
+use super::{linear_system, Centered, Nuisance};
+use crate::estimate::covariance;
 use crate::ident::linalg::{inverse, lstsq_qr};
 use crate::ident::{ContinuousModel, IdentError};
 use crate::optimise;
@@ -100,9 +101,12 @@ where
     }
 }
 
-/// White-residual Cramér–Rao bound of `[b…, a…]` for the joint output-error model: `σ²(JᵀJ)⁻¹`
-/// over all parameters (nuisances included), `J` by central differences for `a` and exactly
-/// (the basis columns) for the linear parameters; the `[B, A]` block is returned.
+/// Cramér–Rao bound of `[b…, a…]` for the joint output-error model, corrected for coloured residuals
+/// by the estimation core's rule ([`covariance`]): `(JᵀJ)⁻¹ [Σ_records W_r] (JᵀJ)⁻¹`, `W_r` the
+/// products of record r's rows of `J` weighted by its Bartlett-windowed residual autocorrelation
+/// (records mutually uncorrelated; white residuals give `σ²(JᵀJ)⁻¹`). Over all parameters
+/// (nuisances included), `J` by central differences for `a` and exactly (the basis columns) for the
+/// linear parameters; the `[B, A]` block is returned.
 pub(super) fn covariance(
     recs: &[Centered],
     dt_s: f64,
@@ -163,17 +167,25 @@ pub(super) fn covariance(
             }
         }
     }
-    let y_model: Vec<f64> = nuis
-        .iter()
-        .flat_map(|q| q.y_model.iter().copied())
-        .collect();
-    let dof = y.len().saturating_sub(p).max(1);
-    let sigma2 = sse(&y, &y_model) / dof as f64;
     let inv = inverse(&jtj, p)?;
+    let mut w = vec![0.0; p * p];
+    let mut start = 0;
+    for (rec, q) in recs.iter().zip(nuis) {
+        let rows = start..start + rec.y.len();
+        let e: Vec<f64> = y[rows.clone()]
+            .iter()
+            .zip(&q.y_model)
+            .map(|(a, b)| a - b)
+            .collect();
+        let cols: Vec<Vec<f64>> = (0..p)
+            .map(|c| rows.clone().map(|i| col(i, c)).collect())
+            .collect();
+        let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let w_r = covariance::lag_weighted_products(&refs, &covariance::lag_weights(&e));
+        w.iter_mut().zip(&w_r).for_each(|(acc, v)| *acc += v);
+        start = rows.end;
+    }
+    let cov = covariance::sandwich(&inv, &w, p);
     let q = m + 1 + n;
-    Some(
-        (0..q * q)
-            .map(|k| sigma2 * inv[(k / q) * p + k % q])
-            .collect(),
-    )
+    Some((0..q * q).map(|k| cov[(k / q) * p + k % q]).collect())
 }
