@@ -53,7 +53,7 @@ pub struct DiagnoseCmd {
     #[arg(long, default_value_t = 2)]
     pub workers: usize,
     /// Rate the replay integrates at, Hz: a whole multiple of the record's rate (default: the smallest one of
-    /// at least 100 Hz). The surfaces move in straight lines between the record's samples; at the record's own
+    /// at least 200 Hz). The surfaces move in straight lines between the record's samples; at the record's own
     /// rate that is a hold of each sample over the step that ends at it (the convention of `flightid fly`).
     #[arg(long, value_name = "HZ")]
     pub replay_rate_hz: Option<f64>,

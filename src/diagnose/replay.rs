@@ -39,7 +39,12 @@ pub const OUTPUTS: [&str; 12] = [
 ];
 
 /// Lowest integration rate of a replay, Hz: a record logged slower is replayed at a whole multiple of its rate.
-pub const MIN_SIM_RATE_HZ: f64 = 100.0;
+/// JSBSim's discrete integration delays the response to a surface by about one integration step (measured on
+/// the c172x: a 0.09 s rudder delay flown at 200 Hz is fitted as 0.083–0.086 s by a replay at 100 Hz (four
+/// records) and 0.091 s at 200 Hz; flown at 100 Hz, as 0.090 s at 100 Hz, 0.096 s at 200 Hz, 0.099 s at
+/// 400 Hz). At 200 Hz that delay, 5 ms, is a quarter of the smallest input delay worth naming; at 100 Hz it is
+/// half of it, and an actuator lag then fitted a true delay better than the delay itself.
+pub const MIN_SIM_RATE_HZ: f64 = 200.0;
 
 /// A measured record prepared for replay: uniform grid, trim point, input deviations, compared outputs.
 #[derive(Debug, Clone)]
@@ -540,5 +545,16 @@ mod tests {
             *v += 5e-4 * ((k * 7919 % 13) as f64 / 6.0 - 1.0);
         }
         assert_eq!(segment_starts(&noisy, 0.1), vec![197]);
+    }
+
+    #[test]
+    fn segments_are_at_least_five_seconds_long() {
+        // Quiet from 1.5 s, maneuvers at 10 s, 14.2 s and 20 s, each after more than 3 s of still input: the one at
+        // 14.2 s would start a segment only 4.2 s after the one at 10 s and does not; the one at 20 s does.
+        let u = input(
+            &[(1.0, 0.5, 0.05), (10.0, 0.5, 0.05), (14.2, 0.5, -0.05), (20.0, 0.5, 0.05)],
+            30.0,
+        );
+        assert_eq!(segment_starts(&u, 0.1), vec![97, 197]);
     }
 }

@@ -499,12 +499,176 @@ pub fn select<'e>(
             valid_cost = Some(after);
         }
     }
+    let rounds = named.len();
+    replace_ambiguous(
+        workers,
+        &w,
+        &catalogue,
+        &sens,
+        &resolution,
+        &masks,
+        opts,
+        progress,
+        Replacement {
+            selected: &mut selected,
+            named: &mut named,
+            candidates: &mut candidates,
+            cost: &mut base_cost,
+            round: rounds,
+        },
+    )?;
     Ok(Selection {
         selected,
         named,
         candidates,
         unidentifiable,
     })
+}
+
+/// The state of the selection that [`replace_ambiguous`] may change.
+struct Replacement<'a, 'e> {
+    selected: &'a mut Vec<Active<'e>>,
+    named: &'a mut Vec<NamedCause>,
+    candidates: &'a mut Vec<Candidate>,
+    cost: &'a mut f64,
+    round: usize,
+}
+
+/// Sequential replacement (Miller, Subset Selection in Regression, 2nd ed., §3.3): once forward selection has
+/// stopped, every named effect is fitted again against the members of its ambiguity group with all the other
+/// named effects in the model, and the one with the lower cost is kept. Two candidates whose sensitivities are
+/// nearly parallel (an input delay and an actuator lag on doublets) differ in cost by little, and while other
+/// effects are still unmodelled their residual decides which fits better; the choice is made only once those are
+/// modelled. Both models have the same number of parameters, so the lower cost is the better criterion value;
+/// the alternative must also pass every significance test against the model without the effect it replaces.
+#[allow(clippy::too_many_arguments)]
+fn replace_ambiguous<'e>(
+    workers: &mut [Worker],
+    w: &Weighted,
+    catalogue: &[&'e dyn Extension],
+    sens: &[Vec<f64>],
+    resolution: &[f64],
+    masks: &[Vec<bool>],
+    opts: &DiagnoseOptions,
+    progress: &Progress,
+    state: Replacement<'_, 'e>,
+) -> Result<(), DiagnoseError> {
+    let Replacement {
+        selected,
+        named,
+        candidates,
+        cost,
+        round,
+    } = state;
+    for i in 0..named.len() {
+        let alternatives: Vec<usize> = named[i]
+            .ambiguous_with
+            .iter()
+            .filter_map(|key| {
+                catalogue
+                    .iter()
+                    .position(|e| format!("{}/{}", e.effect(), e.target()) == *key)
+            })
+            .collect();
+        if alternatives.is_empty() {
+            continue;
+        }
+        progress.stage("ambiguity groups", alternatives.len());
+        // The model without effect i, its residual and cost: the base the alternatives are judged against.
+        let without: Vec<Active<'e>> = selected
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != i)
+            .map(|(_, a)| a.clone())
+            .collect();
+        let r = residuals(&mut workers[0], w, &without).map_err(sim_err("replay"))?;
+        progress.simulated(1);
+        let cost_without: f64 = r.iter().map(|v| v * v).sum();
+        let n_eff = effective_n(&r, w.case.len(), lag_window(w.case));
+        // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate.
+        let starts: Vec<Vec<Active<'e>>> = alternatives
+            .iter()
+            .map(|&j| {
+                let start = score_test(catalogue[j], &sens[j], &r, cost_without, n_eff).values[0];
+                let mut a: Vec<Active<'e>> = selected
+                    .iter()
+                    .map(|s| Active {
+                        free: true,
+                        ..s.clone()
+                    })
+                    .collect();
+                let one = with_candidate(&[], catalogue[j], start, true);
+                a[i] = one[0].clone();
+                a
+            })
+            .collect();
+        let fits: Vec<FullFit> = par_map(workers, &starts, |wk, active| {
+            let mut a = active.clone();
+            let out = fit(wk, w, &mut a, 10, true);
+            progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
+            out.map(|o| (o, a))
+        });
+        let ctx = RoundContext {
+            round,
+            base_cost: cost_without,
+            floor: opts.residual_floor * w.n() as f64,
+        };
+        let mut best: Option<(usize, FitOutcome, Vec<Active<'e>>)> = None;
+        for (&j, out) in alternatives.iter().zip(fits) {
+            let Ok((o, a)) = out else { continue };
+            // The candidate's own parameter is the last of the fit's values: move effect i's to the end.
+            let mut o_last = o.clone();
+            let k = o.values.len();
+            if k > 0 && i < k - 1 {
+                for v in [
+                    &mut o_last.values,
+                    &mut o_last.std_errors,
+                    &mut o_last.crb_std_errors,
+                ] {
+                    let x = v.remove(i);
+                    v.push(x);
+                }
+                let s = o_last.sensitivities.remove(i);
+                o_last.sensitivities.push(s);
+            }
+            let mut c = ctx.candidate(catalogue[j], &o_last, true, resolution[j]);
+            c.rejected_because = rejection(&c, catalogue[j], &o_last, cost_without, opts, &masks[j]);
+            if c.rejected_because.is_none()
+                && o.cost_after < *cost
+                && best.as_ref().is_none_or(|(_, b, _)| o.cost_after < b.cost_after)
+            {
+                best = Some((j, o, a));
+            } else if c.rejected_because.is_none() {
+                c.rejected_because = Some(format!(
+                    "in place of {}/{}: cost {:.1} not below {:.1}",
+                    named[i].effect, named[i].target, o.cost_after, *cost
+                ));
+            }
+            candidates.push(c);
+        }
+        let Some((j, o, a)) = best else { continue };
+        let replaced = format!("{}/{}", named[i].effect, named[i].target);
+        let kept = format!("{}/{}", catalogue[j].effect(), catalogue[j].target());
+        *selected = a;
+        for s in selected.iter_mut() {
+            s.free = false;
+        }
+        *cost = o.cost_after;
+        let mut group: Vec<String> = std::iter::once(replaced)
+            .chain(named[i].ambiguous_with.iter().filter(|g| **g != kept).cloned())
+            .collect();
+        group.dedup();
+        for (k, (n, s)) in named.iter_mut().zip(selected.iter()).enumerate() {
+            n.effect = s.ext.effect().into();
+            n.target = s.ext.target().into();
+            n.value = s.params[0];
+            n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
+            if k == i {
+                n.ambiguous_with = group.clone();
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The significant candidates the data cannot tell apart from the chosen one: nearly the same cost
