@@ -552,7 +552,11 @@ mod tests {
     }
 
     /// The fit of `free` to `tfs` started from [`perturbed`].
-    fn fit_from_perturbed(truth: &AeroModel, tfs: &IdentifiedTfs, free: &[D]) -> DerivativeEstimate {
+    fn fit_from_perturbed(
+        truth: &AeroModel,
+        tfs: &IdentifiedTfs,
+        free: &[D],
+    ) -> DerivativeEstimate {
         estimate_derivatives(&perturbed(truth, free), tfs, free, FitOptions::default()).unwrap()
     }
 
@@ -707,7 +711,11 @@ mod tests {
             den: vec![1.0, 2.0, 3.0, 4.0],
             covariance: None,
         };
-        let err = fit_error(&truth, &IdentifiedTfs::paper(Some(third_order), None, None), &free);
+        let err = fit_error(
+            &truth,
+            &IdentifiedTfs::paper(Some(third_order), None, None),
+            &free,
+        );
         assert!(
             err.contains("theta_rad/elevator_rad")
                 && err.contains("degree 3")

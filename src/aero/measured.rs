@@ -257,8 +257,8 @@ pub fn equation_error_measured(
             half_window: 3,
             ..EquationErrorOptions::default()
         };
-        let res =
-            equation_error(&Channels::from_columns(&rec), &mass, &geometry, &options).map_err(|e| match e {
+        let res = equation_error(&Channels::from_columns(&rec), &mass, &geometry, &options)
+            .map_err(|e| match e {
                 AeroError::BadRecord(m) => bad(m),
                 other => MeasuredError::Aero(other),
             })?;

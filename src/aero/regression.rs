@@ -25,6 +25,8 @@
 use faer::prelude::Solve;
 use faer::Mat;
 
+use crate::estimate::covariance;
+
 use super::params::{Derivative, Geometry, MassProperties};
 use super::AeroError;
 
@@ -425,26 +427,20 @@ pub(crate) fn lesq(
             .map(|k| v[(a, k)] * v[(b, k)] / (s[k] * s[k]))
             .sum::<f64>()
     });
-    // Coloured residuals: M = Σ_k R(k) Σ_i x(i) x(i+k)ᵀ (+ transpose for k > 0).
-    let autocorrelation =
-        |k: usize| (0..n - k).map(|i| resid[i] * resid[i + k]).sum::<f64>() / n as f64;
+    // Coloured residuals: M = Σ_i Σ_j x(i) R(|i−j|) x(j)ᵀ over the lags up to the first where the
+    // residual autocorrelation is no longer positive (or `max_lag`), unweighted; summed by the
+    // estimation core's FFT products.
     let lags = match max_lag {
         Some(l) => l.min(n - 1),
-        None => (1..n).find(|&k| autocorrelation(k) <= 0.0).unwrap_or(n - 1),
-    };
-    let mut m = Mat::<f64>::zeros(p, p);
-    for k in 0..=lags {
-        let r_k = autocorrelation(k);
-        for a in 0..p {
-            for b in 0..p {
-                let sab: f64 = (0..n - k).map(|i| columns[a][i] * columns[b][i + k]).sum();
-                m[(a, b)] += r_k * sab;
-                if k > 0 {
-                    m[(b, a)] += r_k * sab;
-                }
-            }
+        None => {
+            let acf = covariance::autocorrelation(&resid, n - 1);
+            (1..n).find(|&k| acf[k] <= 0.0).unwrap_or(n - 1)
         }
-    }
+    };
+    let acf = covariance::autocorrelation(&resid, lags);
+    let cols: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
+    let w = covariance::lag_weighted_products(&cols, &acf);
+    let m = Mat::from_fn(p, p, |a, b| w[a * p + b]);
     let cov_c = &d * &m * &d;
     let terms = names
         .iter()

@@ -134,7 +134,11 @@ impl ColumnsArg {
 
 /// `rec` from `path` resampled onto a uniform grid at `resample_hz` when given; a rate the record cannot take
 /// is a usage error (exit 2).
-pub fn resample(rec: FlightRecord, resample_hz: Option<f64>, path: &Path) -> anyhow::Result<FlightRecord> {
+pub fn resample(
+    rec: FlightRecord,
+    resample_hz: Option<f64>,
+    path: &Path,
+) -> anyhow::Result<FlightRecord> {
     match resample_hz {
         Some(hz) => Ok(data::resample_uniform(&rec, hz)
             .map_err(|e| UsageError(format!("{}: {e}", path.display())))?),

@@ -308,18 +308,11 @@ fn assemble(
         let (a, b) = (&w[0], &w[1]);
         let (ta, tb) = (a.columns[time_index][a.rows - 1], b.columns[time_index][0]);
         if tb <= ta {
-            return Err(DataError::TimeNotIncreasing {
-                file: file.to_string(),
-                line: b.first_line,
-                time_s: tb,
-                previous_s: ta,
-                previous_line: a.last_line,
-                relation: if tb == ta {
-                    "repeats"
-                } else {
-                    "goes back from"
-                },
-            });
+            return Err(DataError::time_not_increasing(
+                file,
+                (b.first_line, tb),
+                (a.last_line, ta),
+            ));
         }
     }
     let total: usize = parts.iter().map(|c| c.rows).sum();

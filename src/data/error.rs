@@ -163,6 +163,29 @@ pub struct Warning {
     pub message: String,
 }
 
+impl DataError {
+    /// [`DataError::TimeNotIncreasing`] for the sample at `time_s` (line `line`) that does not exceed the one
+    /// before it, `previous_s` (line `previous_line`).
+    pub(crate) fn time_not_increasing(
+        file: &str,
+        (line, time_s): (usize, f64),
+        (previous_line, previous_s): (usize, f64),
+    ) -> Self {
+        DataError::TimeNotIncreasing {
+            file: file.to_string(),
+            line,
+            time_s,
+            previous_s,
+            previous_line,
+            relation: if time_s == previous_s {
+                "repeats"
+            } else {
+                "goes back from"
+            },
+        }
+    }
+}
+
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.column {

@@ -210,18 +210,11 @@ pub(crate) fn check_time_increasing(
 ) -> Result<(), DataError> {
     for i in 1..time_s.len() {
         if time_s[i] <= time_s[i - 1] {
-            return Err(DataError::TimeNotIncreasing {
-                file: file.to_string(),
-                line: line_of(i),
-                time_s: time_s[i],
-                previous_s: time_s[i - 1],
-                previous_line: line_of(i - 1),
-                relation: if time_s[i] == time_s[i - 1] {
-                    "repeats"
-                } else {
-                    "goes back from"
-                },
-            });
+            return Err(DataError::time_not_increasing(
+                file,
+                (line_of(i), time_s[i]),
+                (line_of(i - 1), time_s[i - 1]),
+            ));
         }
     }
     Ok(())

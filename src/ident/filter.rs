@@ -63,15 +63,7 @@ impl Svf {
             Hold::Foh => {
                 // expm([[A, B, 0],[0, 0, 1],[0, 0, 0]] h): block (1,2) = Γ0, block (1,3) = hΓ0 − Γ1
                 let m = n + 2;
-                let mut big = vec![0.0; m * m];
-                for i in 0..n {
-                    for j in 0..n {
-                        big[i * m + j] = a[i * n + j] * dt_s;
-                    }
-                }
-                big[(n - 1) * m + n] = dt_s;
-                big[n * m + n + 1] = dt_s;
-                let e = expm_rows(&big, m);
+                let e = augmented_exponential(&a, n, m, dt_s, |big| big[n * m + n + 1] = dt_s);
                 let phi: Vec<f64> = (0..n * n).map(|k| e[(k / n) * m + k % n]).collect();
                 let g0: Vec<f64> = (0..n).map(|i| e[i * m + n]).collect();
                 // e[i, n+1] = ∫₀^h e^{Aσ}B (h−σ)/h dσ · h / h → divide by h for the slope weight
@@ -231,13 +223,15 @@ fn companion(den_monic: &[f64]) -> Vec<f64> {
     a
 }
 
-/// `(e^{At}, ∫₀^t e^{Aσ}dσ B)` with `B = e_n`, from one exponential of `[[A, B],[0, 0]] t`
-/// (Van Loan 1978, "Computing integrals involving the matrix exponential").
-fn phi_gamma(a: &[f64], n: usize, t: f64) -> (Vec<f64>, Vec<f64>) {
-    if t == 0.0 {
-        return (identity(n), vec![0.0; n]);
-    }
-    let m = n + 1;
+/// `expm(M t)` of the m × m block matrix `M = [[A, B, …], [0, …]]` (row-major), `A` the n × n companion
+/// matrix and `B = e_n` in column n; `extra` sets the further blocks of `M t` (Van Loan 1978).
+fn augmented_exponential(
+    a: &[f64],
+    n: usize,
+    m: usize,
+    t: f64,
+    extra: impl FnOnce(&mut [f64]),
+) -> Vec<f64> {
     let mut big = vec![0.0; m * m];
     for i in 0..n {
         for j in 0..n {
@@ -245,7 +239,18 @@ fn phi_gamma(a: &[f64], n: usize, t: f64) -> (Vec<f64>, Vec<f64>) {
         }
     }
     big[(n - 1) * m + n] = t;
-    let e = expm_rows(&big, m);
+    extra(&mut big);
+    expm_rows(&big, m)
+}
+
+/// `(e^{At}, ∫₀^t e^{Aσ}dσ B)` with `B = e_n`, from one exponential of `[[A, B],[0, 0]] t`
+/// (Van Loan 1978, "Computing integrals involving the matrix exponential").
+fn phi_gamma(a: &[f64], n: usize, t: f64) -> (Vec<f64>, Vec<f64>) {
+    if t == 0.0 {
+        return (identity(n), vec![0.0; n]);
+    }
+    let m = n + 1;
+    let e = augmented_exponential(a, n, m, t, |_| {});
     let phi: Vec<f64> = (0..n * n).map(|k| e[(k / n) * m + k % n]).collect();
     let g: Vec<f64> = (0..n).map(|i| e[i * m + n]).collect();
     (phi, g)

@@ -19,7 +19,11 @@ pub fn add_white_noise(x: &[f64], std: f64, seed: u64) -> Vec<f64> {
 /// sample step departs from `dt_s` by more than 1 % of it, otherwise interpolated ([`resample_linear`]) onto
 /// `t0 + k dt_s` up to the last sample. Returns the series and, when they were resampled, the largest step
 /// departure, s.
-pub fn on_uniform_step(time_s: &[f64], series: &[&[f64]], dt_s: f64) -> (Vec<Vec<f64>>, Option<f64>) {
+pub fn on_uniform_step(
+    time_s: &[f64],
+    series: &[&[f64]],
+    dt_s: f64,
+) -> (Vec<Vec<f64>>, Option<f64>) {
     let worst_jitter_s = time_s
         .windows(2)
         .map(|w| ((w[1] - w[0]) - dt_s).abs())

@@ -104,7 +104,12 @@ fn derivative(x: &[f64; 6], w: [f64; 3], f: [f64; 3], translational: bool) -> [f
 }
 
 /// Integrates the kinematics and returns the residuals `y_m − model` for each output used.
-pub(super) fn residuals(data: &Data, params: &[Param], th: &[f64], outputs: &[usize]) -> Vec<Vec<f64>> {
+pub(super) fn residuals(
+    data: &Data,
+    params: &[Param],
+    th: &[f64],
+    outputs: &[usize],
+) -> Vec<Vec<f64>> {
     let n = data.t.len();
     let mut gyro_bias = [0.0; 3];
     let mut accel_bias = [0.0; 3];

@@ -202,18 +202,11 @@ impl ChunkSink<'_> {
             let t = &self.columns[self.time_index];
             let (prev, cur) = (t[rows - 1], t[rows]);
             if cur <= prev {
-                return Err(DataError::TimeNotIncreasing {
-                    file: self.file.to_string(),
-                    line,
-                    time_s: cur,
-                    previous_s: prev,
-                    previous_line: self.last_line,
-                    relation: if cur == prev {
-                        "repeats"
-                    } else {
-                        "goes back from"
-                    },
-                });
+                return Err(DataError::time_not_increasing(
+                    self.file,
+                    (line, cur),
+                    (self.last_line, prev),
+                ));
             }
         } else {
             self.first_line = line;
