@@ -173,7 +173,10 @@ fn check_refuses_a_record_beyond_the_reconstruction_budget_and_names_the_way_out
             "--resample-hz",
         ],
     );
-    let o = run(tmp.path(), &["check", "long.csv", "--from-s", "0", "--to-s", "60"]);
+    let o = run(
+        tmp.path(),
+        &["check", "long.csv", "--from-s", "0", "--to-s", "60"],
+    );
     assert!(
         !stderr(&o).contains("exceed the limit"),
         "a 60 s window is within the budget: {}",

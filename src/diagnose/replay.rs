@@ -552,7 +552,12 @@ mod tests {
         // Quiet from 1.5 s, maneuvers at 10 s, 14.2 s and 20 s, each after more than 3 s of still input: the one at
         // 14.2 s would start a segment only 4.2 s after the one at 10 s and does not; the one at 20 s does.
         let u = input(
-            &[(1.0, 0.5, 0.05), (10.0, 0.5, 0.05), (14.2, 0.5, -0.05), (20.0, 0.5, 0.05)],
+            &[
+                (1.0, 0.5, 0.05),
+                (10.0, 0.5, 0.05),
+                (14.2, 0.5, -0.05),
+                (20.0, 0.5, 0.05),
+            ],
             30.0,
         );
         assert_eq!(segment_starts(&u, 0.1), vec![97, 197]);

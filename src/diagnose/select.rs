@@ -632,10 +632,13 @@ fn replace_ambiguous<'e>(
                 o_last.sensitivities.push(s);
             }
             let mut c = ctx.candidate(catalogue[j], &o_last, true, resolution[j]);
-            c.rejected_because = rejection(&c, catalogue[j], &o_last, cost_without, opts, &masks[j]);
+            c.rejected_because =
+                rejection(&c, catalogue[j], &o_last, cost_without, opts, &masks[j]);
             if c.rejected_because.is_none()
                 && o.cost_after < *cost
-                && best.as_ref().is_none_or(|(_, b, _)| o.cost_after < b.cost_after)
+                && best
+                    .as_ref()
+                    .is_none_or(|(_, b, _)| o.cost_after < b.cost_after)
             {
                 best = Some((j, o, a));
             } else if c.rejected_because.is_none() {
@@ -655,7 +658,13 @@ fn replace_ambiguous<'e>(
         }
         *cost = o.cost_after;
         let mut group: Vec<String> = std::iter::once(replaced)
-            .chain(named[i].ambiguous_with.iter().filter(|g| **g != kept).cloned())
+            .chain(
+                named[i]
+                    .ambiguous_with
+                    .iter()
+                    .filter(|g| **g != kept)
+                    .cloned(),
+            )
             .collect();
         group.dedup();
         for (k, (n, s)) in named.iter_mut().zip(selected.iter()).enumerate() {
