@@ -430,16 +430,13 @@ pub(crate) fn lesq(
     // Coloured residuals: M = Σ_i Σ_j x(i) R(|i−j|) x(j)ᵀ over the lags up to the first where the
     // residual autocorrelation is no longer positive (or `max_lag`), unweighted; summed by the
     // estimation core's FFT products.
+    let acf = covariance::autocorrelation(&resid, max_lag.map_or(n - 1, |l| l.min(n - 1)));
     let lags = match max_lag {
         Some(l) => l.min(n - 1),
-        None => {
-            let acf = covariance::autocorrelation(&resid, n - 1);
-            (1..n).find(|&k| acf[k] <= 0.0).unwrap_or(n - 1)
-        }
+        None => (1..n).find(|&k| acf[k] <= 0.0).unwrap_or(n - 1),
     };
-    let acf = covariance::autocorrelation(&resid, lags);
     let cols: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
-    let w = covariance::lag_weighted_products(&cols, &acf);
+    let w = covariance::lag_weighted_products(&cols, &acf[..=lags]);
     let m = Mat::from_fn(p, p, |a, b| w[a * p + b]);
     let cov_c = &d * &m * &d;
     let terms = names
