@@ -64,6 +64,7 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
         case: &p.case,
         sigma: p.sigma.clone(),
         nuisance: &p.nuisance,
+        filter: p.filter.as_ref(),
     };
     let cost = sum_sq(&residuals(worker, &w, &[]).map_err(sim_err("replay"))?);
     let valid_cost = match &p.valid {
@@ -72,6 +73,7 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
                 case: v,
                 sigma: sigma.clone(),
                 nuisance: &[],
+                filter: None,
             };
             let r = residuals(worker, &vw, &[]).map_err(sim_err("validation replay"))?;
             Some(sum_sq(&r))

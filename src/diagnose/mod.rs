@@ -11,6 +11,7 @@ pub mod export;
 pub mod extension;
 pub mod model;
 pub mod prepare;
+pub mod process_noise;
 pub mod progress;
 pub mod replay;
 pub mod report;
@@ -194,6 +195,9 @@ pub struct Diagnosis {
     pub skipped: Vec<Skipped>,
     /// Conditions that limit what the verdict can be trusted for (e.g. a surface column missing).
     pub warnings: Vec<String>,
+    /// The process noise estimated on the training record (turbulence) and whether the search used the filter
+    /// error method; absent when the simulation cannot set its state mid-flight.
+    pub process_noise: Option<process_noise::ProcessNoise>,
     /// Noise standard deviation estimated per channel (the cost weights).
     pub noise_std: BTreeMap<String, f64>,
     /// Number of residual values (samples × channels).
@@ -239,8 +243,9 @@ pub fn diagnose(
     progress.stage("trim, baseline replay", 0);
     let mut p = prepare::prepare(first, train, valid)?;
     progress.stage("segment initial states", 0);
-    p.nuisance =
-        search::initial_state_basis(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
+    let columns =
+        search::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
+    let process_noise = turbulence(&mut workers[0], &mut p, columns)?;
     let nuisance_sims = if p.nuisance.is_empty() {
         0
     } else {
@@ -265,6 +270,7 @@ pub fn diagnose(
             .chain(sel.unidentifiable)
             .collect(),
         warnings: p.warnings,
+        process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.sigma).collect(),
         n_residuals: p.case.len() * p.case.outputs.len(),
         // + the replays outside the search: probe, baseline (2), training after; validation before, cost, after
@@ -276,6 +282,44 @@ pub fn diagnose(
         simulation_s: workers.iter().map(|w| w.sim_s).sum::<f64>() - sim_s0,
         traces: v.traces,
     })
+}
+
+/// Estimates the training record's process noise from the unextended model's residual and the segment
+/// initial-state responses `columns`, sets the filter (when turbulence is found) and the nuisance basis (the
+/// columns through the same filter).
+fn turbulence(
+    worker: &mut search::Worker,
+    p: &mut prepare::Prepared,
+    columns: Vec<Vec<f64>>,
+) -> Result<Option<process_noise::ProcessNoise>, DiagnoseError> {
+    if columns.is_empty() {
+        return Ok(None);
+    }
+    let raw = search::Weighted {
+        case: &p.case,
+        sigma: p.sigma.clone(),
+        nuisance: &[],
+        filter: None,
+    };
+    let r0 = search::residuals(worker, &raw, &[]).map_err(sim_err("replay"))?;
+    let estimate = process_noise::estimate(&p.case, &columns, &r0);
+    let (filter, report) = match estimate {
+        Some((f, report)) => (f, Some(report)),
+        None => (None, None),
+    };
+    let mut columns = columns;
+    if let Some(f) = &filter {
+        columns.iter_mut().for_each(|c| f.apply(c));
+        p.warnings.push(format!(
+            "the record carries process noise (turbulence): the search fitted the filter error method's \
+             innovations (likelihood gain {:.0} against a penalty of {:.0})",
+            report.as_ref().map_or(0.0, |r| r.likelihood_gain),
+            report.as_ref().map_or(0.0, |r| r.penalty),
+        ));
+    }
+    p.nuisance = search::orthonormal_basis(&columns);
+    p.filter = filter;
+    Ok(report)
 }
 
 fn sim_err(during: &str) -> impl FnOnce(SimError) -> DiagnoseError + '_ {

@@ -23,6 +23,9 @@ pub struct Prepared {
     pub warnings: Vec<String>,
     /// The nuisance terms of the training record's fits (`search::initial_state_basis`; set by `diagnose`).
     pub nuisance: Vec<Vec<f64>>,
+    /// The filter error method's filter on the training record's residuals when it flew in turbulence
+    /// (`process_noise::estimate`; set by `diagnose`).
+    pub filter: Option<super::process_noise::ResidualFilter>,
 }
 
 impl Prepared {
@@ -146,5 +149,6 @@ pub fn prepare(
         skipped,
         warnings,
         nuisance: Vec::new(),
+        filter: None,
     })
 }

@@ -13,6 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use super::extension::{Extension, Stage};
+use super::process_noise::ResidualFilter;
 use super::replay::{replay, replay_with_resets, ReplayCase};
 use super::simulator::ReplaySim;
 use crate::data::FlightRecord;
@@ -64,6 +65,9 @@ pub struct Weighted<'c> {
     /// Orthonormal basis of the residual directions the nuisance terms explain (see [`initial_state_basis`]);
     /// the residual is projected off it, which estimates the nuisance terms jointly with every fit.
     pub nuisance: &'c [Vec<f64>],
+    /// The filter error method's innovations in place of the output error (turbulence; see
+    /// [`super::process_noise`]): applied before the nuisance terms are projected off.
+    pub filter: Option<&'c ResidualFilter>,
 }
 
 impl<'c> Weighted<'c> {
@@ -128,6 +132,9 @@ pub fn residuals(
             r.push(if e.is_finite() { e } else { 1e6 });
         }
     }
+    if let Some(f) = w.filter {
+        f.apply(&mut r);
+    }
     project_off(&mut r, w.nuisance);
     Ok(r)
 }
@@ -189,11 +196,12 @@ fn state_perturbations() -> Vec<StateReset> {
 /// The nuisance terms of every fit: the state at the start of each of the case's segments (roll and pitch
 /// angles, body rates and velocities, altitude; `ReplayCase::segments`). Their effect on the noise-normalised
 /// residual is linearised once at the unextended model (one simulation per segment and state, in parallel on
-/// the workers) and returned as an orthonormal basis; [`residuals`] projects it off. Estimating the initial
+/// the workers) and returned column by column (nine per segment, in segment order); [`residuals`] projects
+/// their [`orthonormal_basis`] off. Estimating the initial
 /// state per segment keeps the slow modes' drift, grown from small state errors over a long record, from being
 /// taken for a cause (Jategaonkar, Flight Vehicle System Identification, 2nd ed., initial conditions as
 /// unknowns per maneuver; multiple shooting). Empty when the simulation cannot set its state mid-flight.
-pub fn initial_state_basis(
+pub fn initial_state_columns(
     workers: &mut [Worker],
     case: &ReplayCase,
     sigma: &[f64],
@@ -233,8 +241,7 @@ pub fn initial_state_basis(
         }
         Ok(col)
     });
-    let columns: Vec<Vec<f64>> = columns.into_iter().collect::<Result<_, _>>()?;
-    Ok(orthonormal_basis(&columns))
+    columns.into_iter().collect()
 }
 
 fn cost(r: &[f64]) -> f64 {

@@ -365,11 +365,13 @@ pub fn select<'e>(
         case: &p.case,
         sigma: p.sigma.clone(),
         nuisance: &p.nuisance,
+        filter: p.filter.as_ref(),
     };
     let vw = p.valid.as_ref().map(|(v, s)| Weighted {
         case: v,
         sigma: s.clone(),
         nuisance: &[],
+        filter: None,
     });
     let Identifiable {
         entries: catalogue,

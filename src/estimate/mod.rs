@@ -20,7 +20,7 @@
 
 pub mod covariance;
 pub mod expr;
-mod fem;
+pub(crate) mod fem;
 mod fit;
 mod integrate;
 mod layout;
