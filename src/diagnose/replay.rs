@@ -83,19 +83,7 @@ pub const SEGMENT_LEAD_S: f64 = 0.3;
 /// Jategaonkar, Flight Vehicle System Identification, 2nd ed., on estimating initial conditions per maneuver).
 pub fn segment_starts(inputs: &[(String, Vec<f64>)], dt_s: f64) -> Vec<usize> {
     let n = inputs.first().map(|(_, d)| d.len()).unwrap_or(0);
-    let lag = ((0.5 / dt_s).round() as usize).max(1);
-    let scales: Vec<f64> = inputs
-        .iter()
-        .map(|(_, d)| d.iter().fold(0.0_f64, |m, v| m.max(v.abs())))
-        .collect();
-    let moving: Vec<bool> = (0..n)
-        .map(|k| {
-            inputs.iter().zip(&scales).any(|((_, d), &scale)| {
-                let before = d[k.saturating_sub(lag)];
-                scale > 1e-6 && (d[k] - before).abs() > 0.1 * scale
-            })
-        })
-        .collect();
+    let moving = moving(inputs, dt_s);
     let quiet = (SEGMENT_QUIET_S / dt_s).round() as usize;
     let min_len = (SEGMENT_MIN_S / dt_s).round() as usize;
     let lead = (SEGMENT_LEAD_S / dt_s).round() as usize;
@@ -117,6 +105,25 @@ pub fn segment_starts(inputs: &[(String, Vec<f64>)], dt_s: f64) -> Vec<usize> {
         still = 0;
     }
     starts
+}
+
+/// Whether any input is moving at each sample: it changed over the last half second by more than a tenth of its
+/// largest deviation from its initial value (robust to sensor noise on the surface columns).
+pub fn moving(inputs: &[(String, Vec<f64>)], dt_s: f64) -> Vec<bool> {
+    let n = inputs.first().map(|(_, d)| d.len()).unwrap_or(0);
+    let lag = ((0.5 / dt_s).round() as usize).max(1);
+    let scales: Vec<f64> = inputs
+        .iter()
+        .map(|(_, d)| d.iter().fold(0.0_f64, |m, v| m.max(v.abs())))
+        .collect();
+    (0..n)
+        .map(|k| {
+            inputs.iter().zip(&scales).any(|((_, d), &scale)| {
+                let before = d[k.saturating_sub(lag)];
+                scale > 1e-6 && (d[k] - before).abs() > 0.1 * scale
+            })
+        })
+        .collect()
 }
 
 /// Model trim versus measured initial condition (a trim mismatch is evidence of a model error).
