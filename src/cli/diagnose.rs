@@ -57,6 +57,16 @@ pub struct DiagnoseCmd {
     /// rate that is a hold of each sample over the step that ends at it (the convention of `flightid fly`).
     #[arg(long, value_name = "HZ")]
     pub replay_rate_hz: Option<f64>,
+    /// Records flown in turbulence (experimental): estimate the process noise from the replay's residuals and,
+    /// when the likelihood finds it, fit every candidate on the filter error method's innovations instead of the
+    /// output error (a steady-state Kalman filter of the linearised error dynamics; docs/diagnose.md,
+    /// "Turbulence")
+    #[arg(long)]
+    pub process_noise: bool,
+    /// After forward selection, drop every named effect that no longer passes the significance tests with the
+    /// other named effects in the model (experimental; docs/diagnose.md, "Selection")
+    #[arg(long)]
+    pub backward_elimination: bool,
     #[command(flatten)]
     pub columns: ColumnsArg,
 }
@@ -132,7 +142,11 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         &mut workers,
         &train,
         valid.as_ref(),
-        &DiagnoseOptions::default(),
+        &DiagnoseOptions {
+            process_noise: args.process_noise,
+            backward_elimination: args.backward_elimination,
+            ..DiagnoseOptions::default()
+        },
     )?;
     // With `--json -` stdout carries only the JSON; the summary goes to stderr.
     let mut out: Box<dyn Write> = if args.json.as_deref() == Some("-") {

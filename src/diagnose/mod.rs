@@ -78,6 +78,12 @@ pub struct DiagnoseOptions {
     pub ambiguity_correlation: f64,
     /// Show the search's progress on a terminal (stderr).
     pub progress: bool,
+    /// Estimate the process noise (turbulence) of the training record and, when the likelihood says it is
+    /// there, search on the filter error method's innovations (`process_noise`; docs/diagnose.md, Turbulence).
+    pub process_noise: bool,
+    /// After forward selection, drop every named effect that no longer passes the tests with the others in the
+    /// model (`select::eliminate_backward`).
+    pub backward_elimination: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -92,6 +98,8 @@ impl Default for DiagnoseOptions {
             ambiguity_correlation: 0.9,
             refinement_share: 1.0 / 3.0,
             progress: true,
+            process_noise: false,
+            backward_elimination: false,
         }
     }
 }
@@ -196,7 +204,7 @@ pub struct Diagnosis {
     /// Conditions that limit what the verdict can be trusted for (e.g. a surface column missing).
     pub warnings: Vec<String>,
     /// The process noise estimated on the training record (turbulence) and whether the search used the filter
-    /// error method; absent when the simulation cannot set its state mid-flight.
+    /// error method; absent without `--process-noise` or when the simulation cannot set its state mid-flight.
     pub process_noise: Option<process_noise::ProcessNoise>,
     /// Noise standard deviation estimated per channel (the cost weights).
     pub noise_std: BTreeMap<String, f64>,
@@ -245,7 +253,12 @@ pub fn diagnose(
     progress.stage("segment initial states", 0);
     let columns =
         search::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
-    let process_noise = turbulence(&mut workers[0], &mut p, columns)?;
+    let process_noise = if opts.process_noise {
+        turbulence(&mut workers[0], &mut p, columns)?
+    } else {
+        p.nuisance = search::orthonormal_basis(&columns);
+        None
+    };
     let nuisance_sims = if p.nuisance.is_empty() {
         0
     } else {

@@ -36,7 +36,9 @@ pub const MODEL_HORIZON_S: f64 = 8.0;
 /// Grid of the process-noise variances tried, per second in the perturbation units of
 /// [`super::search::initial_state_columns`] (0.5 m/s, 0.005 rad/s): 10^(−3 … 2) in half decades.
 fn variance_grid() -> Vec<f64> {
-    (0..=10).map(|i| 10f64.powf(-3.0 + 0.5 * i as f64)).collect()
+    (0..=10)
+        .map(|i| 10f64.powf(-3.0 + 0.5 * i as f64))
+        .collect()
 }
 
 /// Perturbation indices of the body rates and the body velocities in `initial_state_columns`' order.
@@ -110,10 +112,14 @@ fn error_dynamics(case: &ReplayCase, columns: &[Vec<f64>]) -> Option<(Mat<f64>, 
     let mut c_sum = Mat::<f64>::zeros(m, n);
     let mut c_count = 0;
     for (s, &b) in case.segments.iter().enumerate() {
-        let end = case.segments.get(s + 1).copied().unwrap_or(len).min(b + horizon);
+        let end = case
+            .segments
+            .get(s + 1)
+            .copied()
+            .unwrap_or(len)
+            .min(b + horizon);
         let y = |k: usize, o: usize, j: usize| columns[s * n + j][o * len + k];
-        let Some(k0) = (b..end).find(|&k| (0..m).any(|o| (0..n).any(|j| y(k, o, j) != 0.0)))
-        else {
+        let Some(k0) = (b..end).find(|&k| (0..m).any(|o| (0..n).any(|j| y(k, o, j) != 0.0))) else {
             continue;
         };
         for o in 0..m {
@@ -183,43 +189,12 @@ fn filter_for(
     })
 }
 
-/// Mean square per channel of the channel-major `r` (`len` samples each) over the samples `used`.
-fn channel_variance(r: &[f64], len: usize, used: &[bool]) -> Vec<f64> {
-    let count = used.iter().filter(|u| **u).count().max(1) as f64;
+/// Mean square per channel of the channel-major `r` (`len` samples each).
+fn channel_variance(r: &[f64], len: usize) -> Vec<f64> {
     r.chunks(len.max(1))
-        .map(|c| {
-            let ss: f64 = c.iter().zip(used).filter(|(_, u)| **u).map(|(v, _)| v * v).sum();
-            (ss / count).max(1e-12)
-        })
+        .map(|c| (c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64).max(1e-12))
         .collect()
 }
-
-/// The samples the likelihood of the process noise is taken over: those at least [`QUIET_S`] after any input
-/// last moved, when they make up [`QUIET_SHARE`] of the record; all samples otherwise.
-fn likelihood_samples(case: &ReplayCase) -> Vec<bool> {
-    let moving = super::replay::moving(&case.inputs, case.dt_s());
-    let settle = (QUIET_S / case.dt_s()).round() as usize;
-    let mut since = settle; // the record starts quiet (its trim point is measured there)
-    let quiet: Vec<bool> = moving
-        .iter()
-        .map(|&m| {
-            since = if m { 0 } else { since + 1 };
-            since >= settle
-        })
-        .collect();
-    let share = quiet.iter().filter(|q| **q).count() as f64 / quiet.len().max(1) as f64;
-    if std::env::var("FLIGHTID_PN_QUIET").as_deref() == Ok("1") && share >= QUIET_SHARE {
-        quiet
-    } else {
-        vec![true; quiet.len()]
-    }
-}
-
-/// Time after the last input movement from which the aircraft's motion is the gusts' (and drift's), not the
-/// maneuver's, s: the short-period and Dutch-roll responses have decayed.
-pub const QUIET_S: f64 = 3.0;
-/// Least share of quiet samples for the likelihood to be taken over them alone.
-pub const QUIET_SHARE: f64 = 0.2;
 
 /// The innovations of `r` through `filter` with the nuisance `columns` (filtered the same way) projected off.
 fn innovations(filter: Option<&ResidualFilter>, r: &[f64], columns: &[Vec<f64>]) -> Vec<f64> {
@@ -246,10 +221,8 @@ pub fn estimate(
 ) -> Option<(Option<ResidualFilter>, ProcessNoise)> {
     let (a, c) = error_dynamics(case, columns)?;
     let (len, dt_s) = (case.len(), case.dt_s());
-    let used = likelihood_samples(case);
-    let n_used = used.iter().filter(|u| **u).count() as f64;
     let oe = innovations(None, r0, columns);
-    let r_oe = channel_variance(&oe, len, &used);
+    let r_oe = channel_variance(&oe, len);
     // −2 ln L at q: the innovation variances relaxed twice from output error's
     let evaluate = |qv: f64, qr: f64| -> Option<(f64, ResidualFilter)> {
         let mut q = vec![0.0; 9];
@@ -260,19 +233,18 @@ pub fn estimate(
         for _ in 0..2 {
             let f = filter_for(&a, &c, &q, &r, dt_s, len)?;
             let nu = innovations(Some(&f), r0, columns);
-            r = channel_variance(&nu, len, &used);
+            r = channel_variance(&nu, len);
             best = Some(f);
         }
-        let cost: f64 = r.iter().map(|v| v.ln()).sum::<f64>() * n_used;
+        let cost: f64 = r.iter().map(|v| v.ln()).sum::<f64>() * len as f64;
         best.map(|f| (cost, f))
     };
-    let cost_oe: f64 = r_oe.iter().map(|v| v.ln()).sum::<f64>() * n_used;
+    let cost_oe: f64 = r_oe.iter().map(|v| v.ln()).sum::<f64>() * len as f64;
     let grid = variance_grid();
     let (mut qv, mut qr) = (0.0, 0.0);
     let mut best: Option<(f64, ResidualFilter)> = None;
     // coordinate search: velocities, rates, velocities again
-    let rounds = if std::env::var("FLIGHTID_PN_RATES").as_deref() == Ok("0") { 1 } else { 3 };
-    for round in 0..rounds {
+    for round in 0..3 {
         for &g in std::iter::once(&0.0).chain(&grid) {
             let (tv, tr) = if round == 1 { (qv, g) } else { (g, qr) };
             if tv == 0.0 && tr == 0.0 {

@@ -519,22 +519,24 @@ pub fn select<'e>(
             round: rounds,
         },
     )?;
-    eliminate_backward(
-        workers,
-        &w,
-        &catalogue,
-        &resolution,
-        &masks,
-        opts,
-        progress,
-        Replacement {
-            selected: &mut selected,
-            named: &mut named,
-            candidates: &mut candidates,
-            cost: &mut base_cost,
-            round: rounds + 1,
-        },
-    )?;
+    if opts.backward_elimination {
+        eliminate_backward(
+            workers,
+            &w,
+            &catalogue,
+            &resolution,
+            &masks,
+            opts,
+            progress,
+            Replacement {
+                selected: &mut selected,
+                named: &mut named,
+                candidates: &mut candidates,
+                cost: &mut base_cost,
+                round: rounds + 1,
+            },
+        )?;
+    }
     Ok(Selection {
         selected,
         named,
@@ -583,9 +585,10 @@ fn eliminate_backward<'e>(
     let mut i = full.len();
     while i > 0 && full.len() >= 2 {
         i -= 1;
-        let Some(ci) = catalogue.iter().position(|e| {
-            e.effect() == full[i].ext.effect() && e.target() == full[i].ext.target()
-        }) else {
+        let Some(ci) = catalogue
+            .iter()
+            .position(|e| e.effect() == full[i].ext.effect() && e.target() == full[i].ext.target())
+        else {
             continue;
         };
         let starts: Vec<Vec<Active<'e>>> = vec![full
