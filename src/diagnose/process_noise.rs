@@ -101,23 +101,35 @@ pub struct ProcessNoise {
 /// The error dynamics `(A, C)` of `case` from the initial-state response `columns` (9 per segment, in
 /// segment order; channel-major, noise-normalised). `None` when there are none or the fit is singular.
 fn error_dynamics(case: &ReplayCase, columns: &[Vec<f64>]) -> Option<(Mat<f64>, Mat<f64>)> {
-    let (len, m) = (case.len(), case.outputs.len());
+    let horizon = (MODEL_HORIZON_S / case.dt_s()).round() as usize;
+    fit_error_dynamics(
+        columns,
+        &case.segments,
+        case.len(),
+        case.outputs.len(),
+        horizon,
+    )
+}
+
+/// [`error_dynamics`] for `columns` of `m` channels × `len` samples, 9 per segment starting at `segments`,
+/// fitted over `horizon` samples of each segment.
+fn fit_error_dynamics(
+    columns: &[Vec<f64>],
+    segments: &[usize],
+    len: usize,
+    m: usize,
+    horizon: usize,
+) -> Option<(Mat<f64>, Mat<f64>)> {
     let n = 9;
-    if columns.len() != n * case.segments.len() || columns.is_empty() || len < 3 {
+    if columns.len() != n * segments.len() || columns.is_empty() || len < 3 {
         return None;
     }
-    let horizon = (MODEL_HORIZON_S / case.dt_s()).round() as usize;
     // Y(k) rows (one per channel) for every segment and step, and the next step's
     let (mut now, mut next) = (Vec::new(), Vec::new());
     let mut c_sum = Mat::<f64>::zeros(m, n);
     let mut c_count = 0;
-    for (s, &b) in case.segments.iter().enumerate() {
-        let end = case
-            .segments
-            .get(s + 1)
-            .copied()
-            .unwrap_or(len)
-            .min(b + horizon);
+    for (s, &b) in segments.iter().enumerate() {
+        let end = segments.get(s + 1).copied().unwrap_or(len).min(b + horizon);
         let y = |k: usize, o: usize, j: usize| columns[s * n + j][o * len + k];
         let Some(k0) = (b..end).find(|&k| (0..m).any(|o| (0..n).any(|j| y(k, o, j) != 0.0))) else {
             continue;
@@ -278,4 +290,81 @@ pub fn estimate(
             used,
         },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{filter_for, fit_error_dynamics};
+    use faer::Mat;
+
+    /// A lightly damped 9-state system (rotations of pairs of states, plus a decay), its output matrix
+    /// (12 channels), and the responses to unit perturbations of each state at the starts of two segments.
+    fn system() -> (Mat<f64>, Mat<f64>, Vec<Vec<f64>>, Vec<usize>, usize) {
+        let n = 9;
+        let mut a = Mat::<f64>::zeros(n, n);
+        for i in 0..n {
+            a[(i, i)] = 0.97;
+        }
+        for (i, j, w) in [(0, 1, 0.08), (2, 3, 0.15), (5, 6, 0.05)] {
+            a[(i, j)] = w;
+            a[(j, i)] = -w;
+        }
+        let m = 12;
+        let c = Mat::<f64>::from_fn(m, n, |o, j| {
+            ((o * 7 + j * 3) % 11) as f64 / 5.0 - 1.0 + if o == j { 2.0 } else { 0.0 }
+        });
+        let (len, segments) = (400, vec![0, 200]);
+        let mut columns = Vec::new();
+        for &b in &segments {
+            for j in 0..n {
+                let mut x = Mat::<f64>::zeros(n, 1);
+                x[(j, 0)] = 1.0;
+                let mut col = vec![0.0; m * len];
+                for k in b..len {
+                    for o in 0..m {
+                        col[o * len + k] = (0..n).map(|i| c[(o, i)] * x[(i, 0)]).sum();
+                    }
+                    x = &a * &x;
+                }
+                columns.push(col);
+            }
+        }
+        (a, c, columns, segments, len)
+    }
+
+    #[test]
+    fn error_dynamics_are_recovered_from_the_perturbation_responses() {
+        let (a, c, columns, segments, len) = system();
+        let (a_fit, c_fit) = fit_error_dynamics(&columns, &segments, len, 12, 100).expect("a fit");
+        for i in 0..9 {
+            for j in 0..9 {
+                assert!((a_fit[(i, j)] - a[(i, j)]).abs() < 1e-9, "A[{i}][{j}]");
+            }
+        }
+        for o in 0..12 {
+            for j in 0..9 {
+                assert!((c_fit[(o, j)] - c[(o, j)]).abs() < 1e-12, "C[{o}][{j}]");
+            }
+        }
+    }
+
+    #[test]
+    fn without_process_noise_the_innovations_are_the_residuals() {
+        let (a, c, columns, _, len) = system();
+        let f = filter_for(&a, &c, &[0.0; 9], &[1.0; 12], 0.02, len).expect("a filter");
+        let mut r = columns[3].clone();
+        f.apply(&mut r);
+        assert_eq!(r, columns[3]);
+        // with process noise the filter follows a free response: its innovations are far smaller
+        let f = filter_for(&a, &c, &[1.0; 9], &[1.0; 12], 0.02, len).expect("a filter");
+        let mut r = columns[3].clone();
+        f.apply(&mut r);
+        let ss = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>();
+        assert!(
+            ss(&r) < 0.5 * ss(&columns[3]),
+            "{} vs {}",
+            ss(&r),
+            ss(&columns[3])
+        );
+    }
 }
