@@ -128,7 +128,10 @@ mod tests {
         assert!(c.get(&(0, vec![])).is_some()); // 0 is now the most recently used
         c.insert((4, vec![]), entry(n));
         assert_eq!(c.len(), 4);
-        assert!(c.get(&(1, vec![])).is_none(), "1 was the least recently used");
+        assert!(
+            c.get(&(1, vec![])).is_none(),
+            "1 was the least recently used"
+        );
         for k in [0, 2, 3, 4] {
             assert!(c.get(&(k, vec![])).is_some(), "{k}");
         }
@@ -138,7 +141,12 @@ mod tests {
     fn the_key_tells_extension_values_apart_and_clones_share_the_store() {
         let c = ReplayCache::new();
         let other = c.clone();
-        let key = |v: f64| (7, vec![("input_delay/elevator".to_string(), vec![v.to_bits()])]);
+        let key = |v: f64| {
+            (
+                7,
+                vec![("input_delay/elevator".to_string(), vec![v.to_bits()])],
+            )
+        };
         c.insert(key(0.08), entry(10));
         assert!(other.get(&key(0.08)).is_some());
         assert!(other.get(&key(0.0800001)).is_none());

@@ -92,7 +92,10 @@ pub fn simulate(
         }
     };
     let (mut rec, trim) = (stored.0.clone(), stored.1.clone());
-    for (e, p) in extensions.iter().filter(|(e, _)| e.stage() == Stage::Output) {
+    for (e, p) in extensions
+        .iter()
+        .filter(|(e, _)| e.stage() == Stage::Output)
+    {
         e.apply_output(p, &mut rec);
     }
     Ok((rec, trim))
@@ -138,8 +141,10 @@ pub fn residuals(
     w: &Weighted,
     active: &[Active],
 ) -> Result<Vec<f64>, SimError> {
-    let exts: Vec<(&dyn Extension, &[f64])> =
-        active.iter().map(|a| (a.ext, a.params.as_slice())).collect();
+    let exts: Vec<(&dyn Extension, &[f64])> = active
+        .iter()
+        .map(|a| (a.ext, a.params.as_slice()))
+        .collect();
     let (rec, _) = simulate(worker, w.case, &exts)?;
     let mut r = Vec::with_capacity(w.n());
     for (c, name) in w.case.outputs.iter().enumerate() {
