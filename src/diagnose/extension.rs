@@ -2,8 +2,9 @@
 //!
 //! An extension acts at one of three places of the replay: on the model before trimming (aerodynamic
 //! coefficient scales), on the surface inputs before simulating (signal path), or on the simulated
-//! outputs (sensors). The search in [`super::search`] only sees the [`Extension`] trait, so a new effect
-//! is a new type here and one row in [`REGISTRY`].
+//! outputs (sensors). What an effect is (its name, stage, targets and parameter) is one row of
+//! [`REGISTRY`]; how it changes the replay is one type implementing [`Effect`]. The search in
+//! [`super::search`] sees a row on one target through the [`Extension`] trait.
 
 use std::collections::BTreeMap;
 
@@ -11,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::simulator::ReplaySim;
 use super::DiagnoseError;
-use crate::data::FlightRecord;
+use crate::data::{Channel, FlightRecord};
 use crate::sim::SimError;
 
 /// Where in the replay an extension acts.
@@ -41,7 +42,7 @@ pub struct ParamSpec {
     pub resolution: f64,
 }
 
-/// A model extension: an effect on a target with parameters fitted by output error.
+/// A model extension as the search sees it: an effect on a target with parameters fitted by output error.
 pub trait Extension: Send + Sync {
     /// Effect name from the docs/diagnose.md vocabulary (`input_delay`, `sensor_bias`, ...).
     fn effect(&self) -> &'static str;
@@ -54,125 +55,55 @@ pub trait Extension: Send + Sync {
     /// CSV columns the extension needs in the measured record.
     fn required_columns(&self) -> Vec<String>;
     /// Changes the model before trimming (Stage::Model).
-    fn apply_model(&self, _p: &[f64], _sim: &mut dyn ReplaySim) -> Result<(), SimError> {
-        Ok(())
-    }
+    fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError>;
     /// Changes the deviation sequence of `surface` (sampled at `dt_s`, sample 0 = initial condition, value 0).
-    fn apply_input(&self, _p: &[f64], _surface: &str, _dev: &mut [f64], _dt_s: f64) {}
+    fn apply_input(&self, p: &[f64], surface: &str, dev: &mut [f64], dt_s: f64);
     /// Changes the simulated record (Stage::Output).
-    fn apply_output(&self, _p: &[f64], _rec: &mut FlightRecord) {}
+    fn apply_output(&self, p: &[f64], rec: &mut FlightRecord);
     /// The catalogue entry (effect, target) whose linear term this one refines, e.g. `aero_derivative/CL_alpha`
     /// for `CL_alpha2`. Near a trim point a refinement acts mostly as a change of that term, so its smallest
     /// effect worth naming is measured against that term's resolution on the record (see `select`).
-    fn refines(&self) -> Option<(&'static str, String)> {
-        None
+    fn refines(&self) -> Option<(&'static str, String)>;
+}
+
+/// How an effect changes the replay on its target. An effect type implements the one method of its stage
+/// ([`EffectKind::stage`]); the others change nothing.
+pub trait Effect: Send + Sync {
+    /// Changes the simulation before trimming (Stage::Model).
+    fn apply_model(&self, _p: &[f64], _sim: &mut dyn ReplaySim) -> Result<(), SimError> {
+        Ok(())
     }
+    /// Changes the deviation sequence of the target surface, sampled at `dt_s` (sample 0 = initial
+    /// condition, value 0) (Stage::Input).
+    fn apply_input(&self, _p: &[f64], _dev: &mut [f64], _dt_s: f64) {}
+    /// Changes the simulated target column (Stage::Output).
+    fn apply_output(&self, _p: &[f64], _column: &mut [f64]) {}
 }
 
 /// Pure time delay of a surface deflection: the aircraft responds to δ(t − τ). Value: τ, s.
-pub struct InputDelay(pub String);
+pub struct InputDelay;
 /// First-order actuator lag τ ẋ = δ − x between the measured deflection and the one the aero model sees. Value: τ, s.
-pub struct ActuatorLag(pub String);
+pub struct ActuatorLag;
 /// Factor on a surface's aerodynamic effect (the deflection deviation the model sees is k·δ). Value: k.
-pub struct ControlEffectiveness(pub String);
+pub struct ControlEffectiveness;
 /// Additive offset on a measured column. Value: offset in column units.
-pub struct SensorBias(pub String);
+pub struct SensorBias;
 /// Factor on a measured column (measured = k · true). Value: k.
-pub struct SensorScale(pub String);
+pub struct SensorScale;
 /// Factor on one aerodynamic coefficient function of the simulation. Value: factor.
 pub struct AeroDerivative {
-    /// docs/diagnose.md name, e.g. `Cm_alpha`.
-    pub name: String,
     /// The simulation's coefficient (knob) name, e.g. `Cmalpha`.
     pub knob: String,
 }
-
 /// An added aerodynamic term the simulation's model lacks, e.g. `Cm_alpha2`: ΔC_m = k α² (α in rad).
 /// Value: the coefficient k.
-pub struct AeroNonlinearity(pub String);
-
-impl Extension for AeroNonlinearity {
-    fn effect(&self) -> &'static str {
-        "aero_nonlinearity"
-    }
-    fn target(&self) -> &str {
-        &self.0
-    }
-    fn stage(&self) -> Stage {
-        Stage::Model
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        // |k| ≤ 100: at α = 0.2 rad that is a ΔC of 4, far beyond any plausible correction.
-        vec![ParamSpec {
-            null: 0.0,
-            min: -100.0,
-            max: 100.0,
-            fd_step: 0.2,
-            resolution: 1.0,
-        }]
-    }
-    fn required_columns(&self) -> Vec<String> {
-        Vec::new()
-    }
-    fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError> {
-        sim.set_added_term(&self.0, p[0])
-    }
-    fn refines(&self) -> Option<(&'static str, String)> {
-        // `Cm_alpha2` (k α²) refines `Cm_alpha`: around α₀ it adds the slope 2kα₀ and the offset kα₀².
-        self.0
-            .strip_suffix('2')
-            .map(|linear| ("aero_derivative", linear.to_string()))
-    }
+pub struct AeroNonlinearity {
+    /// The simulation's name of the added term, e.g. `Cm_alpha2`.
+    pub term: String,
 }
 
-/// Smallest sensor bias worth naming, by the column's unit: 0.3° for an angle, 0.17°/s for a rate,
-/// 0.05 m/s² for an acceleration.
-fn bias_resolution(column: &str) -> f64 {
-    if column.ends_with("_rad_s") {
-        0.003
-    } else if column.ends_with("_rad") {
-        0.005
-    } else if column.ends_with("_m_s2") {
-        0.05
-    } else {
-        1e-3
-    }
-}
-
-fn surface_column(surface: &str) -> String {
-    if surface == "throttle" {
-        "throttle".into()
-    } else {
-        format!("{surface}_rad")
-    }
-}
-
-impl Extension for InputDelay {
-    fn effect(&self) -> &'static str {
-        "input_delay"
-    }
-    fn target(&self) -> &str {
-        &self.0
-    }
-    fn stage(&self) -> Stage {
-        Stage::Input
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec {
-            null: 0.0,
-            min: 0.0,
-            max: 1.0,
-            fd_step: 0.005,
-            resolution: 0.02,
-        }]
-    }
-    fn required_columns(&self) -> Vec<String> {
-        vec![surface_column(&self.0)]
-    }
-    fn apply_input(&self, p: &[f64], surface: &str, dev: &mut [f64], dt_s: f64) {
-        if surface != self.0 {
-            return;
-        }
+impl Effect for InputDelay {
+    fn apply_input(&self, p: &[f64], dev: &mut [f64], dt_s: f64) {
         // δ_d(t_k) = δ(t_k − τ), linear interpolation between samples, δ = 0 before the record.
         let shift = p[0].max(0.0) / dt_s;
         let whole = shift.floor() as usize;
@@ -192,30 +123,9 @@ impl Extension for InputDelay {
     }
 }
 
-impl Extension for ActuatorLag {
-    fn effect(&self) -> &'static str {
-        "actuator_lag"
-    }
-    fn target(&self) -> &str {
-        &self.0
-    }
-    fn stage(&self) -> Stage {
-        Stage::Input
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec {
-            null: 0.0,
-            min: 0.0,
-            max: 2.0,
-            fd_step: 0.005,
-            resolution: 0.03,
-        }]
-    }
-    fn required_columns(&self) -> Vec<String> {
-        vec![surface_column(&self.0)]
-    }
-    fn apply_input(&self, p: &[f64], surface: &str, dev: &mut [f64], dt_s: f64) {
-        if surface != self.0 || p[0] <= 0.0 {
+impl Effect for ActuatorLag {
+    fn apply_input(&self, p: &[f64], dev: &mut [f64], dt_s: f64) {
+        if p[0] <= 0.0 {
             return;
         }
         // τ ẋ = δ − x, discretised exactly for the input the replay applies, straight lines between the
@@ -234,117 +144,47 @@ impl Extension for ActuatorLag {
     }
 }
 
-impl Extension for ControlEffectiveness {
-    fn effect(&self) -> &'static str {
-        "control_effectiveness"
-    }
-    fn target(&self) -> &str {
-        &self.0
-    }
-    fn stage(&self) -> Stage {
-        Stage::Input
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec {
-            null: 1.0,
-            min: 0.1,
-            max: 3.0,
-            fd_step: 0.01,
-            resolution: 0.1,
-        }]
-    }
-    fn required_columns(&self) -> Vec<String> {
-        vec![surface_column(&self.0)]
-    }
-    fn apply_input(&self, p: &[f64], surface: &str, dev: &mut [f64], _dt_s: f64) {
-        if surface == self.0 {
-            dev.iter_mut().for_each(|v| *v *= p[0]);
-        }
+impl Effect for ControlEffectiveness {
+    fn apply_input(&self, p: &[f64], dev: &mut [f64], _dt_s: f64) {
+        dev.iter_mut().for_each(|v| *v *= p[0]);
     }
 }
 
-impl Extension for SensorBias {
-    fn effect(&self) -> &'static str {
-        "sensor_bias"
-    }
-    fn target(&self) -> &str {
-        &self.0
-    }
-    fn stage(&self) -> Stage {
-        Stage::Output
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec {
-            null: 0.0,
-            min: -1e6,
-            max: 1e6,
-            fd_step: 1e-3,
-            resolution: bias_resolution(&self.0),
-        }]
-    }
-    fn required_columns(&self) -> Vec<String> {
-        vec![self.0.clone()]
-    }
-    fn apply_output(&self, p: &[f64], rec: &mut FlightRecord) {
-        if let Some((_, col)) = rec.columns.iter_mut().find(|(n, _)| *n == self.0) {
-            col.iter_mut().for_each(|v| *v += p[0]);
-        }
+impl Effect for SensorBias {
+    fn apply_output(&self, p: &[f64], column: &mut [f64]) {
+        column.iter_mut().for_each(|v| *v += p[0]);
     }
 }
 
-impl Extension for SensorScale {
-    fn effect(&self) -> &'static str {
-        "sensor_scale"
-    }
-    fn target(&self) -> &str {
-        &self.0
-    }
-    fn stage(&self) -> Stage {
-        Stage::Output
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec {
-            null: 1.0,
-            min: 0.2,
-            max: 5.0,
-            fd_step: 0.01,
-            resolution: 0.03,
-        }]
-    }
-    fn required_columns(&self) -> Vec<String> {
-        vec![self.0.clone()]
-    }
-    fn apply_output(&self, p: &[f64], rec: &mut FlightRecord) {
-        if let Some((_, col)) = rec.columns.iter_mut().find(|(n, _)| *n == self.0) {
-            col.iter_mut().for_each(|v| *v *= p[0]);
-        }
+impl Effect for SensorScale {
+    fn apply_output(&self, p: &[f64], column: &mut [f64]) {
+        column.iter_mut().for_each(|v| *v *= p[0]);
     }
 }
 
-impl Extension for AeroDerivative {
-    fn effect(&self) -> &'static str {
-        "aero_derivative"
-    }
-    fn target(&self) -> &str {
-        &self.name
-    }
-    fn stage(&self) -> Stage {
-        Stage::Model
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec {
-            null: 1.0,
-            min: 0.2,
-            max: 4.0,
-            fd_step: 0.02,
-            resolution: 0.15,
-        }]
-    }
-    fn required_columns(&self) -> Vec<String> {
-        Vec::new()
-    }
+impl Effect for AeroDerivative {
     fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError> {
         sim.set_coefficient_scale(&self.knob, p[0])
+    }
+}
+
+impl Effect for AeroNonlinearity {
+    fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError> {
+        sim.set_added_term(&self.term, p[0])
+    }
+}
+
+/// Smallest sensor bias worth naming, by the column's unit: 0.3° for an angle, 0.17°/s for a rate,
+/// 0.05 m/s² for an acceleration.
+fn bias_resolution(column: &str) -> f64 {
+    if column.ends_with("_rad_s") {
+        0.003
+    } else if column.ends_with("_rad") {
+        0.005
+    } else if column.ends_with("_m_s2") {
+        0.05
+    } else {
+        1e-3
     }
 }
 
@@ -372,17 +212,17 @@ pub const DERIVATIVE_KNOBS: [(&str, &str); 18] = [
 
 /// Output columns that may carry a sensor bias or scale. Airspeed and altitude are not among them: they set
 /// the trim point of the replay, so an error in them shows as a trim mismatch instead.
-pub const SENSOR_COLUMNS: [&str; 10] = [
-    "phi_rad",
-    "theta_rad",
-    "p_rad_s",
-    "q_rad_s",
-    "r_rad_s",
-    "alpha_rad",
-    "beta_rad",
-    "ax_m_s2",
-    "ay_m_s2",
-    "az_m_s2",
+pub const SENSOR_COLUMNS: [Channel; 10] = [
+    Channel::Phi,
+    Channel::Theta,
+    Channel::P,
+    Channel::Q,
+    Channel::R,
+    Channel::Alpha,
+    Channel::Beta,
+    Channel::Ax,
+    Channel::Ay,
+    Channel::Az,
 ];
 
 /// Which targets an effect applies to.
@@ -398,63 +238,196 @@ pub enum Targets {
     AddedTerms,
 }
 
-/// One row of the catalogue: an effect name, its targets and how to build it for one target
-/// (the target name and, for derivatives, the simulation's coefficient name).
+impl Targets {
+    /// The measured columns an effect on `target` needs: a surface's deflection column, a sensor column
+    /// itself; none for a change of the model.
+    fn required_columns(self, target: &str) -> Vec<String> {
+        match self {
+            Targets::Surfaces => Channel::of_surface(target)
+                .map(|c| c.to_string())
+                .into_iter()
+                .collect(),
+            Targets::SensorColumns => vec![target.to_string()],
+            Targets::Derivatives | Targets::AddedTerms => Vec::new(),
+        }
+    }
+}
+
+/// One row of the catalogue: what an effect is and how to build it for one target (the target name and, for
+/// derivatives, the simulation's coefficient name).
 pub struct EffectKind {
     /// Effect name of the vocabulary.
     pub effect: &'static str,
+    /// Where it acts.
+    pub stage: Stage,
     /// Targets it applies to.
     pub targets: Targets,
-    /// Builds the extension for a target.
-    pub build: fn(&str, &str) -> Box<dyn Extension>,
+    /// Its one parameter (the reported value) on a target.
+    pub param: fn(&str) -> ParamSpec,
+    /// The catalogue entry (effect, target) whose linear term it refines on a target ([`Extension::refines`]).
+    pub refines: fn(&str) -> Option<(&'static str, String)>,
+    /// Builds its [`Effect`] for a target and coefficient name.
+    pub build: fn(&str, &str) -> Box<dyn Effect>,
 }
 
-/// The catalogue: a new effect is one type implementing [`Extension`] and one row here.
+/// The catalogue: a new effect is one type implementing [`Effect`] and one row here.
 pub const REGISTRY: [EffectKind; 7] = [
     EffectKind {
         effect: "input_delay",
+        stage: Stage::Input,
         targets: Targets::Surfaces,
-        build: |t, _| Box::new(InputDelay(t.into())),
+        param: |_| ParamSpec {
+            null: 0.0,
+            min: 0.0,
+            max: 1.0,
+            fd_step: 0.005,
+            resolution: 0.02,
+        },
+        refines: |_| None,
+        build: |_, _| Box::new(InputDelay),
     },
     EffectKind {
         effect: "actuator_lag",
+        stage: Stage::Input,
         targets: Targets::Surfaces,
-        build: |t, _| Box::new(ActuatorLag(t.into())),
+        param: |_| ParamSpec {
+            null: 0.0,
+            min: 0.0,
+            max: 2.0,
+            fd_step: 0.005,
+            resolution: 0.03,
+        },
+        refines: |_| None,
+        build: |_, _| Box::new(ActuatorLag),
     },
     EffectKind {
         effect: "control_effectiveness",
+        stage: Stage::Input,
         targets: Targets::Surfaces,
-        build: |t, _| Box::new(ControlEffectiveness(t.into())),
+        param: |_| ParamSpec {
+            null: 1.0,
+            min: 0.1,
+            max: 3.0,
+            fd_step: 0.01,
+            resolution: 0.1,
+        },
+        refines: |_| None,
+        build: |_, _| Box::new(ControlEffectiveness),
     },
     EffectKind {
         effect: "sensor_bias",
+        stage: Stage::Output,
         targets: Targets::SensorColumns,
-        build: |t, _| Box::new(SensorBias(t.into())),
+        param: |column| ParamSpec {
+            null: 0.0,
+            min: -1e6,
+            max: 1e6,
+            fd_step: 1e-3,
+            resolution: bias_resolution(column),
+        },
+        refines: |_| None,
+        build: |_, _| Box::new(SensorBias),
     },
     EffectKind {
         effect: "sensor_scale",
+        stage: Stage::Output,
         targets: Targets::SensorColumns,
-        build: |t, _| Box::new(SensorScale(t.into())),
+        param: |_| ParamSpec {
+            null: 1.0,
+            min: 0.2,
+            max: 5.0,
+            fd_step: 0.01,
+            resolution: 0.03,
+        },
+        refines: |_| None,
+        build: |_, _| Box::new(SensorScale),
     },
     EffectKind {
         effect: "aero_derivative",
+        stage: Stage::Model,
         targets: Targets::Derivatives,
-        build: |t, knob| {
-            Box::new(AeroDerivative {
-                name: t.into(),
-                knob: knob.into(),
-            })
+        param: |_| ParamSpec {
+            null: 1.0,
+            min: 0.2,
+            max: 4.0,
+            fd_step: 0.02,
+            resolution: 0.15,
         },
+        refines: |_| None,
+        build: |_, knob| Box::new(AeroDerivative { knob: knob.into() }),
     },
     EffectKind {
         effect: "aero_nonlinearity",
+        stage: Stage::Model,
         targets: Targets::AddedTerms,
-        build: |t, _| Box::new(AeroNonlinearity(t.into())),
+        // |k| ≤ 100: at α = 0.2 rad that is a ΔC of 4, far beyond any plausible correction.
+        param: |_| ParamSpec {
+            null: 0.0,
+            min: -100.0,
+            max: 100.0,
+            fd_step: 0.2,
+            resolution: 1.0,
+        },
+        // `Cm_alpha2` (k α²) refines `Cm_alpha`: around α₀ it adds the slope 2kα₀ and the offset kα₀².
+        refines: |term| {
+            term.strip_suffix('2')
+                .map(|linear| ("aero_derivative", linear.to_string()))
+        },
+        build: |term, _| Box::new(AeroNonlinearity { term: term.into() }),
     },
 ];
 
-/// The surfaces of the schema.
-pub const SURFACES: [&str; 4] = ["elevator", "aileron", "rudder", "throttle"];
+/// One row of [`REGISTRY`] on one target: the [`Extension`] the search fits.
+pub struct Entry {
+    kind: &'static EffectKind,
+    target: String,
+    effect: Box<dyn Effect>,
+}
+
+impl Entry {
+    /// The row `kind` on `target` (`knob`: the simulation's coefficient name for a derivative).
+    pub fn new(kind: &'static EffectKind, target: &str, knob: &str) -> Self {
+        Entry {
+            kind,
+            target: target.to_string(),
+            effect: (kind.build)(target, knob),
+        }
+    }
+}
+
+impl Extension for Entry {
+    fn effect(&self) -> &'static str {
+        self.kind.effect
+    }
+    fn target(&self) -> &str {
+        &self.target
+    }
+    fn stage(&self) -> Stage {
+        self.kind.stage
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        vec![(self.kind.param)(&self.target)]
+    }
+    fn required_columns(&self) -> Vec<String> {
+        self.kind.targets.required_columns(&self.target)
+    }
+    fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError> {
+        self.effect.apply_model(p, sim)
+    }
+    fn apply_input(&self, p: &[f64], surface: &str, dev: &mut [f64], dt_s: f64) {
+        if surface == self.target {
+            self.effect.apply_input(p, dev, dt_s);
+        }
+    }
+    fn apply_output(&self, p: &[f64], rec: &mut FlightRecord) {
+        if let Some((_, column)) = rec.columns.iter_mut().find(|(n, _)| *n == self.target) {
+            self.effect.apply_output(p, column);
+        }
+    }
+    fn refines(&self) -> Option<(&'static str, String)> {
+        (self.kind.refines)(&self.target)
+    }
+}
 
 /// The simulation's coefficient name of a derivative (the name itself when it is not in the table).
 fn knob_of(target: &str) -> String {
@@ -479,7 +452,7 @@ pub fn make(
         )));
     };
     match kind.targets {
-        Targets::Surfaces if !SURFACES.contains(&target) => {
+        Targets::Surfaces if Channel::of_surface(target).is_none() => {
             Err(DiagnoseError::UnknownExtension(format!(
                 "{effect} needs a surface target (elevator, aileron, rudder, throttle), got '{target}'"
             )))
@@ -489,7 +462,7 @@ pub fn make(
                 "the simulation has no aerodynamic coefficient for '{target}'"
             )))
         }
-        _ => Ok((kind.build)(target, &knob_of(target))),
+        _ => Ok(Box::new(Entry::new(kind, target, &knob_of(target)))),
     }
 }
 
@@ -507,8 +480,9 @@ pub fn catalogue(
     let mut skipped = Vec::new();
     for kind in &REGISTRY {
         let targets: Vec<(String, String)> = match kind.targets {
-            Targets::Surfaces => SURFACES
+            Targets::Surfaces => Channel::CONTROLS
                 .iter()
+                .filter_map(|c| c.surface())
                 .map(|s| (s.to_string(), String::new()))
                 .collect(),
             Targets::SensorColumns => SENSOR_COLUMNS
@@ -535,7 +509,11 @@ pub fn catalogue(
                 .map(|t| (t.clone(), String::new()))
                 .collect(),
         };
-        all.extend(targets.iter().map(|(t, k)| (kind.build)(t, k)));
+        all.extend(
+            targets
+                .iter()
+                .map(|(t, k)| Box::new(Entry::new(kind, t, k)) as Box<dyn Extension>),
+        );
     }
     let mut usable = Vec::new();
     for e in all {
@@ -613,5 +591,103 @@ impl ExtensionFile {
                 ))
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every row builds on a target of its kind, with the stage, parameter and columns of the row.
+    #[test]
+    fn every_registry_row_builds_an_extension_with_its_metadata() {
+        let coefficients: Vec<String> = DERIVATIVE_KNOBS
+            .iter()
+            .map(|(_, k)| k.to_string())
+            .collect();
+        for kind in &REGISTRY {
+            let target = match kind.targets {
+                Targets::Surfaces => "elevator",
+                Targets::SensorColumns => "q_rad_s",
+                Targets::Derivatives => "Cm_alpha",
+                Targets::AddedTerms => "Cm_alpha2",
+            };
+            let e = make(kind.effect, target, &coefficients).unwrap();
+            assert_eq!(
+                (e.effect(), e.target(), e.stage()),
+                (kind.effect, target, kind.stage)
+            );
+            let spec = e.params()[0];
+            assert!(
+                spec.min <= spec.null && spec.null <= spec.max,
+                "{}",
+                kind.effect
+            );
+            assert!(
+                spec.fd_step > 0.0 && spec.resolution > 0.0,
+                "{}",
+                kind.effect
+            );
+            let columns = e.required_columns();
+            match kind.targets {
+                Targets::Surfaces => assert_eq!(columns, ["elevator_rad"]),
+                Targets::SensorColumns => assert_eq!(columns, ["q_rad_s"]),
+                _ => assert!(columns.is_empty()),
+            }
+        }
+    }
+
+    /// At its "no effect" value a signal-path or sensor effect leaves the sequence exactly as it was, and it
+    /// never touches another surface or column: exact equality, since these are the identity operations.
+    #[test]
+    fn a_null_parameter_and_another_target_change_nothing() {
+        let dev: Vec<f64> = (0..50).map(|k| (0.3 * k as f64).sin() * 0.05).collect();
+        for kind in REGISTRY.iter().filter(|k| k.targets == Targets::Surfaces) {
+            let e = make(kind.effect, "elevator", &[]).unwrap();
+            let null = [e.params()[0].null];
+            let mut d = dev.clone();
+            e.apply_input(&null, "elevator", &mut d, 0.02);
+            assert_eq!(d, dev, "{} at its null value", kind.effect);
+            let mut other = dev.clone();
+            e.apply_input(&[0.7], "aileron", &mut other, 0.02);
+            assert_eq!(other, dev, "{} on another surface", kind.effect);
+        }
+        for kind in REGISTRY
+            .iter()
+            .filter(|k| k.targets == Targets::SensorColumns)
+        {
+            let e = make(kind.effect, "q_rad_s", &[]).unwrap();
+            let mut rec = FlightRecord::new((0..3).map(|k| k as f64 * 0.02).collect());
+            rec.columns = vec![
+                ("q_rad_s".into(), vec![0.1, -0.2, 0.3]),
+                ("p_rad_s".into(), vec![1.0; 3]),
+            ];
+            let before = rec.columns.clone();
+            e.apply_output(&[e.params()[0].null], &mut rec);
+            assert_eq!(rec.columns, before, "{} at its null value", kind.effect);
+            e.apply_output(&[2.0], &mut rec);
+            assert_ne!(
+                rec.columns[0], before[0],
+                "{} on its own column",
+                kind.effect
+            );
+            assert_eq!(
+                rec.columns[1], before[1],
+                "{} on another column",
+                kind.effect
+            );
+        }
+    }
+
+    /// A square term refines the linear derivative of the same name; nothing else refines anything.
+    #[test]
+    fn only_a_square_term_refines_a_linear_derivative() {
+        let e = make("aero_nonlinearity", "CL_alpha2", &[]).unwrap();
+        assert_eq!(
+            e.refines(),
+            Some(("aero_derivative", "CL_alpha".to_string()))
+        );
+        let d = make("sensor_bias", "q_rad_s", &[]).unwrap();
+        assert_eq!(d.refines(), None);
     }
 }
