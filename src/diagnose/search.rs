@@ -546,7 +546,8 @@ pub fn effective_n(r: &[f64], m: usize, lags: usize) -> f64 {
             let mean = e.iter().sum::<f64>() / e.len() as f64;
             let centred: Vec<f64> = e.iter().map(|v| v - mean).collect();
             let lags = lags.min(e.len().saturating_sub(1));
-            let taper = covariance::bartlett_taper(&covariance::autocorrelation(&centred, lags), lags);
+            let taper =
+                covariance::bartlett_taper(&covariance::autocorrelation(&centred, lags), lags);
             covariance::effective_samples(&taper, e.len())
         })
         .sum()

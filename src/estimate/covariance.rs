@@ -259,11 +259,19 @@ mod tests {
         }
         let n_of = |r: &[f64]| effective_samples(&bartlett_taper(&autocorrelation(r, 50), 50), len);
         let inflation = len as f64 / n_of(&ar);
-        assert!((inflation - 2.92).abs() < 0.25, "AR(1) inflation {inflation}");
+        assert!(
+            (inflation - 2.92).abs() < 0.25,
+            "AR(1) inflation {inflation}"
+        );
         let white_n = n_of(&white) / len as f64;
-        assert!((white_n - 1.0).abs() < 0.15, "white noise: n_eff/N = {white_n}");
+        assert!(
+            (white_n - 1.0).abs() < 0.15,
+            "white noise: n_eff/N = {white_n}"
+        );
         // never more samples than there are, never fewer than one
-        let alternating: Vec<f64> = (0..len).map(|k| if k % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let alternating: Vec<f64> = (0..len)
+            .map(|k| if k % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
         assert_eq!(n_of(&alternating), len as f64);
         let constant = vec![1.0; 100];
         let n = effective_samples(&bartlett_taper(&autocorrelation(&constant, 99), 99), 100);
