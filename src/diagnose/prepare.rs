@@ -3,7 +3,7 @@
 
 use super::extension::{self, Extension, Stage};
 use super::replay::{self, ReplayCase};
-use super::search::Worker;
+use super::search::{self, Worker};
 use super::{residual, sim_err, DiagnoseError, Skipped};
 use crate::data::FlightRecord;
 
@@ -89,7 +89,7 @@ pub fn prepare(
         .collect();
     warnings.extend(rate_note);
     // Compare only the channels the simulation produces (a linear model may lack accelerations).
-    let (probe, _) = replay::replay(worker.sim.as_mut(), &case, &[]).map_err(sim_err("replay"))?;
+    let (probe, _) = search::simulate(worker, &case, &[]).map_err(sim_err("replay"))?;
     let missing: Vec<String> = case
         .outputs
         .iter()

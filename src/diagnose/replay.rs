@@ -383,15 +383,8 @@ pub fn replay_with_resets(
             ..r.clone()
         })
         .collect();
-    let mut rec = sim.fly_with_resets(&plan, &resets)?;
-    if m > 1 {
-        let keep: Vec<usize> = (0..case.len()).map(|k| k * m).collect();
-        for (_, col) in rec.columns.iter_mut() {
-            if col.len() > n_steps {
-                *col = keep.iter().map(|&i| col[i]).collect();
-            }
-        }
-    }
+    // Only the record's samples, every m-th step, are read and returned.
+    let mut rec = sim.fly_recording_every(&plan, &resets, m)?;
     rec.time_s = case.record.time_s.clone();
     for (e, p) in extensions {
         if e.stage() == Stage::Output {
