@@ -2,7 +2,13 @@
 //! (target: under 5 s wall on 2 cores). The record hides an 80 ms elevator delay and carries noise. It is
 //! diagnosed twice: replayed at its own rate (50 Hz), and at the rate `flightid diagnose` uses by default.
 //!
-//! Run: `cargo bench --bench diagnose`.
+//! The record is flown at 200 Hz and logged at 50 Hz, its surfaces moving linearly between the logged samples
+//! (the convention the replay declares), so that a replay at 200 Hz differs from it by the hidden delay and the
+//! noise only. `--flown-at 50` flies it at 50 Hz instead (the record of the earlier figures in docs/diagnose.md:
+//! JSBSim's integration at 50 Hz then differs from the 200 Hz replay by more than the delay, and the search
+//! names passengers).
+//!
+//! Run: `cargo bench --bench diagnose [-- --flown-at HZ]`.
 
 use flightid::aircraft;
 use flightid::diagnose::search::Worker;
@@ -11,13 +17,21 @@ use flightid::signal::{add_white_noise, generate, Maneuver};
 use flightid::sim::{FlightPlan, JsbsimSim, Simulator, SurfaceInput, TrimPoint};
 use std::time::Instant;
 
+/// Logging rate of the record, Hz.
 const RATE_HZ: f64 = 50.0;
+/// Record length, s.
+const DURATION_S: f64 = 60.0;
+/// The hidden elevator delay, s.
+const DELAY_S: f64 = 0.08;
 
-fn record(sim: &mut JsbsimSim, seed: u64) -> flightid::data::FlightRecord {
+/// A 60 s record flown at `flown_hz` (a whole multiple of [`RATE_HZ`]) and logged at [`RATE_HZ`], with white
+/// noise (seeded) on every channel but the surfaces and the throttle.
+fn record(sim: &mut JsbsimSim, flown_hz: f64, seed: u64) -> flightid::data::FlightRecord {
     let dt = 1.0 / RATE_HZ;
-    let n = (60.0 * RATE_HZ) as usize;
-    let gen = |m: Maneuver, amp: f64, start: f64| -> Vec<f64> {
-        generate(&m, dt, 60.0, start)
+    let n = (DURATION_S * RATE_HZ) as usize;
+    let m = (flown_hz / RATE_HZ).round() as usize;
+    let gen = |mv: Maneuver, amp: f64, start: f64| -> Vec<f64> {
+        generate(&mv, dt, DURATION_S, start)
             .into_iter()
             .take(n)
             .map(|v| amp * v)
@@ -38,25 +52,45 @@ fn record(sim: &mut JsbsimSim, seed: u64) -> flightid::data::FlightRecord {
         ),
     ];
     let trim = sim.trim(&TrimPoint::level(4000.0, 100.0)).unwrap();
-    let delay = 4; // samples = 80 ms on the elevator
+    let delay_steps = (DELAY_S * flown_hz).round() as usize;
+    // Logged sample k + 1 is u[k]; the surface moves linearly from one logged sample to the next over the m
+    // integration steps in between (the step ending at a logged sample reads that sample).
+    let fine = |u: &[f64]| -> Vec<f64> {
+        let at = |k: usize| if k == 0 { 0.0 } else { u[k - 1] };
+        (0..n * m)
+            .map(|s| {
+                let (k, f) = (s / m, (s % m + 1) as f64 / m as f64);
+                (1.0 - f) * at(k) + f * at(k + 1)
+            })
+            .collect()
+    };
     let plan = FlightPlan {
-        rate_hz: RATE_HZ,
-        n_steps: n,
+        rate_hz: flown_hz,
+        n_steps: n * m,
         inputs: measured
             .iter()
-            .map(|(s, u)| SurfaceInput {
-                surface: s.to_string(),
-                deflection_rad: if *s == "elevator" {
-                    (0..n)
-                        .map(|k| if k >= delay { u[k - delay] } else { 0.0 })
-                        .collect()
-                } else {
-                    u.clone()
-                },
+            .map(|(s, u)| {
+                let f = fine(u);
+                SurfaceInput {
+                    surface: s.to_string(),
+                    deflection_rad: if *s == "elevator" {
+                        (0..f.len())
+                            .map(|k| {
+                                if k >= delay_steps {
+                                    f[k - delay_steps]
+                                } else {
+                                    0.0
+                                }
+                            })
+                            .collect()
+                    } else {
+                        f
+                    },
+                }
             })
             .collect(),
     };
-    let mut rec = sim.fly(&plan).unwrap();
+    let mut rec = sim.fly(&plan).unwrap().every_nth(m);
     for (s, u) in &measured {
         let base = trim.surfaces_rad[*s];
         let col: Vec<f64> = std::iter::once(base)
@@ -76,16 +110,36 @@ fn record(sim: &mut JsbsimSim, seed: u64) -> flightid::data::FlightRecord {
     rec
 }
 
+/// `--flown-at HZ` (default 200).
+fn flown_at_hz() -> f64 {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == "--flown-at")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(200.0)
+}
+
 fn main() {
     let cfg = aircraft::load("c172x").unwrap();
-    let mut gen = JsbsimSim::start(&cfg, RATE_HZ).unwrap();
-    let train = record(&mut gen, 1);
-    let valid = record(&mut gen, 2);
+    let flown_hz = flown_at_hz();
+    let mut gen = JsbsimSim::start(&cfg, flown_hz).unwrap();
+    let train = record(&mut gen, flown_hz, 1);
+    let valid = record(&mut gen, flown_hz, 2);
     drop(gen);
     // At the record's rate (the convention of `fly`, which made the record), then at the rate `flightid diagnose`
     // integrates a 50 Hz record at by default (ReplayCase::sim_rate_hz).
     let default_rate = ReplayCase::new(&train).unwrap().sim_rate_hz();
     for rate in [RATE_HZ, default_rate] {
+        // The machine's load shares the 2 cores: print it with the figures.
+        let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+        println!(
+            "load average (1, 5, 15 min): {}",
+            load.split_whitespace()
+                .take(3)
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
         let t0 = Instant::now();
         let mut workers: Vec<Worker> = (0..2)
             .map(|_| Worker::new(Box::new(JsbsimSim::start(&cfg, rate).unwrap())))
@@ -102,7 +156,7 @@ fn main() {
         .unwrap();
         let wall = t0.elapsed().as_secs_f64();
         println!(
-            "diagnose 60 s @ 50 Hz replayed at {rate:.0} Hz, full c172x catalogue, 2 workers: {wall:.1} s wall, {} \
+            "diagnose 60 s @ 50 Hz (flown at {flown_hz:.0} Hz) replayed at {rate:.0} Hz, full c172x catalogue, 2 workers: {wall:.1} s wall, {} \
              simulations, {:.1} simulations/s, {:.0} % of the workers' time inside JSBSim (target < 5 s)",
             d.simulations,
             d.simulations as f64 / wall,

@@ -635,3 +635,49 @@ fn a_state_reset_sets_the_sample_it_starts_and_the_flight_goes_on_from_it() {
     let beta0 = nudged.column("beta_rad").unwrap()[0];
     assert!((beta0 - (trim.beta_rad + 0.5 / v)).abs() < 1e-3, "{beta0}");
 }
+
+/// Recording every m-th step (a replay integrating at m times its record's rate): the same samples as the
+/// full flight thinned, bit for bit (the bridge reads the same properties after the same steps), with a reset
+/// and a moving surface; a step count that is no multiple of m (480 steps, every 7th) is refused.
+#[test]
+fn recording_every_fourth_step_returns_the_full_flight_thinned_bit_for_bit() {
+    use flightid::sim::{FlightPlan, StateReset, SurfaceInput};
+    let mut sim = start("c172x");
+    let point = TrimPoint::level(4000.0, 100.0);
+    let unit = flightid::signal::generate(
+        &flightid::signal::Maneuver::Doublet { pulse_s: 0.5 },
+        1.0 / 120.0,
+        4.0,
+        0.5,
+    );
+    let plan = FlightPlan {
+        rate_hz: 120.0,
+        n_steps: 480,
+        inputs: vec![SurfaceInput {
+            surface: "elevator".into(),
+            deflection_rad: unit[..480].iter().map(|u| 0.02 * u).collect(),
+        }],
+    };
+    let reset = StateReset {
+        step: 240,
+        rates_rad_s: Some([0.01, 0.0, 0.0]),
+        relative: true,
+        ..Default::default()
+    };
+    sim.trim(&point).unwrap();
+    let full = sim
+        .fly_with_resets(&plan, std::slice::from_ref(&reset))
+        .unwrap()
+        .every_nth(4);
+    sim.trim(&point).unwrap();
+    let thin = sim
+        .fly_recording_every(&plan, std::slice::from_ref(&reset), 4)
+        .unwrap();
+    assert_eq!(thin.len(), 121);
+    assert_eq!(thin.time_s, full.time_s);
+    for (name, values) in &full.columns {
+        assert_eq!(thin.column(name), Some(values.as_slice()), "{name}");
+    }
+    sim.trim(&point).unwrap();
+    assert!(sim.fly_recording_every(&plan, &[], 7).is_err());
+}

@@ -3,12 +3,14 @@
 //! The exchange format is the CSV schema of docs/data.md ([`SCHEMA_COLUMNS`]): SI units, radians,
 //! `time_s` strictly increasing, unknown columns kept. [`FlightRecord`] is its in-memory form.
 
+mod channel;
 mod columns;
 mod csv_io;
 mod error;
 mod record;
 mod resample;
 
+pub use channel::{Channel, UnknownChannel};
 pub use columns::{did_you_mean, resolve_column, unit_names, ColumnMap, ColumnMapping, Dimension};
 pub use csv_io::{
     parse_csv_bytes, parse_csv_bytes_mapped, read_csv, read_csv_mapped, read_csv_with_warnings,

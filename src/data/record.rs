@@ -1,30 +1,10 @@
 //! The in-memory flight record (docs/data.md), its validation and unit-sanity checks.
 
+use super::channel::Channel;
 use super::error::{DataError, Warning, WarningKind, IN_MEMORY};
 
 /// The schema columns of docs/data.md, in their canonical order.
-pub const SCHEMA_COLUMNS: &[&str] = &[
-    "time_s",
-    "elevator_rad",
-    "aileron_rad",
-    "rudder_rad",
-    "throttle",
-    "phi_rad",
-    "theta_rad",
-    "psi_rad",
-    "p_rad_s",
-    "q_rad_s",
-    "r_rad_s",
-    "alpha_rad",
-    "beta_rad",
-    "airspeed_m_s",
-    "altitude_m",
-    "ax_m_s2",
-    "ay_m_s2",
-    "az_m_s2",
-    "thrust_n",
-    "qbar_pa",
-];
+pub const SCHEMA_COLUMNS: &[&str] = &super::channel::names(Channel::ALL);
 
 /// Standard gravity, m/s² (ISO 80000-3).
 pub const G0_M_S2: f64 = 9.80665;
@@ -63,7 +43,8 @@ impl FlightRecord {
     }
 
     /// Adds a column, or replaces the values of an existing column of the same name.
-    pub fn push_column(&mut self, name: &str, values: Vec<f64>) {
+    pub fn push_column(&mut self, name: impl AsRef<str>, values: Vec<f64>) {
+        let name = name.as_ref();
         if let Some(slot) = self.columns.iter_mut().find(|(n, _)| n == name) {
             slot.1 = values;
         } else {
@@ -71,9 +52,10 @@ impl FlightRecord {
         }
     }
 
-    /// The values of a column (`time_s` included), if present.
-    pub fn column(&self, name: &str) -> Option<&[f64]> {
-        if name == "time_s" {
+    /// The values of a column (`time_s` included), if present: a schema [`Channel`] or any other name.
+    pub fn column(&self, name: impl AsRef<str>) -> Option<&[f64]> {
+        let name = name.as_ref();
+        if name == Channel::Time.name() {
             return Some(&self.time_s);
         }
         self.columns
@@ -93,7 +75,7 @@ impl FlightRecord {
 
     /// All column names, `time_s` first.
     pub fn column_names(&self) -> Vec<&str> {
-        std::iter::once("time_s")
+        std::iter::once(Channel::Time.name())
             .chain(self.columns.iter().map(|(n, _)| n.as_str()))
             .collect()
     }
@@ -157,7 +139,7 @@ impl FlightRecord {
             }
         }
         // In-memory rows are numbered like a file with one header line: sample i is line i + 2.
-        let columns = std::iter::once(("time_s", self.time_s.as_slice()))
+        let columns = std::iter::once((Channel::Time.name(), self.time_s.as_slice()))
             .chain(self.columns.iter().map(|(n, v)| (n.as_str(), v.as_slice())));
         for (name, values) in columns {
             if let Some(i) = values.iter().position(|v| !v.is_finite()) {
@@ -252,7 +234,7 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             continue;
         };
         if name.ends_with("_rad") {
-            let (suspicious, evidence) = if name == "psi_rad" {
+            let (suspicious, evidence) = if name == Channel::Psi.name() {
                 let min = values.iter().copied().fold(f64::INFINITY, f64::min);
                 (
                     m > 2.0 * std::f64::consts::PI * 1.01 && min >= -360.0 && m <= 360.0,
@@ -261,7 +243,7 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             } else if m > std::f64::consts::PI {
                 (true, None)
             } else {
-                let limit = if name == "phi_rad" {
+                let limit = if name == Channel::Phi.name() {
                     std::f64::consts::FRAC_PI_2
                 } else {
                     0.7
@@ -292,7 +274,7 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             }
         } else if name.ends_with("_rad_s") {
             let p99 = abs_percentile(values, 0.99);
-            let rate_limit = if name == "p_rad_s" { 10.0 } else { 2.0 };
+            let rate_limit = if name == Channel::P.name() { 10.0 } else { 2.0 };
             if m > 10.0 || p99 > rate_limit {
                 out.push(Warning {
                     kind: WarningKind::LooksLikeDegreesPerSecond,
@@ -306,7 +288,7 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
                     ),
                 });
             }
-        } else if name == "airspeed_m_s" {
+        } else if name == Channel::Airspeed.name() {
             let mut v = values.clone();
             let med = median_in_place(&mut v);
             if med > 300.0 {
@@ -320,7 +302,7 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
                     ),
                 });
             }
-        } else if name == "throttle" {
+        } else if name == Channel::Throttle.name() {
             let min = values.iter().copied().fold(f64::INFINITY, f64::min);
             let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             if min < -0.05 || max > 1.05 {
@@ -336,8 +318,8 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
     }
     let flagged = |out: &[Warning], c: &str| out.iter().any(|w| w.column.as_deref() == Some(c));
     for w in [
-        angle_rate_warning(rec, "theta_rad", "q_rad_s"),
-        angle_rate_warning(rec, "phi_rad", "p_rad_s"),
+        angle_rate_warning(rec, Channel::Theta, Channel::Q),
+        angle_rate_warning(rec, Channel::Phi, Channel::P),
         speed_kinematics_warning(rec),
         accel_g_warning(rec),
     ]
@@ -393,7 +375,7 @@ fn slope_and_correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
 }
 
 /// Flags an angle and its body rate that disagree by the degree factor (see [`unit_warnings`]).
-fn angle_rate_warning(rec: &FlightRecord, angle: &str, rate: &str) -> Option<Warning> {
+fn angle_rate_warning(rec: &FlightRecord, angle: Channel, rate: Channel) -> Option<Warning> {
     let (x, w) = (rec.column(angle)?, rec.column(rate)?);
     if rec.len() < 20 {
         return None;
@@ -401,9 +383,9 @@ fn angle_rate_warning(rec: &FlightRecord, angle: &str, rate: &str) -> Option<War
     let dx = derivative(&rec.time_s, x);
     // The Euler-angle rate the body rates give (small-angle terms dropped where columns lack).
     let kin: Vec<f64> = match angle {
-        "theta_rad" => {
-            let phi = rec.column("phi_rad");
-            let r = rec.column("r_rad_s");
+        Channel::Theta => {
+            let phi = rec.column(Channel::Phi);
+            let r = rec.column(Channel::R);
             (0..rec.len())
                 .map(|i| match (phi, r) {
                     (Some(phi), Some(r)) => w[i] * phi[i].cos() - r[i] * phi[i].sin(),
@@ -441,10 +423,10 @@ fn angle_rate_warning(rec: &FlightRecord, angle: &str, rate: &str) -> Option<War
 
 /// Flags an airspeed in knots or ft/s from the flight-path kinematics (see [`unit_warnings`]).
 fn speed_kinematics_warning(rec: &FlightRecord) -> Option<Warning> {
-    let v = rec.column("airspeed_m_s")?;
-    let (ax, az) = (rec.column("ax_m_s2")?, rec.column("az_m_s2")?);
-    let (theta, alpha) = (rec.column("theta_rad")?, rec.column("alpha_rad")?);
-    let phi = rec.column("phi_rad");
+    let v = rec.column(Channel::Airspeed)?;
+    let (ax, az) = (rec.column(Channel::Ax)?, rec.column(Channel::Az)?);
+    let (theta, alpha) = (rec.column(Channel::Theta)?, rec.column(Channel::Alpha)?);
+    let phi = rec.column(Channel::Phi);
     let dt = rec.dt_s()?;
     let window = (1.0 / dt).round().max(1.0) as usize;
     if rec.len() < 4 * window {
@@ -479,7 +461,7 @@ fn speed_kinematics_warning(rec: &FlightRecord) -> Option<Warning> {
         .1;
     Some(Warning {
         kind: WarningKind::LooksLikeKnotsOrFeet,
-        column: Some("airspeed_m_s".into()),
+        column: Some(Channel::Airspeed.to_string()),
         message: format!(
             "airspeed changes {k:.2} times as fast as the specific force along the flight path \
              says (correlation {corr:.2} over 1 s windows); m/s would give 1: it looks like {unit}"
@@ -489,9 +471,9 @@ fn speed_kinematics_warning(rec: &FlightRecord) -> Option<Warning> {
 
 /// Flags accelerations recorded in g: the median specific-force magnitude is 0.5..2.
 fn accel_g_warning(rec: &FlightRecord) -> Option<Warning> {
-    let axes: Vec<(&str, &[f64])> = ["ax_m_s2", "ay_m_s2", "az_m_s2"]
-        .iter()
-        .filter_map(|n| rec.column(n).map(|v| (*n, v)))
+    let axes: Vec<(Channel, &[f64])> = Channel::SPECIFIC_FORCES
+        .into_iter()
+        .filter_map(|c| rec.column(c).map(|v| (c, v)))
         .collect();
     if axes.is_empty() || rec.is_empty() {
         return None;
@@ -501,8 +483,8 @@ fn accel_g_warning(rec: &FlightRecord) -> Option<Warning> {
         .collect();
     let med = median_in_place(&mut mags);
     // Only meaningful when the vertical axis is there: ax/ay alone are near zero in either unit.
-    if axes.iter().any(|(n, _)| *n == "az_m_s2") && (0.5..2.0).contains(&med) {
-        let names: Vec<&str> = axes.iter().map(|(n, _)| *n).collect();
+    if axes.iter().any(|(c, _)| *c == Channel::Az) && (0.5..2.0).contains(&med) {
+        let names: Vec<&str> = axes.iter().map(|(c, _)| c.name()).collect();
         return Some(Warning {
             kind: WarningKind::LooksLikeG,
             column: Some(names.join("/")),
@@ -536,7 +518,7 @@ pub fn sampling_warning(time_s: &[f64]) -> Option<Warning> {
     let max = steps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     Some(Warning {
         kind: WarningKind::IrregularSampling,
-        column: Some("time_s".into()),
+        column: Some(Channel::Time.to_string()),
         message: format!(
             "irregular sampling: {} of {} steps differ from the median step {median} s by more than 10 % \
              (steps range {min} .. {max} s; first at t = {} s); resample onto a uniform grid \

@@ -20,6 +20,7 @@ use std::path::Path;
 use mavlink::dialects::ardupilotmega::MavMessage;
 use mavlink::{MavlinkVersion, Message};
 
+use super::channel::Channel;
 use super::error::{DataError, Warning, WarningKind};
 use super::record::{FlightRecord, G0_M_S2};
 use super::servo_map::ServoMap;
@@ -398,10 +399,10 @@ pub fn parse_tlog_bytes(
         });
     }
     for (needed, why) in [
-        ("ax_m_s2", "no HIGHRES_IMU/SCALED_IMU/RAW_IMU"),
-        ("airspeed_m_s", "no VFR_HUD"),
-        ("alpha_rad", "no AOA_SSA"),
-        ("elevator_rad", "no SERVO_OUTPUT_RAW or no --servo-map"),
+        (Channel::Ax, "no HIGHRES_IMU/SCALED_IMU/RAW_IMU"),
+        (Channel::Airspeed, "no VFR_HUD"),
+        (Channel::Alpha, "no AOA_SSA"),
+        (Channel::Elevator, "no SERVO_OUTPUT_RAW or no --servo-map"),
     ] {
         if record.column(needed).is_none() {
             warnings.push(Warning {
@@ -721,9 +722,9 @@ fn build_record(
     if let Some(af) = servo_map {
         if !series.servo.is_empty() {
             let surfaces = [
-                ("elevator_rad", af.elevator),
-                ("aileron_rad", af.aileron),
-                ("rudder_rad", af.rudder),
+                (Channel::Elevator, af.elevator),
+                (Channel::Aileron, af.aileron),
+                (Channel::Rudder, af.rudder),
             ];
             for (name, map) in surfaces {
                 if let Some(m) = map {
@@ -734,35 +735,25 @@ fn build_record(
             if let Some(t) = af.throttle {
                 let pwm = interp(&series.servo, usize::from(t.channel - 1), &grid_us);
                 rec.push_column(
-                    "throttle",
+                    Channel::Throttle,
                     pwm.into_iter().map(|p| t.to_fraction(p)).collect(),
                 );
             }
         }
     }
-    if rec.column("throttle").is_none() && !series.vfr_hud.is_empty() {
-        rec.push_column("throttle", interp(&series.vfr_hud, 2, &grid_us));
+    if rec.column(Channel::Throttle).is_none() && !series.vfr_hud.is_empty() {
+        rec.push_column(Channel::Throttle, interp(&series.vfr_hud, 2, &grid_us));
     }
-    for (k, name) in [
-        "phi_rad",
-        "theta_rad",
-        "psi_rad",
-        "p_rad_s",
-        "q_rad_s",
-        "r_rad_s",
-    ]
-    .iter()
-    .enumerate()
-    {
-        rec.push_column(name, interp(&series.attitude, k, &grid_us));
+    for (k, channel) in Channel::ATTITUDE_AND_RATES.into_iter().enumerate() {
+        rec.push_column(channel, interp(&series.attitude, k, &grid_us));
     }
     if !series.aoa_ssa.is_empty() {
-        rec.push_column("alpha_rad", interp(&series.aoa_ssa, 0, &grid_us));
-        rec.push_column("beta_rad", interp(&series.aoa_ssa, 1, &grid_us));
+        rec.push_column(Channel::Alpha, interp(&series.aoa_ssa, 0, &grid_us));
+        rec.push_column(Channel::Beta, interp(&series.aoa_ssa, 1, &grid_us));
     }
     if !series.vfr_hud.is_empty() {
-        rec.push_column("airspeed_m_s", interp(&series.vfr_hud, 0, &grid_us));
-        rec.push_column("altitude_m", interp(&series.vfr_hud, 1, &grid_us));
+        rec.push_column(Channel::Airspeed, interp(&series.vfr_hud, 0, &grid_us));
+        rec.push_column(Channel::Altitude, interp(&series.vfr_hud, 1, &grid_us));
     }
     let imu = [
         (&series.highres_imu, "HIGHRES_IMU"),
@@ -775,18 +766,13 @@ fn build_record(
     .into_iter()
     .find(|(s, _)| !s.is_empty());
     if let Some((s, source)) = imu {
-        for (k, name) in ["ax_m_s2", "ay_m_s2", "az_m_s2"].iter().enumerate() {
-            rec.push_column(name, interp(s, k, &grid_us));
+        for (k, channel) in Channel::SPECIFIC_FORCES.into_iter().enumerate() {
+            rec.push_column(channel, interp(s, k, &grid_us));
         }
         rec.metadata.push(format!(" accelerations from {source}"));
     }
     // Schema order for readability.
-    let order = |n: &str| {
-        super::record::SCHEMA_COLUMNS
-            .iter()
-            .position(|c| *c == n)
-            .unwrap_or(usize::MAX)
-    };
+    let order = |n: &str| Channel::from_name(n).map_or(usize::MAX, |c| c as usize);
     rec.columns.sort_by_key(|(n, _)| order(n));
     Ok(rec)
 }

@@ -5,9 +5,9 @@ use std::collections::BTreeMap;
 
 use super::extension::Extension;
 use super::prepare::Prepared;
-use super::replay::{self, ReplayCase, TrimMismatch};
+use super::replay::{ReplayCase, TrimMismatch};
 use super::residual::{self, ChannelResidual};
-use super::search::{residuals, Weighted, Worker};
+use super::search::{residuals, simulate, Weighted, Worker};
 use super::{sim_err, DiagnoseError};
 use crate::data::FlightRecord;
 
@@ -24,10 +24,7 @@ pub fn analyse_replay(
     case: &ReplayCase,
     extensions: &[(&dyn Extension, &[f64])],
 ) -> Result<ReplayAnalysis, DiagnoseError> {
-    let t0 = std::time::Instant::now();
-    let out = replay::replay(worker.sim.as_mut(), case, extensions);
-    worker.sim_s += t0.elapsed().as_secs_f64();
-    let (rec, trim) = out.map_err(sim_err("replay"))?;
+    let (rec, trim) = simulate(worker, case, extensions).map_err(sim_err("replay"))?;
     let stats = case
         .outputs
         .iter()

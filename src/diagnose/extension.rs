@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::simulator::ReplaySim;
 use super::DiagnoseError;
-use crate::data::FlightRecord;
+use crate::data::{Channel, FlightRecord};
 use crate::sim::SimError;
 
 /// Where in the replay an extension acts.
@@ -188,14 +188,6 @@ fn bias_resolution(column: &str) -> f64 {
     }
 }
 
-fn surface_column(surface: &str) -> String {
-    if surface == "throttle" {
-        "throttle".into()
-    } else {
-        format!("{surface}_rad")
-    }
-}
-
 /// docs/diagnose.md derivative names and the coefficient function names of JSBSim's c172x that carry them.
 pub const DERIVATIVE_KNOBS: [(&str, &str); 18] = [
     ("CL_alpha", "CLwbh"),
@@ -220,17 +212,17 @@ pub const DERIVATIVE_KNOBS: [(&str, &str); 18] = [
 
 /// Output columns that may carry a sensor bias or scale. Airspeed and altitude are not among them: they set
 /// the trim point of the replay, so an error in them shows as a trim mismatch instead.
-pub const SENSOR_COLUMNS: [&str; 10] = [
-    "phi_rad",
-    "theta_rad",
-    "p_rad_s",
-    "q_rad_s",
-    "r_rad_s",
-    "alpha_rad",
-    "beta_rad",
-    "ax_m_s2",
-    "ay_m_s2",
-    "az_m_s2",
+pub const SENSOR_COLUMNS: [Channel; 10] = [
+    Channel::Phi,
+    Channel::Theta,
+    Channel::P,
+    Channel::Q,
+    Channel::R,
+    Channel::Alpha,
+    Channel::Beta,
+    Channel::Ax,
+    Channel::Ay,
+    Channel::Az,
 ];
 
 /// Which targets an effect applies to.
@@ -251,7 +243,10 @@ impl Targets {
     /// itself; none for a change of the model.
     fn required_columns(self, target: &str) -> Vec<String> {
         match self {
-            Targets::Surfaces => vec![surface_column(target)],
+            Targets::Surfaces => Channel::of_surface(target)
+                .map(|c| c.to_string())
+                .into_iter()
+                .collect(),
             Targets::SensorColumns => vec![target.to_string()],
             Targets::Derivatives | Targets::AddedTerms => Vec::new(),
         }
@@ -434,9 +429,6 @@ impl Extension for Entry {
     }
 }
 
-/// The surfaces of the schema.
-pub const SURFACES: [&str; 4] = ["elevator", "aileron", "rudder", "throttle"];
-
 /// The simulation's coefficient name of a derivative (the name itself when it is not in the table).
 fn knob_of(target: &str) -> String {
     DERIVATIVE_KNOBS
@@ -460,7 +452,7 @@ pub fn make(
         )));
     };
     match kind.targets {
-        Targets::Surfaces if !SURFACES.contains(&target) => {
+        Targets::Surfaces if Channel::of_surface(target).is_none() => {
             Err(DiagnoseError::UnknownExtension(format!(
                 "{effect} needs a surface target (elevator, aileron, rudder, throttle), got '{target}'"
             )))
@@ -488,8 +480,9 @@ pub fn catalogue(
     let mut skipped = Vec::new();
     for kind in &REGISTRY {
         let targets: Vec<(String, String)> = match kind.targets {
-            Targets::Surfaces => SURFACES
+            Targets::Surfaces => Channel::CONTROLS
                 .iter()
+                .filter_map(|c| c.surface())
                 .map(|s| (s.to_string(), String::new()))
                 .collect(),
             Targets::SensorColumns => SENSOR_COLUMNS

@@ -7,6 +7,7 @@
 //! → [`export`] (the extension file).
 
 pub mod baseline;
+pub mod cache;
 pub mod export;
 pub mod extension;
 pub mod model;
@@ -243,6 +244,8 @@ pub fn diagnose(
 ) -> Result<Diagnosis, DiagnoseError> {
     let t0 = std::time::Instant::now();
     let sim_s0: f64 = workers.iter().map(|w| w.sim_s).sum();
+    let sims0: usize = workers.iter().map(|w| w.simulations).sum();
+    search::share_replays(workers);
     let Some(first) = workers.first_mut() else {
         return Err(DiagnoseError::BadData("no simulation worker".into()));
     };
@@ -258,11 +261,6 @@ pub fn diagnose(
     } else {
         p.nuisance = search::orthonormal_basis(&columns);
         None
-    };
-    let nuisance_sims = if p.nuisance.is_empty() {
-        0
-    } else {
-        1 + 9 * p.case.segments.len()
     };
     let base = baseline::baseline(&mut workers[0], &p)?;
     let sel = select::select(workers, &p, &base, opts, &progress)?;
@@ -286,11 +284,7 @@ pub fn diagnose(
         process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.sigma).collect(),
         n_residuals: p.case.len() * p.case.outputs.len(),
-        // + the replays outside the search: probe, baseline (2), training after; validation before, cost, after
-        simulations: progress.simulations()
-            + 4
-            + 3 * usize::from(p.valid.is_some())
-            + nuisance_sims,
+        simulations: workers.iter().map(|w| w.simulations).sum::<usize>() - sims0,
         wall_s: t0.elapsed().as_secs_f64(),
         simulation_s: workers.iter().map(|w| w.sim_s).sum::<f64>() - sim_s0,
         traces: v.traces,

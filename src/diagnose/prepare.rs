@@ -3,7 +3,7 @@
 
 use super::extension::{self, Extension, Stage};
 use super::replay::{self, ReplayCase};
-use super::search::Worker;
+use super::search::{self, Worker};
 use super::{residual, sim_err, DiagnoseError, Skipped};
 use crate::data::FlightRecord;
 
@@ -21,7 +21,7 @@ pub struct Prepared {
     pub skipped: Vec<Skipped>,
     /// Conditions that limit what the verdict can be trusted for.
     pub warnings: Vec<String>,
-    /// The nuisance terms of the training record's fits (`search::initial_state_basis`; set by `diagnose`).
+    /// The nuisance terms of the training record's fits (`search::initial_state_columns`, orthonormalised; set by `diagnose`).
     pub nuisance: Vec<Vec<f64>>,
     /// The filter error method's filter on the training record's residuals when it flew in turbulence
     /// (`process_noise::estimate`; set by `diagnose`).
@@ -92,7 +92,7 @@ pub fn prepare(
         .collect();
     warnings.extend(rate_note);
     // Compare only the channels the simulation produces (a linear model may lack accelerations).
-    let (probe, _) = replay::replay(worker.sim.as_mut(), &case, &[]).map_err(sim_err("replay"))?;
+    let (probe, _) = search::simulate(worker, &case, &[]).map_err(sim_err("replay"))?;
     let missing: Vec<String> = case
         .outputs
         .iter()

@@ -78,7 +78,7 @@ pub const SEGMENT_LEAD_S: f64 = 0.3;
 /// segment starting at 0 is not listed). An input is moving at sample k when it changed over the last half
 /// second by more than a tenth of its largest deviation from its initial value (robust to sensor noise on the
 /// surface columns). The state at each segment's start is estimated with every fit (a nuisance term, see
-/// `search::initial_state_basis`), so the slow modes (spiral, phugoid) cannot drift apart from the record over
+/// `search::initial_state_columns`), so the slow modes (spiral, phugoid) cannot drift apart from the record over
 /// more than one maneuver: drift is not taken for a cause (the idea of multiple shooting, Bock & Plitt 1984;
 /// Jategaonkar, Flight Vehicle System Identification, 2nd ed., on estimating initial conditions per maneuver).
 pub fn segment_starts(inputs: &[(String, Vec<f64>)], dt_s: f64) -> Vec<usize> {
@@ -390,15 +390,8 @@ pub fn replay_with_resets(
             ..r.clone()
         })
         .collect();
-    let mut rec = sim.fly_with_resets(&plan, &resets)?;
-    if m > 1 {
-        let keep: Vec<usize> = (0..case.len()).map(|k| k * m).collect();
-        for (_, col) in rec.columns.iter_mut() {
-            if col.len() > n_steps {
-                *col = keep.iter().map(|&i| col[i]).collect();
-            }
-        }
-    }
+    // Only the record's samples, every m-th step, are read and returned.
+    let mut rec = sim.fly_recording_every(&plan, &resets, m)?;
     rec.time_s = case.record.time_s.clone();
     for (e, p) in extensions {
         if e.stage() == Stage::Output {

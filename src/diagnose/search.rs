@@ -12,6 +12,7 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
+use super::cache::{fingerprint, ReplayCache, ReplayKey};
 use super::extension::{Extension, Stage};
 use super::process_noise::ResidualFilter;
 use super::replay::{replay, replay_with_resets, ReplayCase};
@@ -20,29 +21,87 @@ use crate::data::FlightRecord;
 use crate::estimate::covariance;
 use crate::ident::linalg;
 use crate::optimise;
-use crate::sim::{SimError, StateReset};
+use crate::sim::{SimError, StateReset, TrimState};
 use faer::Mat;
 
-/// A simulation worker: one simulator and a cache of its last simulated record.
+/// A simulation worker: one simulator and the store of replays it shares with the other workers.
 pub struct Worker {
     /// The simulator (one JSBSim process, or a linear model).
     pub sim: Box<dyn ReplaySim>,
-    cache: Option<(CacheKey, FlightRecord)>,
+    cache: ReplayCache,
     /// Time spent in this worker's simulations, s.
     pub sim_s: f64,
+    /// Simulations this worker ran (replays found in the store not counted).
+    pub simulations: usize,
 }
 
-type CacheKey = (usize, Vec<(String, Vec<u64>)>);
-
 impl Worker {
-    /// Wraps a simulator.
+    /// Wraps a simulator (with a store of its own until [`share_replays`]).
     pub fn new(sim: Box<dyn ReplaySim>) -> Self {
         Worker {
             sim,
-            cache: None,
+            cache: ReplayCache::new(),
             sim_s: 0.0,
+            simulations: 0,
         }
     }
+}
+
+/// Gives the workers one new, empty store of replays (one per diagnosis: the workers must simulate the same
+/// model at the same rate).
+pub fn share_replays(workers: &mut [Worker]) {
+    let cache = ReplayCache::new();
+    for w in workers {
+        w.cache = cache.clone();
+    }
+}
+
+/// Replays `case` with `extensions` (each with its parameter values) on the worker, or takes the replay from the
+/// workers' store when one with the same record and the same extensions before the outputs was simulated;
+/// sensor (output-stage) extensions are applied to the returned copy.
+pub fn simulate(
+    worker: &mut Worker,
+    case: &ReplayCase,
+    extensions: &[(&dyn Extension, &[f64])],
+) -> Result<(FlightRecord, TrimState), SimError> {
+    let key: ReplayKey = (
+        fingerprint(case),
+        extensions
+            .iter()
+            .filter(|(e, p)| e.stage() != Stage::Output && !is_null(*e, p))
+            .map(|(e, p)| {
+                (
+                    format!("{}/{}", e.effect(), e.target()),
+                    p.iter().map(|v| v.to_bits()).collect(),
+                )
+            })
+            .collect(),
+    );
+    let stored = match worker.cache.get(&key) {
+        Some(r) => r,
+        None => {
+            let before_outputs: Vec<(&dyn Extension, &[f64])> = extensions
+                .iter()
+                .filter(|(e, _)| e.stage() != Stage::Output)
+                .copied()
+                .collect();
+            let t0 = std::time::Instant::now();
+            let out = replay(worker.sim.as_mut(), case, &before_outputs);
+            worker.sim_s += t0.elapsed().as_secs_f64();
+            worker.simulations += 1;
+            let r = std::sync::Arc::new(out?);
+            worker.cache.insert(key, std::sync::Arc::clone(&r));
+            r
+        }
+    };
+    let (mut rec, trim) = (stored.0.clone(), stored.1.clone());
+    for (e, p) in extensions
+        .iter()
+        .filter(|(e, _)| e.stage() == Stage::Output)
+    {
+        e.apply_output(p, &mut rec);
+    }
+    Ok((rec, trim))
 }
 
 /// An extension with its current parameter values; `free` ones are fitted.
@@ -62,7 +121,7 @@ pub struct Weighted<'c> {
     pub case: &'c ReplayCase,
     /// Noise standard deviation per output column (same order as `case.outputs`).
     pub sigma: Vec<f64>,
-    /// Orthonormal basis of the residual directions the nuisance terms explain (see [`initial_state_basis`]);
+    /// Orthonormal basis of the residual directions the nuisance terms explain (see [`initial_state_columns`]);
     /// the residual is projected off it, which estimates the nuisance terms jointly with every fit.
     pub nuisance: &'c [Vec<f64>],
     /// The filter error method's innovations in place of the output error (turbulence; see
@@ -81,46 +140,18 @@ fn is_null(e: &dyn Extension, p: &[f64]) -> bool {
     e.params().iter().zip(p).all(|(s, v)| *v == s.null)
 }
 
-/// Simulates with the active extensions (re-using the worker's last simulation when only sensor extensions
-/// changed) and returns the noise-normalised residual vector, channel-major.
+/// Simulates with the active extensions ([`simulate`]: a replay already in the workers' store is not run
+/// again) and returns the noise-normalised residual vector, channel-major.
 pub fn residuals(
     worker: &mut Worker,
     w: &Weighted,
     active: &[Active],
 ) -> Result<Vec<f64>, SimError> {
-    let key: CacheKey = (
-        w.case as *const ReplayCase as usize,
-        active
-            .iter()
-            .filter(|a| a.ext.stage() != Stage::Output && !is_null(a.ext, &a.params))
-            .map(|a| {
-                (
-                    format!("{}/{}", a.ext.effect(), a.ext.target()),
-                    a.params.iter().map(|v| v.to_bits()).collect(),
-                )
-            })
-            .collect(),
-    );
-    let cached = matches!(&worker.cache, Some((k, _)) if *k == key);
-    if !cached {
-        let sim_exts: Vec<(&dyn Extension, &[f64])> = active
-            .iter()
-            .filter(|a| a.ext.stage() != Stage::Output)
-            .map(|a| (a.ext, a.params.as_slice()))
-            .collect();
-        let t0 = std::time::Instant::now();
-        let out = replay(worker.sim.as_mut(), w.case, &sim_exts);
-        worker.sim_s += t0.elapsed().as_secs_f64();
-        let (rec, _) = out?;
-        worker.cache = Some((key, rec));
-    }
-    let mut rec = match &worker.cache {
-        Some((_, r)) => r.clone(),
-        None => return Err(SimError::Protocol("replay cache is empty".into())),
-    };
-    for a in active.iter().filter(|a| a.ext.stage() == Stage::Output) {
-        a.ext.apply_output(&a.params, &mut rec);
-    }
+    let exts: Vec<(&dyn Extension, &[f64])> = active
+        .iter()
+        .map(|a| (a.ext, a.params.as_slice()))
+        .collect();
+    let (rec, _) = simulate(worker, w.case, &exts)?;
     let mut r = Vec::with_capacity(w.n());
     for (c, name) in w.case.outputs.iter().enumerate() {
         let y = w.case.measured(name);
@@ -212,10 +243,7 @@ pub fn initial_state_columns(
     if !first.sim.supports_resets() {
         return Ok(Vec::new());
     }
-    let t0 = std::time::Instant::now();
-    let base = replay(first.sim.as_mut(), case, &[]);
-    first.sim_s += t0.elapsed().as_secs_f64();
-    let (base, _) = base?;
+    let (base, _) = simulate(first, case, &[])?;
     let items: Vec<StateReset> = case
         .segments
         .iter()
@@ -229,6 +257,7 @@ pub fn initial_state_columns(
         let t0 = std::time::Instant::now();
         let out = replay_with_resets(wk.sim.as_mut(), case, &[], std::slice::from_ref(reset));
         wk.sim_s += t0.elapsed().as_secs_f64();
+        wk.simulations += 1;
         let (rec, _) = out?;
         let mut col = Vec::with_capacity(case.len() * case.outputs.len());
         for (c, name) in case.outputs.iter().enumerate() {

@@ -42,6 +42,17 @@ pub trait ReplaySim: Simulator + Send {
             ))
         }
     }
+    /// [`ReplaySim::fly_with_resets`] keeping only every `every`-th sample (the first included): a replay
+    /// integrating at a multiple of its record's rate needs only the record's samples.
+    fn fly_recording_every(
+        &mut self,
+        plan: &FlightPlan,
+        resets: &[StateReset],
+        every: usize,
+    ) -> Result<FlightRecord, SimError> {
+        let rec = self.fly_with_resets(plan, resets)?;
+        Ok(if every > 1 { rec.every_nth(every) } else { rec })
+    }
     /// Writes the model with the current coefficient factors and added terms in it to `dir`.
     fn export_model(&mut self, dir: &std::path::Path) -> Result<std::path::PathBuf, SimError> {
         Err(SimError::Usage(format!(
@@ -79,5 +90,13 @@ impl ReplaySim for JsbsimSim {
         resets: &[StateReset],
     ) -> Result<FlightRecord, SimError> {
         JsbsimSim::fly_with_resets(self, plan, resets)
+    }
+    fn fly_recording_every(
+        &mut self,
+        plan: &FlightPlan,
+        resets: &[StateReset],
+        every: usize,
+    ) -> Result<FlightRecord, SimError> {
+        JsbsimSim::fly_recording_every(self, plan, resets, every)
     }
 }

@@ -416,6 +416,25 @@ impl JsbsimSim {
         plan: &FlightPlan,
         resets: &[StateReset],
     ) -> Result<FlightRecord, SimError> {
+        self.fly_recording_every(plan, resets, 1)
+    }
+
+    /// [`JsbsimSim::fly_with_resets`] recording only every `every`-th step (sample 0 and the state after steps
+    /// `every`, `2 every`, …; `plan.n_steps` must be a multiple of `every`): a replay that integrates at a multiple
+    /// of its record's rate reads and transfers only the record's samples (the same values as
+    /// `fly_with_resets(..).every_nth(every)`, bit for bit).
+    pub fn fly_recording_every(
+        &mut self,
+        plan: &FlightPlan,
+        resets: &[StateReset],
+        every: usize,
+    ) -> Result<FlightRecord, SimError> {
+        if every == 0 || plan.n_steps % every != 0 {
+            return Err(SimError::Usage(format!(
+                "recording every {every} steps of a {}-step flight: the steps must be a whole multiple",
+                plan.n_steps
+            )));
+        }
         let trim = self
             .trim
             .take()
@@ -550,18 +569,22 @@ impl JsbsimSim {
             resets_json.push(json!({"step": r.step, "state": st}));
         }
         let req = json!({"cmd": "fly", "n_steps": n, "drives": drives, "record": record,
-                         "set_before": set_before, "resets": resets_json});
+                         "set_before": set_before, "resets": resets_json, "record_every": every});
         let resp = self.bridge.request(req, &payload)?;
         let width = record.len();
         let rows = resp.payload.len() / width;
-        if rows != n + 1 || resp.payload.len() % width != 0 {
+        if rows != n / every + 1 || resp.payload.len() % width != 0 {
             return Err(SimError::Protocol(format!(
                 "fly returned {} values, expected {}",
                 resp.payload.len(),
-                (n + 1) * width
+                (n / every + 1) * width
             )));
         }
-        let mut rec = FlightRecord::new((0..rows).map(|k| k as f64 / self.rate_hz).collect());
+        let mut rec = FlightRecord::new(
+            (0..rows)
+                .map(|k| (k * every) as f64 / self.rate_hz)
+                .collect(),
+        );
         let column = |j: usize, factor: f64| -> Vec<f64> {
             (0..rows)
                 .map(|k| resp.payload[k * width + j] * factor)

@@ -1,0 +1,220 @@
+//! The columns of the flight-data schema (docs/data.md) as a type: a [`Channel`] names one column, and its
+//! name carries its unit (`q_rad_s`), so code that means a schema column says which one, and a typo is a
+//! compile error instead of a column that is silently never found.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// One column of the flight-data schema. SI units; angles in rad, body axes (x forward, y right, z down).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Channel {
+    /// `time_s`: sample time, s.
+    Time,
+    /// `elevator_rad`: elevator deflection, rad (trailing edge down positive).
+    Elevator,
+    /// `aileron_rad`: aileron deflection, rad.
+    Aileron,
+    /// `rudder_rad`: rudder deflection, rad.
+    Rudder,
+    /// `throttle`: throttle setting, fraction 0..1.
+    Throttle,
+    /// `phi_rad`: roll angle φ, rad.
+    Phi,
+    /// `theta_rad`: pitch angle θ, rad.
+    Theta,
+    /// `psi_rad`: heading ψ, rad.
+    Psi,
+    /// `p_rad_s`: body roll rate, rad/s.
+    P,
+    /// `q_rad_s`: body pitch rate, rad/s.
+    Q,
+    /// `r_rad_s`: body yaw rate, rad/s.
+    R,
+    /// `alpha_rad`: angle of attack α, rad.
+    Alpha,
+    /// `beta_rad`: sideslip angle β, rad.
+    Beta,
+    /// `airspeed_m_s`: true airspeed, m/s.
+    Airspeed,
+    /// `altitude_m`: altitude, m.
+    Altitude,
+    /// `ax_m_s2`: body-x specific force, m/s².
+    Ax,
+    /// `ay_m_s2`: body-y specific force, m/s².
+    Ay,
+    /// `az_m_s2`: body-z specific force, m/s².
+    Az,
+    /// `thrust_n`: thrust, N.
+    Thrust,
+    /// `qbar_pa`: dynamic pressure, Pa.
+    Qbar,
+}
+
+impl Channel {
+    /// Every column of the schema, in its canonical order.
+    pub const ALL: [Channel; 20] = [
+        Channel::Time,
+        Channel::Elevator,
+        Channel::Aileron,
+        Channel::Rudder,
+        Channel::Throttle,
+        Channel::Phi,
+        Channel::Theta,
+        Channel::Psi,
+        Channel::P,
+        Channel::Q,
+        Channel::R,
+        Channel::Alpha,
+        Channel::Beta,
+        Channel::Airspeed,
+        Channel::Altitude,
+        Channel::Ax,
+        Channel::Ay,
+        Channel::Az,
+        Channel::Thrust,
+        Channel::Qbar,
+    ];
+
+    /// The control inputs: the three surfaces and the throttle.
+    pub const CONTROLS: [Channel; 4] = [
+        Channel::Elevator,
+        Channel::Aileron,
+        Channel::Rudder,
+        Channel::Throttle,
+    ];
+
+    /// The attitude angles and body rates of an attitude solution (φ, θ, ψ, p, q, r).
+    pub const ATTITUDE_AND_RATES: [Channel; 6] = [
+        Channel::Phi,
+        Channel::Theta,
+        Channel::Psi,
+        Channel::P,
+        Channel::Q,
+        Channel::R,
+    ];
+
+    /// The body-axis specific forces (accelerometers).
+    pub const SPECIFIC_FORCES: [Channel; 3] = [Channel::Ax, Channel::Ay, Channel::Az];
+
+    /// The column name of docs/data.md, e.g. `q_rad_s`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Channel::Time => "time_s",
+            Channel::Elevator => "elevator_rad",
+            Channel::Aileron => "aileron_rad",
+            Channel::Rudder => "rudder_rad",
+            Channel::Throttle => "throttle",
+            Channel::Phi => "phi_rad",
+            Channel::Theta => "theta_rad",
+            Channel::Psi => "psi_rad",
+            Channel::P => "p_rad_s",
+            Channel::Q => "q_rad_s",
+            Channel::R => "r_rad_s",
+            Channel::Alpha => "alpha_rad",
+            Channel::Beta => "beta_rad",
+            Channel::Airspeed => "airspeed_m_s",
+            Channel::Altitude => "altitude_m",
+            Channel::Ax => "ax_m_s2",
+            Channel::Ay => "ay_m_s2",
+            Channel::Az => "az_m_s2",
+            Channel::Thrust => "thrust_n",
+            Channel::Qbar => "qbar_pa",
+        }
+    }
+
+    /// The channel of a column name, if it is a schema column.
+    pub fn from_name(name: &str) -> Option<Channel> {
+        Channel::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// The surface a control input moves, as the simulation names it (`elevator`, ..., `throttle`); `None`
+    /// for a channel that is not a control input.
+    pub fn surface(self) -> Option<&'static str> {
+        match self {
+            Channel::Elevator => Some("elevator"),
+            Channel::Aileron => Some("aileron"),
+            Channel::Rudder => Some("rudder"),
+            Channel::Throttle => Some("throttle"),
+            _ => None,
+        }
+    }
+
+    /// The control input that moves a surface the simulation names `surface`.
+    pub fn of_surface(surface: &str) -> Option<Channel> {
+        Channel::CONTROLS
+            .into_iter()
+            .find(|c| c.surface() == Some(surface))
+    }
+}
+
+/// The column names of `channels`, in their order (a const fn, so that tables of names can be constants).
+pub const fn names<const N: usize>(channels: [Channel; N]) -> [&'static str; N] {
+    let mut out = [""; N];
+    let mut i = 0;
+    while i < N {
+        out[i] = channels[i].name();
+        i += 1;
+    }
+    out
+}
+
+impl fmt::Display for Channel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl AsRef<str> for Channel {
+    fn as_ref(&self) -> &str {
+        self.name()
+    }
+}
+
+/// A column name that is not in the schema.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("'{0}' is not a column of the flight-data schema (docs/data.md)")]
+pub struct UnknownChannel(pub String);
+
+impl FromStr for Channel {
+    type Err = UnknownChannel;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Channel::from_name(s).ok_or_else(|| UnknownChannel(s.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every channel's name parses back to it, and no two channels share a name.
+    #[test]
+    fn names_round_trip_and_are_unique() {
+        for c in Channel::ALL {
+            assert_eq!(c.name().parse::<Channel>(), Ok(c));
+        }
+        let mut seen: Vec<&str> = Channel::ALL.iter().map(|c| c.name()).collect();
+        seen.sort();
+        seen.dedup();
+        assert_eq!(seen.len(), Channel::ALL.len());
+        assert!("q_deg_s".parse::<Channel>().is_err());
+    }
+
+    /// [`Channel::ALL`] lists the channels in their declaration order, so `c as usize` is a channel's place
+    /// in the schema.
+    #[test]
+    fn all_is_in_schema_order() {
+        for (i, c) in Channel::ALL.into_iter().enumerate() {
+            assert_eq!(c as usize, i, "{c}");
+        }
+    }
+
+    /// A control input and its surface name map both ways; a sensor has no surface.
+    #[test]
+    fn control_inputs_map_to_surfaces() {
+        for c in Channel::CONTROLS {
+            assert_eq!(Channel::of_surface(c.surface().unwrap()), Some(c));
+        }
+        assert_eq!(Channel::Q.surface(), None);
+        assert_eq!(Channel::of_surface("flap"), None);
+    }
+}
