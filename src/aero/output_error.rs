@@ -43,7 +43,7 @@ use super::measured::{
     modes_with_uncertainty, moved_to_cg, records_exciting, reference_condition, AirData,
     AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, ReferenceCondition,
 };
-use crate::data::{self, G0_M_S2};
+use crate::data::{self, Channel, G0_M_S2};
 use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signature, StateModel};
 
 mod free;
@@ -214,6 +214,35 @@ fn need<'a>(
     })
 }
 
+/// What every fit of an axis reads besides its records: the air data per record, the airframe, the mean
+/// flight condition and the options.
+#[derive(Clone, Copy)]
+struct FitSetup<'a> {
+    air: &'a BTreeMap<String, AirData>,
+    airframe: &'a Airframe,
+    cond: &'a ReferenceCondition,
+    options: &'a OutputErrorOptions,
+}
+
+/// The control derivatives held at 0 because no record moves their surface (module doc); `controls` pairs
+/// each control input with its derivatives.
+fn derivatives_of_still_surfaces(
+    records: &[&(String, data::FlightRecord)],
+    controls: &[(Channel, [&'static str; 3])],
+) -> BTreeSet<&'static str> {
+    let moves = |surface: Channel| {
+        records.iter().any(|(_, r)| {
+            r.column(surface)
+                .is_some_and(super::measured::surface_moves)
+        })
+    };
+    controls
+        .iter()
+        .filter(|(surface, _)| !moves(*surface))
+        .flat_map(|(_, derivatives)| *derivatives)
+        .collect()
+}
+
 /// The result of one axis's fit.
 struct AxisFit {
     estimate: estimate::Estimate,
@@ -283,16 +312,14 @@ fn states_and_biases<O: PartialEq>(outputs: &[O], biased: &[O]) -> Nuisance {
 /// Fits the longitudinal model to the records (module doc).
 fn fit_longitudinal(
     records: &[&(String, data::FlightRecord)],
-    air: &BTreeMap<String, AirData>,
-    airframe: &Airframe,
-    cond: &ReferenceCondition,
-    options: &OutputErrorOptions,
+    setup: FitSetup,
     notes: &mut Vec<String>,
 ) -> Result<AxisFit, MeasuredError> {
-    let constants = model_constants(airframe, true, cond.airspeed_m_s)?;
+    let cond = setup.cond;
+    let constants = model_constants(setup.airframe, true, cond.airspeed_m_s)?;
     let thrust = records.iter().all(|(_, r)| r.column("thrust_n").is_some());
     if thrust {
-        airframe.thrust_line("records with thrust_n")?;
+        setup.airframe.thrust_line("records with thrust_n")?;
     } else if records.iter().any(|(_, r)| r.column("thrust_n").is_some()) {
         notes.push("longitudinal: thrust_n is not in every record; thrust left out (T = 0; C_D0 absorbs it)".into());
     }
@@ -301,7 +328,7 @@ fn fit_longitudinal(
     let mut recs = Vec::new();
     for (name, raw) in records {
         let why = "the longitudinal model's states";
-        let cg = moved_to_cg(raw, &airframe.sensors).map_err(MeasuredError::Aero)?;
+        let cg = moved_to_cg(raw, &setup.airframe.sensors).map_err(MeasuredError::Aero)?;
         // A state the record lacks starts from the others (α = θ, θ = α: γ ≈ 0; q = 0) and is estimated.
         let first = |c: &str| cg.column(c).map(|v| v[0]);
         let v0 = need(name, &cg, "airspeed_m_s", why)?[0];
@@ -324,12 +351,12 @@ fn fit_longitudinal(
         if thrust {
             inputs.push(need(name, raw, "thrust_n", "")?.to_vec());
         }
-        inputs.push(vec![air[name.as_str()].density_kg_m3; n]);
+        inputs.push(vec![setup.air[name.as_str()].density_kg_m3; n]);
         let columns: Vec<&str> = outputs.iter().map(|o| o.column()).collect();
         recs.push(core_record(name, raw, inputs, &columns, x0)?);
     }
     // Start values: equation error, then the trim (module doc).
-    let starts = equation_error_starts(records, airframe, AxisChoice::Longitudinal, notes);
+    let starts = equation_error_starts(records, setup.airframe, AxisChoice::Longitudinal, notes);
     let qs = cond.qbar_pa() * constants.geometry.wing_area_m2;
     let span = constants.geometry.span_m;
     let aspect = if span.is_finite() {
@@ -368,13 +395,8 @@ fn fit_longitudinal(
     ]
     .into_iter()
     .collect();
-    let mut still = BTreeSet::new();
-    if !records.iter().any(|(_, r)| {
-        r.column("elevator_rad")
-            .is_some_and(super::measured::surface_moves)
-    }) {
-        still.extend(["CL_de", "CD_de", "Cm_de"]);
-    }
+    let mut still =
+        derivatives_of_still_surfaces(records, &[(Channel::Elevator, ["CL_de", "CD_de", "Cm_de"])]);
     if !outputs.contains(&LonOutput::Alpha) {
         still.insert("tau_alpha_s");
     }
@@ -384,30 +406,27 @@ fn fit_longitudinal(
         &starts,
         &fallback,
         &still,
-        options,
+        setup.options,
         notes,
     );
     let model = LongitudinalModel::new(constants, outputs.clone(), thrust);
     let bias = [LonOutput::Q, LonOutput::Ax, LonOutput::Az, LonOutput::Qdot];
     let nuisance = states_and_biases(&outputs, &bias);
-    fit_model(&model, &params, &recs, &nuisance, options, constants)
+    fit_model(&model, &params, &recs, &nuisance, setup.options, constants)
 }
 
 /// Fits the lateral-directional model to the records (module doc).
 fn fit_lateral(
     records: &[&(String, data::FlightRecord)],
-    air: &BTreeMap<String, AirData>,
-    airframe: &Airframe,
-    cond: &ReferenceCondition,
-    options: &OutputErrorOptions,
+    setup: FitSetup,
     notes: &mut Vec<String>,
 ) -> Result<AxisFit, MeasuredError> {
-    let constants = model_constants(airframe, false, cond.airspeed_m_s)?;
+    let constants = model_constants(setup.airframe, false, setup.cond.airspeed_m_s)?;
     let outputs = outputs_in_every_record(&LatOutput::ALL, LatOutput::column, records, "lateral")?;
     let mut recs = Vec::new();
     let mut zero_filled = BTreeSet::new();
     for (name, raw) in records {
-        let cg = moved_to_cg(raw, &airframe.sensors).map_err(MeasuredError::Aero)?;
+        let cg = moved_to_cg(raw, &setup.airframe.sensors).map_err(MeasuredError::Aero)?;
         // A state the record lacks starts at 0 (wings level, no sideslip) and is estimated.
         let x0: Vec<f64> = LATERAL_STATES
             .iter()
@@ -419,7 +438,7 @@ fn fit_lateral(
             .iter()
             .map(|&c| {
                 if c == DENSITY {
-                    return vec![air[name.as_str()].density_kg_m3; n];
+                    return vec![setup.air[name.as_str()].density_kg_m3; n];
                 }
                 match cg.column(c) {
                     Some(v) => v.to_vec(),
@@ -439,7 +458,7 @@ fn fit_lateral(
             zero_filled.into_iter().collect::<Vec<_>>().join(", ")
         ));
     }
-    let starts = equation_error_starts(records, airframe, AxisChoice::Lateral, notes);
+    let starts = equation_error_starts(records, setup.airframe, AxisChoice::Lateral, notes);
     let fallback: BTreeMap<&'static str, f64> = [
         ("CY_beta", -0.5),
         ("Cl_beta", -0.05),
@@ -455,18 +474,11 @@ fn fit_lateral(
     ]
     .into_iter()
     .collect();
-    let moves = |c: &str| {
-        records
-            .iter()
-            .any(|(_, r)| r.column(c).is_some_and(super::measured::surface_moves))
-    };
-    let mut still = BTreeSet::new();
-    if !moves("aileron_rad") {
-        still.extend(["CY_da", "Cl_da", "Cn_da"]);
-    }
-    if !moves("rudder_rad") {
-        still.extend(["CY_dr", "Cl_dr", "Cn_dr"]);
-    }
+    let controls = [
+        (Channel::Aileron, ["CY_da", "Cl_da", "Cn_da"]),
+        (Channel::Rudder, ["CY_dr", "Cl_dr", "Cn_dr"]),
+    ];
+    let mut still = derivatives_of_still_surfaces(records, &controls);
     if !outputs.contains(&LatOutput::Beta) {
         still.insert("tau_beta_s");
     }
@@ -476,7 +488,7 @@ fn fit_lateral(
         &starts,
         &fallback,
         &still,
-        options,
+        setup.options,
         notes,
     );
     let model = LateralModel::new(constants, outputs.clone());
@@ -488,7 +500,7 @@ fn fit_lateral(
         LatOutput::Rdot,
     ];
     let nuisance = states_and_biases(&outputs, &bias);
-    fit_model(&model, &params, &recs, &nuisance, options, constants)
+    fit_model(&model, &params, &recs, &nuisance, setup.options, constants)
 }
 
 /// Runs the core on one model.
@@ -524,12 +536,10 @@ fn fit_model(
 /// reports. Returns the note and the adopted fit.
 fn alphadot_check(
     records: &[&(String, data::FlightRecord)],
-    air: &BTreeMap<String, AirData>,
-    airframe: &Airframe,
-    cond: &ReferenceCondition,
-    options: &OutputErrorOptions,
+    setup: FitSetup,
     held: &AxisFit,
 ) -> Option<(String, Option<AxisFit>)> {
+    let options = setup.options;
     if options.method != Method::Oe
         || !held
             .estimate
@@ -548,12 +558,18 @@ fn alphadot_check(
         free: true,
     });
     let mut wider_notes = Vec::new();
-    let f = fit_longitudinal(records, air, airframe, cond, &wider, &mut wider_notes).ok()?;
+    let wider_setup = FitSetup {
+        options: &wider,
+        ..setup
+    };
+    let f = fit_longitudinal(records, wider_setup, &mut wider_notes).ok()?;
     let p = f.estimate.parameter("Cm_alphadot")?;
     let drop = held.estimate.cost - f.estimate.cost;
     let t = p.value / p.std_error.max(f64::MIN_POSITIVE);
     // without an α vane the split between α̇ and q rests on the accelerometer alone: report, never adopt
-    let vane = records.iter().all(|(_, r)| r.column("alpha_rad").is_some());
+    let vane = records
+        .iter()
+        .all(|(_, r)| r.column(Channel::Alpha).is_some());
     let converged = f.estimate.stop == estimate::StopReason::Converged;
     let supported = p.value < 0.0 && t.abs() > 3.0 && 2.0 * drop > 11.34 && vane && converged;
     let verdict = if supported && user_chose {
@@ -630,10 +646,16 @@ pub fn output_error_report(
             })
             .collect()
     };
+    let setup = FitSetup {
+        air: &air,
+        airframe,
+        cond: &cond,
+        options,
+    };
     if axis.longitudinal() {
         let recs = records_for(records, true);
-        let mut f = fit_longitudinal(&recs, &air, airframe, &cond, options, &mut notes)?;
-        if let Some((note, adopted)) = alphadot_check(&recs, &air, airframe, &cond, options, &f) {
+        let mut f = fit_longitudinal(&recs, setup, &mut notes)?;
+        if let Some((note, adopted)) = alphadot_check(&recs, setup, &f) {
             notes.push(note);
             if let Some(wider) = adopted {
                 f = wider;
@@ -648,7 +670,7 @@ pub fn output_error_report(
     }
     if axis.lateral() {
         let recs = records_for(records, false);
-        let f = fit_lateral(&recs, &air, airframe, &cond, options, &mut notes)?;
+        let f = fit_lateral(&recs, setup, &mut notes)?;
         let (free, cov) = free_block(&f.estimate);
         let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| {
             lateral_modes_at(&f.constants, &cond, t)

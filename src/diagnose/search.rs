@@ -4,9 +4,9 @@
 //! standard deviation of channel c, by Levenberg–Marquardt with finite-difference output sensitivities;
 //! standard errors from the Cramér–Rao bound s² (SᵀS)⁻¹ (Morelli & Klein, Aircraft System Identification,
 //! 2nd ed., §6.2–6.3, eqs. 6.19–6.27). Modelling error leaves coloured residuals, for which the Cramér–Rao
-//! bound is far too optimistic; the reported standard errors are therefore the heteroscedasticity-and-
-//! autocorrelation-consistent sandwich (SᵀS)⁻¹ (Σ_l w_l Γ_l) (SᵀS)⁻¹ with Bartlett weights (Newey & West 1987,
-//! Econometrica 55; Morelli & Klein §6.3 "colored residuals"). Selection: BIC = n ln(J/n) + k ln n
+//! bound is far too optimistic; the reported standard errors are therefore the estimation core's
+//! coloured-residual bound (SᵀS)⁻¹ [Σ_c Σ_i Σ_j s_i R_c(i−j) s_jᵀ] (SᵀS)⁻¹ (Morelli & Klein §6.6, eq. 6.86)
+//! with a Bartlett window of one second per output channel c. Selection: BIC = n ln(J/n) + k ln n
 //! (Schwarz 1978) with the effective number of independent residuals n_eff, forward selection.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -17,6 +17,8 @@ use super::extension::{Extension, Stage};
 use super::replay::{replay, replay_with_resets, ReplayCase};
 use super::simulator::ReplaySim;
 use crate::data::FlightRecord;
+use crate::estimate::covariance;
+use crate::ident::linalg;
 use crate::optimise;
 use crate::sim::{SimError, StateReset, TrimState};
 use faer::Mat;
@@ -334,48 +336,6 @@ pub struct FitOutcome {
     pub evaluations: usize,
 }
 
-/// Solves the small symmetric system A x = b by Gaussian elimination with partial pivoting.
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for i in 0..n {
-        let p = (i..n).max_by(|&x, &y| a[x][i].abs().total_cmp(&a[y][i].abs()))?;
-        if a[p][i].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(i, p);
-        b.swap(i, p);
-        for j in i + 1..n {
-            let f = a[j][i] / a[i][i];
-            let (upper, lower) = a.split_at_mut(j);
-            for (ajk, aik) in lower[0][i..n].iter_mut().zip(&upper[i][i..n]) {
-                *ajk -= f * aik;
-            }
-            b[j] -= f * b[i];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|k| a[i][k] * x[k]).sum();
-        x[i] = (b[i] - s) / a[i][i];
-    }
-    Some(x)
-}
-
-fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    let n = a.len();
-    let mut cols = Vec::new();
-    for j in 0..n {
-        let mut e = vec![0.0; n];
-        e[j] = 1.0;
-        cols.push(solve(a.to_vec(), e)?);
-    }
-    Some(
-        (0..n)
-            .map(|i| (0..n).map(|j| cols[j][i]).collect())
-            .collect(),
-    )
-}
-
 /// Residual sensitivities ∂r/∂θ of the `free` parameters by forward differences from `r` (a
 /// backward one at the upper bound).
 fn residual_jacobian(
@@ -525,40 +485,25 @@ pub fn fit(
     } else {
         last_cols
     };
-    let a: Vec<Vec<f64>> = cols
-        .iter()
-        .map(|ci| {
-            cols.iter()
-                .map(|cj| ci.iter().zip(cj).map(|(x, y)| x * y).sum())
-                .collect()
-        })
+    let p = free.len();
+    let a: Vec<f64> = (0..p * p)
+        .map(|ij| linalg::dot(&cols[ij / p], &cols[ij % p]))
         .collect();
-    let n = r.len() as f64;
-    let s2 = c / (n - free.len() as f64).max(1.0);
+    let s2 = c / (r.len() as f64 - p as f64).max(1.0);
     let m = w.case.len();
     let lags = hac_lags(w.case.dt_s(), m);
-    let (crb_std_errors, std_errors) = match inverse(&a) {
+    let (crb_std_errors, std_errors) = match linalg::inverse(&a, p) {
         Some(inv) => {
-            let meat = hac_meat(&cols, &r, m, lags);
-            let p = free.len();
-            let crb: Vec<f64> = (0..p).map(|i| (s2 * inv[i][i]).max(0.0).sqrt()).collect();
-            let sandwich = (0..p)
-                .map(|i| {
-                    let mut v = 0.0;
-                    for j in 0..p {
-                        for k in 0..p {
-                            v += inv[i][j] * meat[j][k] * inv[k][i];
-                        }
-                    }
-                    v.max(0.0).sqrt().max(crb[i])
-                })
+            let cov = covariance::sandwich(&inv, &coloured_products(&cols, &r, m, lags), p);
+            let crb: Vec<f64> = (0..p)
+                .map(|i| (s2 * inv[i * p + i]).max(0.0).sqrt())
                 .collect();
-            (crb, sandwich)
+            let coloured = (0..p)
+                .map(|i| cov[i * p + i].max(0.0).sqrt().max(crb[i]))
+                .collect();
+            (crb, coloured)
         }
-        None => (
-            vec![f64::INFINITY; free.len()],
-            vec![f64::INFINITY; free.len()],
-        ),
+        None => (vec![f64::INFINITY; p], vec![f64::INFINITY; p]),
     };
     let n_eff = effective_n(&r, m, lags);
     // Restore the cache to the fitted values (the last simulation was a perturbed one).
@@ -649,57 +594,35 @@ fn hac_lags(dt_s: f64, samples_per_channel: usize) -> usize {
     ((1.0 / dt_s).round() as usize).clamp(1, (samples_per_channel / 4).max(1))
 }
 
-/// The "meat" Σ_c Σ_{|l|≤L} (1 − |l|/(L+1)) Σ_k g_c[k] g_c[k+l]ᵀ of the sandwich, with the score
-/// g_c[k] = s_c[k] r_c[k] per channel c (channel-major vectors of `m` samples each; Newey & West 1987, eq. 2).
-fn hac_meat(cols: &[Vec<f64>], r: &[f64], m: usize, lags: usize) -> Vec<Vec<f64>> {
+/// `Σ_c Σ_i Σ_j s_c[i] R_c(|i−j|) s_c[j]ᵀ` (row-major p × p) over the output channels c, with R_c the
+/// Bartlett-tapered autocorrelation of channel c's residual up to `lags` (channel-major vectors of `m`
+/// samples each; the channels are taken as mutually uncorrelated).
+fn coloured_products(cols: &[Vec<f64>], r: &[f64], m: usize, lags: usize) -> Vec<f64> {
     let p = cols.len();
-    let mut meat = vec![vec![0.0; p]; p];
-    let channels = r.len() / m.max(1);
-    let g: Vec<Vec<f64>> = cols
-        .iter()
-        .map(|s| s.iter().zip(r).map(|(a, b)| a * b).collect())
-        .collect();
-    for c in 0..channels {
-        let base = c * m;
-        for i in 0..p {
-            for j in 0..p {
-                let (gi, gj) = (&g[i][base..base + m], &g[j][base..base + m]);
-                let mut v: f64 = gi.iter().zip(gj).map(|(x, y)| x * y).sum();
-                for l in 1..=lags.min(m - 1) {
-                    let w = 1.0 - l as f64 / (lags + 1) as f64;
-                    let cross: f64 = (0..m - l)
-                        .map(|k| gi[k] * gj[k + l] + gi[k + l] * gj[k])
-                        .sum();
-                    v += w * cross;
-                }
-                meat[i][j] += v;
-            }
-        }
+    let mut total = vec![0.0; p * p];
+    for (c, rc) in r.chunks(m.max(1)).enumerate() {
+        let slices: Vec<&[f64]> = cols.iter().map(|s| &s[c * m..c * m + rc.len()]).collect();
+        let taper = covariance::bartlett_taper(&covariance::autocorrelation(rc, lags), lags);
+        let w = covariance::lag_weighted_products(&slices, &taper);
+        total.iter_mut().zip(w).for_each(|(t, v)| *t += v);
     }
-    meat
+    total
 }
 
-/// Effective number of independent residuals: Σ_c m / (1 + 2 Σ_{l=1}^{L} (1 − l/(L+1)) ρ_c(l)), with ρ_c
-/// the autocorrelation of channel c's residual (the variance-inflation factor of a mean of correlated
-/// samples, Bartlett 1946; Box, Jenkins & Reinsel, Time Series Analysis, §2.1.6). Clamped to [1, m] per channel.
+/// Effective number of independent residuals: the sum over channels of
+/// [`covariance::effective_samples`] of the mean-removed residual with a Bartlett window of `lags`.
 pub fn effective_n(r: &[f64], m: usize, lags: usize) -> f64 {
     if m == 0 {
         return 0.0;
     }
     r.chunks(m)
         .map(|e| {
-            let n = e.len();
-            let mean = e.iter().sum::<f64>() / n as f64;
-            let c0: f64 = e.iter().map(|v| (v - mean).powi(2)).sum();
-            if c0 <= 0.0 {
-                return n as f64;
-            }
-            let mut inflation = 1.0;
-            for l in 1..=lags.min(n.saturating_sub(1)) {
-                let cl: f64 = (l..n).map(|k| (e[k] - mean) * (e[k - l] - mean)).sum();
-                inflation += 2.0 * (1.0 - l as f64 / (lags + 1) as f64) * cl / c0;
-            }
-            (n as f64 / inflation.max(1.0)).clamp(1.0, n as f64)
+            let mean = e.iter().sum::<f64>() / e.len() as f64;
+            let centred: Vec<f64> = e.iter().map(|v| v - mean).collect();
+            let lags = lags.min(e.len().saturating_sub(1));
+            let taper =
+                covariance::bartlett_taper(&covariance::autocorrelation(&centred, lags), lags);
+            covariance::effective_samples(&taper, e.len())
         })
         .sum()
 }

@@ -33,10 +33,31 @@ pub fn lag_weights(r: &[f64]) -> Vec<f64> {
     let decay = (1..=cap)
         .find(|&l| (acf[l] / r0).abs() < bound)
         .unwrap_or(cap);
-    let max_lag = (2 * decay).min(cap);
+    bartlett_taper(&acf, (2 * decay).min(cap))
+}
+
+/// The Bartlett-tapered autocorrelation `(1 − l/(L+1)) R(l)`, l = 0 … L = `max_lag` (Newey & West
+/// 1987): the lag weights for [`lag_weighted_products`] with a lag window chosen by the caller.
+pub fn bartlett_taper(acf: &[f64], max_lag: usize) -> Vec<f64> {
+    let max_lag = max_lag.min(acf.len().saturating_sub(1));
     (0..=max_lag)
         .map(|l| acf[l] * (1.0 - l as f64 / (max_lag as f64 + 1.0)))
         .collect()
+}
+
+/// The effective number of independent samples `N / (1 + 2 Σ_{l≥1} w(l) R(l) / R(0))` of a series of
+/// `len` samples with the tapered autocorrelation `tapered` ([`bartlett_taper`] or [`lag_weights`]):
+/// the variance-inflation factor of a mean of correlated samples (Bartlett 1946; Box, Jenkins &
+/// Reinsel, *Time Series Analysis*, §2.1.6), clamped to [1, N].
+pub fn effective_samples(tapered: &[f64], len: usize) -> f64 {
+    let n = len as f64;
+    match tapered.split_first() {
+        Some((&r0, rest)) if r0 > 0.0 => {
+            let inflation = 1.0 + 2.0 * rest.iter().sum::<f64>() / r0;
+            (n / inflation.max(1.0)).clamp(1.0_f64.min(n), n)
+        }
+        _ => n,
+    }
 }
 
 /// `M⁻¹ W M⁻¹` for one residual series `r` and row-major `len × p` sensitivities `s`, with
@@ -153,7 +174,7 @@ pub fn lag_weighted_products(cols: &[&[f64]], acf: &[f64]) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::{autocorrelation, lag_weighted_products};
+    use super::{autocorrelation, bartlett_taper, effective_samples, lag_weighted_products};
 
     /// Deterministic pseudo-random numbers in [−0.5, 0.5) (xorshift64).
     fn noise(count: usize) -> Vec<f64> {
@@ -224,5 +245,36 @@ mod tests {
                 assert!((f - d).abs() <= 1e-12 * scale, "W[{a}][{b}]: {f} vs {d}");
             }
         }
+    }
+
+    #[test]
+    fn effective_samples_of_a_first_order_process_follow_its_variance_inflation() {
+        // AR(1) with φ = 0.5: the variance of a mean is inflated by (1 + φ)/(1 − φ) = 3; a Bartlett
+        // window of 50 lags shortens the sum by Σ l φ^l / 51 = 2/51, so the inflation is 2.92.
+        let len = 20_000;
+        let white = noise(len);
+        let mut ar = white.clone();
+        for k in 1..len {
+            ar[k] += 0.5 * ar[k - 1];
+        }
+        let n_of = |r: &[f64]| effective_samples(&bartlett_taper(&autocorrelation(r, 50), 50), len);
+        let inflation = len as f64 / n_of(&ar);
+        assert!(
+            (inflation - 2.92).abs() < 0.25,
+            "AR(1) inflation {inflation}"
+        );
+        let white_n = n_of(&white) / len as f64;
+        assert!(
+            (white_n - 1.0).abs() < 0.15,
+            "white noise: n_eff/N = {white_n}"
+        );
+        // never more samples than there are, never fewer than one
+        let alternating: Vec<f64> = (0..len)
+            .map(|k| if k % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        assert_eq!(n_of(&alternating), len as f64);
+        let constant = vec![1.0; 100];
+        let n = effective_samples(&bartlett_taper(&autocorrelation(&constant, 99), 99), 100);
+        assert!((1.0..=100.0).contains(&n), "{n}");
     }
 }

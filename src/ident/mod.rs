@@ -21,7 +21,7 @@ mod delay;
 mod filter;
 mod iv;
 mod joint;
-mod linalg;
+pub(crate) mod linalg;
 pub(crate) use linalg::lstsq_qr;
 mod ls;
 mod metrics;
