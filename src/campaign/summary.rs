@@ -66,24 +66,17 @@ fn failures_section(results: &[CaseResult]) -> Section {
         .into_iter()
         .map(|(m, [n, err, poor])| vec![m, n.to_string(), err.to_string(), poor.to_string()])
         .collect();
-    let mut tables = vec![Table {
-        caption: format!(
-            "Failures per method (poor fit: simulation fit below {POOR_FIT_PERCENT} %)"
-        ),
-        header: vec![
-            "method".into(),
-            "identifications".into(),
-            "estimator errors".into(),
-            "poor fits".into(),
-        ],
+    let mut tables = vec![Table::new(
+        format!("Failures per method (poor fit: simulation fit below {POOR_FIT_PERCENT} %)"),
+        &["method", "identifications", "estimator errors", "poor fits"],
         rows,
-    }];
+    )];
     if !failed.is_empty() {
-        tables.push(Table {
-            caption: "Cases that failed (trim or flight)".into(),
-            header: vec!["case".into(), "error".into()],
-            rows: failed.clone(),
-        });
+        tables.push(Table::new(
+            "Cases that failed (trim or flight)",
+            &["case", "error"],
+            failed.clone(),
+        ));
     }
     Section {
         heading: "Failures".into(),

@@ -226,17 +226,12 @@ fn print_order_selection(candidates: &[ident::OrderCandidate], poles: usize, zer
             ]
         })
         .collect();
-    println!(
-        "{}",
-        text_table(&Table {
-            caption: format!(
-                "order chosen from the data: the simplest within {} point of the best simulation fit",
-                ident::FIT_MARGIN_PERCENT
-            ),
-            header: vec!["poles/zeros".into(), "fit %".into(), "verdict".into()],
-            rows,
-        })
+    let caption = format!(
+        "order chosen from the data: the simplest within {} point of the best simulation fit",
+        ident::FIT_MARGIN_PERCENT
     );
+    let table = Table::new(caption, &["poles/zeros", "fit %", "verdict"], rows);
+    println!("{}", text_table(&table));
 }
 
 fn print_result(
@@ -287,11 +282,11 @@ fn print_result(
     }
     println!(
         "\n{}",
-        text_table(&Table {
-            caption: "B(s)/A(s), A monic (± standard error)".into(),
-            header: vec!["coefficient".into(), "value".into(), "± std".into()],
+        text_table(&Table::new(
+            "B(s)/A(s), A monic (± standard error)",
+            &["coefficient", "value", "± std"],
             rows,
-        })
+        ))
     );
     let pole_rows = r
         .poles
@@ -318,18 +313,18 @@ fn print_result(
         .collect();
     println!(
         "{}",
-        text_table(&Table {
-            caption: "poles and modes".into(),
-            header: vec![
-                "pole".into(),
-                "std (re, im)".into(),
-                "wn rad/s".into(),
-                "zeta".into(),
-                "tau s".into(),
-                "period s".into(),
+        text_table(&Table::new(
+            "poles and modes",
+            &[
+                "pole",
+                "std (re, im)",
+                "wn rad/s",
+                "zeta",
+                "tau s",
+                "period s",
             ],
-            rows: pole_rows,
-        })
+            pole_rows,
+        ))
     );
     let zeros: Vec<String> = r.zeros.iter().map(fmt_c).collect();
     println!("zeros: {}", zeros.join(", "));
@@ -483,18 +478,11 @@ fn run_joint(args: &IdentifyCmd, method: Method) -> anyhow::Result<()> {
             .collect();
         println!(
             "\n{}",
-            text_table(&Table {
-                caption: "records (each with its own trim, output offset and initial condition)"
-                    .into(),
-                header: vec![
-                    "record".into(),
-                    "samples".into(),
-                    "input trim".into(),
-                    "output offset".into(),
-                    "fit %".into(),
-                ],
+            text_table(&Table::new(
+                "records (each with its own trim, output offset and initial condition)",
+                &["record", "samples", "input trim", "output offset", "fit %"],
                 rows,
-            })
+            ))
         );
     }
     if let Some(target) = &args.json {

@@ -536,11 +536,7 @@ fn tf_section(
                 header,
                 rows,
             },
-            Table {
-                caption: format!("{key}: poles and zeros, rad/s"),
-                header: vec!["model".into(), "poles".into(), "zeros".into()],
-                rows: pole_rows,
-            },
+            Table::new(format!("{key}: poles and zeros, rad/s"), &["model", "poles", "zeros"], pole_rows),
         ],
         plots: vec![
             (

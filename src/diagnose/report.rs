@@ -30,19 +30,16 @@ fn summary_section(d: &Diagnosis, aircraft: &str) -> Section {
              errors, a real share of the cost explained, and a gain on the validation record)."
         ));
     }
-    s.tables.push(Table {
-        caption: "Named effects (value ± coloured-residual standard error)".into(),
-        header: [
+    s.tables.push(Table::new(
+        "Named effects (value ± coloured-residual standard error)",
+        &[
             "effect",
             "target",
             "value",
             "std error",
             "cannot be told apart from",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: d
-            .named_cause
+        ],
+        d.named_cause
             .iter()
             .map(|c| {
                 vec![
@@ -54,7 +51,7 @@ fn summary_section(d: &Diagnosis, aircraft: &str) -> Section {
                 ]
             })
             .collect(),
-    });
+    ));
     if let Some(v) = &d.validation {
         s.paragraphs.push(format!(
             "Validation record (never fitted): noise-weighted ISE {:.1} → {:.1} ({:.0} % less).",
@@ -62,19 +59,16 @@ fn summary_section(d: &Diagnosis, aircraft: &str) -> Section {
             v.ise_after,
             100.0 * (1.0 - v.ise_after / v.ise_before)
         ));
-        s.tables.push(Table {
-            caption: "Validation per channel".into(),
-            header: [
+        s.tables.push(Table::new(
+            "Validation per channel",
+            &[
                 "channel",
                 "fit % before",
                 "fit % after",
                 "ISE before",
                 "ISE after",
-            ]
-            .map(String::from)
-            .to_vec(),
-            rows: v
-                .fit_percent_before
+            ],
+            v.fit_percent_before
                 .iter()
                 .map(|(c, b)| {
                     let get = |m: &std::collections::BTreeMap<String, f64>| {
@@ -89,7 +83,7 @@ fn summary_section(d: &Diagnosis, aircraft: &str) -> Section {
                     ]
                 })
                 .collect(),
-        });
+        ));
     } else {
         s.paragraphs
             .push("No validation record: the gain on unseen data was not measured.".into());
@@ -111,9 +105,9 @@ fn candidates_section(d: &Diagnosis) -> Section {
         d.simulations,
         d.wall_s
     ));
-    s.tables.push(Table {
-        caption: "Candidates".into(),
-        header: [
+    s.tables.push(Table::new(
+        "Candidates",
+        &[
             "round",
             "effect",
             "target",
@@ -123,11 +117,8 @@ fn candidates_section(d: &Diagnosis) -> Section {
             "|z|",
             "validation gain",
             "verdict",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: rows
-            .iter()
+        ],
+        rows.iter()
             .map(|c| {
                 vec![
                     c.round.to_string(),
@@ -146,7 +137,7 @@ fn candidates_section(d: &Diagnosis) -> Section {
                 ]
             })
             .collect(),
-    });
+    ));
     s
 }
 
@@ -160,20 +151,17 @@ fn evidence_section(d: &Diagnosis) -> Section {
             .collect(),
         ..Default::default()
     };
-    s.tables.push(Table {
-        caption: "Trim: model vs measured initial condition".into(),
-        header: ["quantity", "measured", "model"].map(String::from).to_vec(),
-        rows: d
-            .trim_mismatch
+    s.tables.push(Table::new(
+        "Trim: model vs measured initial condition",
+        &["quantity", "measured", "model"],
+        d.trim_mismatch
             .iter()
             .map(|m| vec![m.quantity.clone(), f(m.measured), f(m.model)])
             .collect(),
-    });
-    s.tables.push(Table {
-        caption:
-            "Residual per channel (before → after); peak cross-correlation with an input at its lag"
-                .into(),
-        header: [
+    ));
+    s.tables.push(Table::new(
+        "Residual per channel (before → after); peak cross-correlation with an input at its lag",
+        &[
             "channel",
             "fit % before",
             "fit % after",
@@ -181,11 +169,8 @@ fn evidence_section(d: &Diagnosis) -> Section {
             "rms after",
             "whiteness p before",
             "strongest input correlation",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: d
-            .residuals
+        ],
+        d.residuals
             .iter()
             .map(|(c, r)| {
                 let a = d.residuals_after.get(c);
@@ -207,17 +192,16 @@ fn evidence_section(d: &Diagnosis) -> Section {
                 ]
             })
             .collect(),
-    });
+    ));
     if !d.skipped.is_empty() {
-        s.tables.push(Table {
-            caption: "Catalogue entries skipped".into(),
-            header: ["effect", "target", "reason"].map(String::from).to_vec(),
-            rows: d
-                .skipped
+        s.tables.push(Table::new(
+            "Catalogue entries skipped",
+            &["effect", "target", "reason"],
+            d.skipped
                 .iter()
                 .map(|k| vec![k.effect.clone(), k.target.clone(), k.reason.clone()])
                 .collect(),
-        });
+        ));
     }
     s
 }

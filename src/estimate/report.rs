@@ -104,13 +104,11 @@ impl Estimate {
             .into_iter()
             .chain(self.warnings.iter().map(|w| format!("Warning: {w}")))
             .collect(),
-            tables: vec![Table {
-                caption: "estimates".into(),
-                header: ["name", "value", "σ", "t", "σ %"]
-                    .map(String::from)
-                    .to_vec(),
+            tables: vec![Table::new(
+                "estimates",
+                &["name", "value", "σ", "t", "σ %"],
                 rows,
-            }],
+            )],
             plots: Vec::new(),
         }
     }

@@ -277,6 +277,17 @@ pub struct Table {
     pub rows: Vec<Vec<String>>,
 }
 
+impl Table {
+    /// A table with fixed column headers.
+    pub fn new(caption: impl Into<String>, header: &[&str], rows: Vec<Vec<String>>) -> Self {
+        Table {
+            caption: caption.into(),
+            header: header.iter().map(|h| h.to_string()).collect(),
+            rows,
+        }
+    }
+}
+
 /// A report section.
 #[derive(Debug, Clone, Default)]
 pub struct Section {
@@ -458,11 +469,11 @@ mod tests {
             sections: vec![Section {
                 heading: "overlay".into(),
                 paragraphs: vec!["a < b".into()],
-                tables: vec![Table {
-                    caption: "fit".into(),
-                    header: vec!["model".into(), "fit %".into()],
-                    rows: vec![vec!["ls".into(), "99.1".into()]],
-                }],
+                tables: vec![Table::new(
+                    "fit",
+                    &["model", "fit %"],
+                    vec![vec!["ls".into(), "99.1".into()]],
+                )],
                 plots: vec![("theta".into(), plot)],
             }],
         };

@@ -125,11 +125,11 @@ mod tests {
     #[test]
     fn a_table_with_a_long_note_column_fits_the_width() {
         let note = "word ".repeat(100);
-        let t = Table {
-            caption: "caption".into(),
-            header: vec!["name".into(), "value".into(), "note".into()],
-            rows: vec![vec!["Cm_q".into(), "-12.3".into(), note.clone()]],
-        };
+        let t = Table::new(
+            "caption",
+            &["name", "value", "note"],
+            vec![vec!["Cm_q".into(), "-12.3".into(), note.clone()]],
+        );
         let text = text_table(&t, 60);
         assert!(text.lines().all(|l| l.chars().count() <= 60), "{text}");
         assert_eq!(text.matches("word").count(), 100);

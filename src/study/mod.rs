@@ -566,13 +566,7 @@ impl Study {
     /// The model-check table.
     pub fn modal_table(&self) -> Table {
         let pct = |a: f64, b: f64| format!("{:+.2} %", 100.0 * (a / b - 1.0));
-        Table {
-            caption: "Model check: paper-structure and full model from the truth derivatives vs JSBSim's linearization"
-                .into(),
-            header: ["quantity", "JSBSim", "paper", "error", "full", "error"]
-                .map(String::from)
-                .to_vec(),
-            rows: self
+        Table::new("Model check: paper-structure and full model from the truth derivatives vs JSBSim's linearization", &["quantity", "JSBSim", "paper", "error", "full", "error"], self
                 .modal_check
                 .iter()
                 .map(|m| {
@@ -585,8 +579,7 @@ impl Study {
                         pct(m.full, m.jsbsim),
                     ]
                 })
-                .collect(),
-        }
+                .collect())
     }
 
     /// Table 1 and Table 3 of every route, and the error attribution of every estimate that misses its 3σ
@@ -620,21 +613,17 @@ impl Study {
             }
         }
         if !rows.is_empty() {
-            out.push(Table {
-                caption:
-                    "derivatives — error attribution of every miss (share of estimate − truth; the \
-                          parts add up to 100 %, shares of opposite sign offset each other)"
-                        .into(),
-                header: [
+            out.push(Table::new(
+                "derivatives — error attribution of every miss (share of estimate − truth; the \
+                          parts add up to 100 %, shares of opposite sign offset each other)",
+                &[
                     "derivative",
                     "route",
                     "estimate − truth",
                     "terms (share of the error)",
-                ]
-                .map(String::from)
-                .to_vec(),
+                ],
                 rows,
-            });
+            ));
         }
         out
     }

@@ -263,13 +263,10 @@ fn fmt(x: f64) -> String {
 
 /// The paper's Table 1: truth vs estimate per derivative, with the 3σ interval and the verdict.
 pub fn table1(card: &Scorecard, caption: &str) -> Table {
-    Table {
-        caption: format!("{caption} — Table 1: truth vs estimate ({})", card.route),
-        header: ["derivative", "truth", "estimate", "3σ interval", "verdict"]
-            .map(String::from)
-            .to_vec(),
-        rows: card
-            .rows
+    Table::new(
+        format!("{caption} — Table 1: truth vs estimate ({})", card.route),
+        &["derivative", "truth", "estimate", "3σ interval", "verdict"],
+        card.rows
             .iter()
             .map(|r| {
                 let ci = if r.std_error.is_finite() {
@@ -290,7 +287,7 @@ pub fn table1(card: &Scorecard, caption: &str) -> Table {
                 ]
             })
             .collect(),
-    }
+    )
 }
 
 /// The paper's Table 3: relative errors, coverage, target and the structure term behind a miss.
@@ -300,20 +297,17 @@ pub fn table3(card: &Scorecard, caption: &str) -> Table {
         Some(false) => "NO".to_string(),
         None => "-".to_string(),
     };
-    Table {
-        caption: format!("{caption} — Table 3: errors ({})", card.route),
-        header: [
+    Table::new(
+        format!("{caption} — Table 3: errors ({})", card.route),
+        &[
             "derivative",
             "error %",
             "in 3σ",
             "target %",
             "meets",
             "note",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: card
-            .rows
+        ],
+        card.rows
             .iter()
             .map(|r| {
                 vec![
@@ -328,5 +322,5 @@ pub fn table3(card: &Scorecard, caption: &str) -> Table {
                 ]
             })
             .collect(),
-    }
+    )
 }
