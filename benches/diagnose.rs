@@ -110,6 +110,21 @@ fn record(sim: &mut JsbsimSim, flown_hz: f64, seed: u64) -> flightid::data::Flig
     rec
 }
 
+/// CPU time of this process and of its children that have ended (the bridges), s, from /proc/self/stat
+/// (utime + stime, cutime + cstime; clock ticks of 1/100 s). Zero where /proc is missing.
+fn cpu_s() -> (f64, f64) {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // the fields after the command name in parentheses (which may hold spaces)
+    let rest = stat.rsplit_once(')').map(|(_, r)| r).unwrap_or("");
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .map(|v| v.parse().unwrap_or(0.0))
+        .collect();
+    let tick = |i: usize| f.get(i).copied().unwrap_or(0.0) / 100.0;
+    // fields 14-17 of proc(5) are utime, stime, cutime, cstime: indices 11-14 after the state field
+    (tick(11) + tick(12), tick(13) + tick(14))
+}
+
 /// `--flown-at HZ` (default 200).
 fn flown_at_hz() -> f64 {
     let args: Vec<String> = std::env::args().collect();
@@ -140,6 +155,7 @@ fn main() {
                 .collect::<Vec<_>>()
                 .join(" ")
         );
+        let (cpu0, bridges_cpu0) = cpu_s();
         let t0 = Instant::now();
         let mut workers: Vec<Worker> = (0..2)
             .map(|_| Worker::new(Box::new(JsbsimSim::start(&cfg, rate).unwrap())))
@@ -155,12 +171,20 @@ fn main() {
         )
         .unwrap();
         let wall = t0.elapsed().as_secs_f64();
+        drop(workers); // the bridge processes end and are waited for: their CPU time is counted
+        let (cpu1, bridges_cpu1) = cpu_s();
         println!(
             "diagnose 60 s @ 50 Hz (flown at {flown_hz:.0} Hz) replayed at {rate:.0} Hz, full c172x catalogue, 2 workers: {wall:.1} s wall, {} \
              simulations, {:.1} simulations/s, {:.0} % of the workers' time inside JSBSim (target < 5 s)",
             d.simulations,
             d.simulations as f64 / wall,
             100.0 * d.simulation_s / (2.0 * wall)
+        );
+        println!(
+            "  CPU: {:.1} s in the JSBSim bridge processes, {:.1} s in flightid (2 cores: the wall time at idle is \
+             at least half their sum)",
+            bridges_cpu1 - bridges_cpu0,
+            cpu1 - cpu0
         );
         for c in &d.named_cause {
             println!(

@@ -311,6 +311,16 @@ class Sim:
     def close(self):
         shutil.rmtree(self.root, ignore_errors=True)
 
+    def set_rate(self, dt_s):
+        """Integrates at another step from the next trim on (a trim is needed before the next flight; trimmed
+        snapshots of the former step are dropped)."""
+        if not (dt_s > 0.0 and math.isfinite(dt_s)):
+            raise BridgeError("protocol", f"'rate' needs a positive dt_s, got {dt_s!r}")
+        self.dt_s = dt_s
+        self.fdm.set_dt(dt_s)
+        self.snapshots.clear()
+        self.trimmed = False
+
     def node(self, name):
         n = self.pm.get_node(name)
         if n is None:
@@ -758,6 +768,9 @@ def main():
             elif cmd == "trim":
                 values = sim.restore_trim(req) if req.get("reuse") else sim.trim(req)
                 send({"ok": True, "values": values})
+            elif cmd == "rate":
+                sim.set_rate(float(req["dt_s"]))
+                send({"ok": True})
             elif cmd == "get":
                 send({"ok": True, "values": {k: sim.node(k).get_double_value() for k in req["properties"]}})
             elif cmd == "set":

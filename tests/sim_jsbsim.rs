@@ -681,3 +681,48 @@ fn recording_every_fourth_step_returns_the_full_flight_thinned_bit_for_bit() {
     sim.trim(&point).unwrap();
     assert!(sim.fly_recording_every(&plan, &[], 7).is_err());
 }
+
+/// Switching a running simulation to another integration rate (diagnose simulates its nuisance sensitivities at
+/// 50 Hz between 200 Hz replays): it then flies as a process started at that rate, and back.
+#[test]
+fn a_rate_switch_flies_like_a_process_started_at_that_rate() {
+    use flightid::sim::{FlightPlan, SurfaceInput};
+    let point = TrimPoint::level(4000.0, 100.0);
+    let plan = |rate_hz: f64| {
+        let unit = flightid::signal::generate(
+            &flightid::signal::Maneuver::Doublet { pulse_s: 0.5 },
+            1.0 / rate_hz,
+            3.0,
+            0.5,
+        );
+        let n = (3.0 * rate_hz) as usize;
+        FlightPlan {
+            rate_hz,
+            n_steps: n,
+            inputs: vec![SurfaceInput {
+                surface: "elevator".into(),
+                deflection_rad: unit[..n].iter().map(|u| 0.02 * u).collect(),
+            }],
+        }
+    };
+    let fly = |sim: &mut JsbsimSim, rate_hz: f64| {
+        sim.trim(&point).unwrap();
+        sim.fly(&plan(rate_hz)).unwrap()
+    };
+    let mut switched = start("c172x"); // 120 Hz
+    let at_120 = fly(&mut switched, 120.0);
+    switched.set_rate_hz(50.0).unwrap();
+    assert_eq!(switched.rate_hz(), 50.0);
+    let at_50 = fly(&mut switched, 50.0);
+    let fresh_50 = fly(
+        &mut JsbsimSim::start(&flightid::aircraft::load("c172x").unwrap(), 50.0).unwrap(),
+        50.0,
+    );
+    switched.set_rate_hz(120.0).unwrap();
+    let again_120 = fly(&mut switched, 120.0);
+    for c in ["q_rad_s", "theta_rad", "alpha_rad", "airspeed_m_s"] {
+        assert_eq!(at_50.column(c), fresh_50.column(c), "{c} at 50 Hz");
+        assert_eq!(at_120.column(c), again_120.column(c), "{c} back at 120 Hz");
+    }
+    assert!(switched.set_rate_hz(0.0).is_err());
+}

@@ -19,7 +19,7 @@ use crate::sim::TrimState;
 /// Memory the cache may hold, bytes (a 60 s record at 50 Hz with 17 channels is 0.4 MB).
 pub const BUDGET_BYTES: usize = 64 << 20;
 
-/// What a replay depends on: the record's fingerprint ([`fingerprint`]) and each extension acting before the
+/// What a replay depends on: the fingerprint of the record and the simulation's rate ([`fingerprint`]) and each extension acting before the
 /// outputs with a non-null value, as `effect/target` and the bits of its parameters.
 pub type ReplayKey = (u64, Vec<(String, Vec<u64>)>);
 
@@ -76,9 +76,11 @@ fn record_bytes(r: &FlightRecord) -> usize {
     8 * (r.time_s.len() + r.columns.iter().map(|(_, c)| c.len()).sum::<usize>())
 }
 
-/// Hash of what a replay of `case` depends on: rate, length, trim point and the input deviations (bits).
-pub fn fingerprint(case: &ReplayCase) -> u64 {
+/// Hash of what a replay of `case` depends on: the rate the simulation integrates at (None: a simulation without
+/// a rate of its own), the record's rate and length, the trim point and the input deviations (bits).
+pub fn fingerprint(case: &ReplayCase, sim_rate_hz: Option<f64>) -> u64 {
     let mut h = DefaultHasher::new();
+    sim_rate_hz.map(f64::to_bits).hash(&mut h);
     case.rate_hz.to_bits().hash(&mut h);
     case.len().hash(&mut h);
     let p = &case.point;

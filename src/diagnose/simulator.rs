@@ -24,6 +24,17 @@ pub trait ReplaySim: Simulator + Send {
     fn rate_hz(&self) -> Option<f64> {
         None
     }
+    /// Makes the simulation integrate at `rate_hz` from the next trim on (None from [`ReplaySim::rate_hz`]: it
+    /// has no rate of its own and the call does nothing).
+    fn set_rate_hz(&mut self, rate_hz: f64) -> Result<(), SimError> {
+        match self.rate_hz() {
+            None => Ok(()),
+            Some(r) if r == rate_hz => Ok(()),
+            Some(r) => Err(SimError::Usage(format!(
+                "this simulation integrates at {r} Hz only, not {rate_hz} Hz"
+            ))),
+        }
+    }
     /// Whether the simulation can set its state mid-flight ([`ReplaySim::fly_with_resets`]).
     fn supports_resets(&self) -> bool {
         false
@@ -65,6 +76,9 @@ pub trait ReplaySim: Simulator + Send {
 impl ReplaySim for JsbsimSim {
     fn rate_hz(&self) -> Option<f64> {
         Some(JsbsimSim::rate_hz(self))
+    }
+    fn set_rate_hz(&mut self, rate_hz: f64) -> Result<(), SimError> {
+        JsbsimSim::set_rate_hz(self, rate_hz)
     }
     fn coefficient_names(&self) -> Vec<String> {
         self.coefficient_knobs.clone()

@@ -209,6 +209,21 @@ impl JsbsimSim {
         self.rate_hz
     }
 
+    /// Integrates at `rate_hz` from the next trim on (the same process and aircraft; a trim is needed before
+    /// the next flight).
+    pub fn set_rate_hz(&mut self, rate_hz: f64) -> Result<(), SimError> {
+        if !(rate_hz.is_finite() && rate_hz > 0.0) {
+            return Err(SimError::Usage(format!(
+                "simulation rate must be positive, got {rate_hz} Hz"
+            )));
+        }
+        self.bridge
+            .request(json!({"cmd": "rate", "dt_s": 1.0 / rate_hz}), &[])?;
+        self.rate_hz = rate_hz;
+        self.trim = None;
+        Ok(())
+    }
+
     /// Sets the factor on an aerodynamic coefficient function (e.g. `Cmalpha`), applied from the next trim on.
     pub fn set_coefficient_scale(
         &mut self,
@@ -429,7 +444,7 @@ impl JsbsimSim {
         resets: &[StateReset],
         every: usize,
     ) -> Result<FlightRecord, SimError> {
-        if every == 0 || plan.n_steps % every != 0 {
+        if every == 0 || !plan.n_steps.is_multiple_of(every) {
             return Err(SimError::Usage(format!(
                 "recording every {every} steps of a {}-step flight: the steps must be a whole multiple",
                 plan.n_steps
