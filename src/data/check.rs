@@ -29,6 +29,7 @@ mod kinematics;
 
 use serde::Serialize;
 
+use super::channel::Channel;
 use super::error::DataError;
 use super::record::FlightRecord;
 use fit::{coloured_residual_covariance, fit, invert, jacobian};
@@ -130,12 +131,12 @@ pub fn check_compatibility(
     rec.validate()?;
     let why = "for flight-path reconstruction (rates drive the attitude kinematics)";
     let gyro = [
-        rec.require("p_rad_s", why)?.to_vec(),
-        rec.require("q_rad_s", why)?.to_vec(),
-        rec.require("r_rad_s", why)?.to_vec(),
+        rec.require(Channel::P, why)?.to_vec(),
+        rec.require(Channel::Q, why)?.to_vec(),
+        rec.require(Channel::R, why)?.to_vec(),
     ];
-    let phi = rec.require("phi_rad", "as the attitude reference of the check")?;
-    let theta = rec.require("theta_rad", "as the attitude reference of the check")?;
+    let phi = rec.require(Channel::Phi, "as the attitude reference of the check")?;
+    let theta = rec.require(Channel::Theta, "as the attitude reference of the check")?;
     if rec.len() < 20 {
         return Err(DataError::InvalidArgument(format!(
             "the compatibility check needs at least 20 samples, got {}",
@@ -143,16 +144,17 @@ pub fn check_compatibility(
         )));
     }
     let accel = match (
-        rec.column("ax_m_s2"),
-        rec.column("ay_m_s2"),
-        rec.column("az_m_s2"),
+        rec.column(Channel::Ax),
+        rec.column(Channel::Ay),
+        rec.column(Channel::Az),
     ) {
         (Some(a), Some(b), Some(c)) => Some([a.to_vec(), b.to_vec(), c.to_vec()]),
         _ => None,
     };
-    let air = ["airspeed_m_s", "alpha_rad", "beta_rad"].map(|n| rec.column(n).map(<[f64]>::to_vec));
+    let air = [Channel::Airspeed, Channel::Alpha, Channel::Beta]
+        .map(|c| rec.column(c).map(<[f64]>::to_vec));
     let translational = accel.is_some() && air.iter().all(Option::is_some);
-    let psi = rec.column("psi_rad").map(crate::signal::unwrap_rad);
+    let psi = rec.column(Channel::Psi).map(crate::signal::unwrap_rad);
     let [v_m, a_m, b_m] = air;
     let out: [Option<Vec<f64>>; 6] = if translational {
         [v_m, a_m, b_m, Some(phi.to_vec()), Some(theta.to_vec()), psi]

@@ -65,7 +65,8 @@ impl FlightRecord {
     }
 
     /// The values of a column, or an error saying which tool needs it and why.
-    pub fn require(&self, name: &str, why: &str) -> Result<&[f64], DataError> {
+    pub fn require(&self, name: impl AsRef<str>, why: &str) -> Result<&[f64], DataError> {
+        let name = name.as_ref();
         self.column(name).ok_or_else(|| DataError::MissingColumn {
             column: name.to_string(),
             why: why.to_string(),

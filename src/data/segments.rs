@@ -23,6 +23,7 @@
 
 use serde::Serialize;
 
+use super::channel::Channel;
 use super::error::DataError;
 use super::record::{median_in_place, FlightRecord};
 
@@ -129,8 +130,8 @@ pub struct SegmentOptions {
 impl Default for SegmentOptions {
     fn default() -> Self {
         Self {
-            surfaces: ["elevator_rad", "aileron_rad", "rudder_rad"]
-                .map(String::from)
+            surfaces: [Channel::Elevator, Channel::Aileron, Channel::Rudder]
+                .map(|c| c.to_string())
                 .to_vec(),
             min_amplitude_rad: 0.25_f64.to_radians(),
             max_gap_s: 1.5,
@@ -440,8 +441,8 @@ fn steady_before(rec: &FlightRecord, start: usize, window_s: f64, tol: f64) -> b
     if start <= lo + 1 {
         return true;
     }
-    ["p_rad_s", "q_rad_s", "r_rad_s"].iter().all(|name| {
-        let Some(x) = rec.column(name) else {
+    [Channel::P, Channel::Q, Channel::R].into_iter().all(|c| {
+        let Some(x) = rec.column(c) else {
             return true;
         };
         let w = &x[lo..start];
