@@ -216,10 +216,7 @@ fn innovations(filter: Option<&ResidualFilter>, r: &[f64], columns: &[Vec<f64>])
         f.apply(&mut nu);
         cols.iter_mut().for_each(|c| f.apply(c));
     }
-    for q in super::search::orthonormal_basis(&cols) {
-        let c: f64 = q.iter().zip(&nu).map(|(a, b)| a * b).sum();
-        nu.iter_mut().zip(&q).for_each(|(x, y)| *x -= c * y);
-    }
+    super::search::project_off(&mut nu, &super::search::orthonormal_basis(&cols));
     nu
 }
 

@@ -205,7 +205,7 @@ pub fn residuals(
 
 /// r ← (1 − Q Qᵀ) r for an orthonormal basis Q: the least-squares residual once the nuisance terms, linear in
 /// their effect on the output, are estimated jointly (variable projection, Golub & Pereyra 1973).
-fn project_off(r: &mut [f64], basis: &[Vec<f64>]) {
+pub(super) fn project_off(r: &mut [f64], basis: &[Vec<f64>]) {
     for q in basis {
         let c: f64 = q.iter().zip(r.iter()).map(|(a, b)| a * b).sum();
         r.iter_mut().zip(q).for_each(|(x, y)| *x -= c * y);
@@ -279,7 +279,7 @@ pub fn initial_state_columns(
     at_sensitivity_rate(workers, case, |workers| state_columns(workers, case, sigma))
 }
 
-/// [`initial_state_basis`] simulated at the workers' current rate.
+/// [`initial_state_columns`] simulated at the workers' current rate.
 fn state_columns(
     workers: &mut [Worker],
     case: &ReplayCase,

@@ -545,6 +545,26 @@ pub fn select<'e>(
     })
 }
 
+/// The fit `o` with free parameter `i` moved last, where the selection's tests read the candidate's.
+fn with_last(o: &FitOutcome, i: usize) -> FitOutcome {
+    let mut out = o.clone();
+    if i + 1 < o.values.len() {
+        for v in [
+            &mut out.values,
+            &mut out.std_errors,
+            &mut out.crb_std_errors,
+        ] {
+            let x = v.remove(i);
+            v.push(x);
+        }
+        if i < out.sensitivities.len() {
+            let s = out.sensitivities.remove(i);
+            out.sensitivities.push(s);
+        }
+    }
+    out
+}
+
 /// Backward elimination (Miller, Subset Selection in Regression, 2nd ed., §3.2, the backward step of Efroymson's
 /// stepwise method): with every named effect in the model, each one, latest first, must still pass every test
 /// of the selection against the model without it (fitted again, the others free). An effect named early can
@@ -606,18 +626,7 @@ fn eliminate_backward<'e>(
         let Some(Ok((o_without, a_without))) = without.into_iter().next() else {
             continue;
         };
-        // effect i's parameter last, as the tests read it
-        let mut o_last = o_full.clone();
-        for v in [
-            &mut o_last.values,
-            &mut o_last.std_errors,
-            &mut o_last.crb_std_errors,
-        ] {
-            let x = v.remove(i);
-            v.push(x);
-        }
-        let s = o_last.sensitivities.remove(i);
-        o_last.sensitivities.push(s);
+        let o_last = with_last(&o_full, i);
         let ctx = RoundContext {
             round,
             base_cost: o_without.cost_after,
@@ -740,20 +749,7 @@ fn replace_ambiguous<'e>(
         for (&j, out) in alternatives.iter().zip(fits) {
             let Ok((o, a)) = out else { continue };
             // The candidate's own parameter is the last of the fit's values: move effect i's to the end.
-            let mut o_last = o.clone();
-            let k = o.values.len();
-            if k > 0 && i < k - 1 {
-                for v in [
-                    &mut o_last.values,
-                    &mut o_last.std_errors,
-                    &mut o_last.crb_std_errors,
-                ] {
-                    let x = v.remove(i);
-                    v.push(x);
-                }
-                let s = o_last.sensitivities.remove(i);
-                o_last.sensitivities.push(s);
-            }
+            let o_last = with_last(&o, i);
             let mut c = ctx.candidate(catalogue[j], &o_last, true, resolution[j]);
             c.rejected_because =
                 rejection(&c, catalogue[j], &o_last, cost_without, opts, &masks[j]);
