@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use super::common::ColumnsArg;
 use super::UsageError;
 use crate::data;
 use crate::estimate::{self, InputHold, Method, Options, Record, SubspaceOptions, UserModel};
@@ -21,6 +22,8 @@ pub struct EstimateCmd {
     /// Flight-data CSV; repeat for a joint fit (one parameter set, nuisance terms per record).
     #[arg(long = "data", required = true)]
     pub data: Vec<PathBuf>,
+    #[command(flatten)]
+    pub columns: ColumnsArg,
     /// Estimator: oe (output error), fem (filter error: a steady-state Kalman filter in the loop
     /// with the process noise estimated; for records with turbulence or drift), or n4sid
     /// (subspace identification of a linear model: no start values, no iterations).
@@ -73,7 +76,7 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
     let flights = args
         .data
         .iter()
-        .map(|path| Ok((path.display().to_string(), data::read_csv(path)?)))
+        .map(|path| Ok((path.display().to_string(), args.columns.read(path)?)))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let usage = |e: &dyn std::fmt::Display| UsageError(e.to_string());
     let Some(method) = method else {

@@ -48,11 +48,17 @@ pub enum Channel {
     Thrust,
     /// `qbar_pa`: dynamic pressure, Pa.
     Qbar,
+    /// `pdot_rad_s2`: body roll acceleration ṗ, rad/s² (a measured or differentiated angular acceleration).
+    PDot,
+    /// `qdot_rad_s2`: body pitch acceleration q̇, rad/s².
+    QDot,
+    /// `rdot_rad_s2`: body yaw acceleration ṙ, rad/s².
+    RDot,
 }
 
 impl Channel {
     /// Every column of the schema, in its canonical order.
-    pub const ALL: [Channel; 20] = [
+    pub const ALL: [Channel; 23] = [
         Channel::Time,
         Channel::Elevator,
         Channel::Aileron,
@@ -73,6 +79,9 @@ impl Channel {
         Channel::Az,
         Channel::Thrust,
         Channel::Qbar,
+        Channel::PDot,
+        Channel::QDot,
+        Channel::RDot,
     ];
 
     /// The control inputs: the three surfaces and the throttle.
@@ -119,6 +128,9 @@ impl Channel {
             Channel::Az => "az_m_s2",
             Channel::Thrust => "thrust_n",
             Channel::Qbar => "qbar_pa",
+            Channel::PDot => "pdot_rad_s2",
+            Channel::QDot => "qdot_rad_s2",
+            Channel::RDot => "rdot_rad_s2",
         }
     }
 

@@ -10,7 +10,8 @@
 //! VTAS = { to = "airspeed_m_s", unit = "kts" }
 //! ```
 //!
-//! Units: rad, deg, m, ft, m/s, ft/s, kts, g, m/s2, deg/s, rad/s, N, lbf, Pa, psf, s, ms, percent.
+//! Units: rad, deg, m, ft, m/s, ft/s, kts, g, m/s2, deg/s, rad/s, deg/s2, rad/s2, N, lbf, Pa, psf, s, ms,
+//! percent.
 //! A unit must measure what its target column measures (`deg` cannot go to `airspeed_m_s`).
 //! The reader renames and converts while reading, so every command sees SI columns.
 
@@ -39,6 +40,8 @@ pub enum Dimension {
     Force,
     /// Pascals.
     Pressure,
+    /// Radians per second squared.
+    AngularAcceleration,
     /// A fraction (throttle 0..1).
     Fraction,
 }
@@ -57,6 +60,7 @@ impl Dimension {
             "thrust_n" => Dimension::Force,
             "qbar_pa" => Dimension::Pressure,
             c if c.ends_with("_rad_s") => Dimension::AngularRate,
+            c if c.ends_with("_rad_s2") => Dimension::AngularAcceleration,
             c if c.ends_with("_rad") => Dimension::Angle,
             c if c.ends_with("_m_s2") => Dimension::Acceleration,
             _ => return None,
@@ -73,6 +77,7 @@ impl Dimension {
             Dimension::Acceleration => "an acceleration",
             Dimension::Force => "a force",
             Dimension::Pressure => "a pressure",
+            Dimension::AngularAcceleration => "an angular acceleration",
             Dimension::Fraction => "a fraction",
         }
     }
@@ -88,6 +93,12 @@ const UNITS: &[(&str, Dimension, f64)] = &[
     (
         "deg/s",
         Dimension::AngularRate,
+        std::f64::consts::PI / 180.0,
+    ),
+    ("rad/s2", Dimension::AngularAcceleration, 1.0),
+    (
+        "deg/s2",
+        Dimension::AngularAcceleration,
         std::f64::consts::PI / 180.0,
     ),
     ("m", Dimension::Length, 1.0),
@@ -306,6 +317,7 @@ fn default_unit(dim: Dimension) -> &'static str {
         Dimension::Acceleration => "m/s2",
         Dimension::Force => "N",
         Dimension::Pressure => "Pa",
+        Dimension::AngularAcceleration => "rad/s2",
         Dimension::Fraction => "1",
     }
 }

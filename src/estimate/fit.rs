@@ -421,6 +421,32 @@ impl Problem<'_> {
         (0..self.records.len()).all(|r| self.gain(phi, r).is_ok_and(|g| g.kc_max <= 1.0))
     }
 
+    /// Filter error: scales every process-noise entry of φ by the largest common factor s ∈ [0, 1] (to
+    /// 1e-4, by bisection) under which diag(KC) ≤ 1 holds (with no process noise K = 0 and it always
+    /// does). Halving instead threw away up to half of an estimate that sat on the constraint, so the
+    /// relaxation cycled: the cost rose at every halving and the iterations climbed back.
+    fn scale_into_constraint(&self, phi: &mut [f64]) {
+        if self.constraint_holds(phi) {
+            return;
+        }
+        let entries = self.layout.process_noise_entries();
+        let scaled = |s: f64| {
+            let mut t = phi.to_vec();
+            entries.iter().for_each(|&j| t[j] *= s);
+            t
+        };
+        let (mut holds, mut breaks) = (0.0, 1.0);
+        while breaks - holds > 1e-4 {
+            let mid = 0.5 * (holds + breaks);
+            if self.constraint_holds(&scaled(mid)) {
+                holds = mid;
+            } else {
+                breaks = mid;
+            }
+        }
+        phi.copy_from_slice(&scaled(holds));
+    }
+
     /// Filter error: the steady-state gain of record `r` at φ.
     fn gain(&self, phi: &[f64], r: usize) -> Result<fem::Gain, SimError> {
         let sm = self
@@ -669,14 +695,9 @@ impl optimise::Problem for Relaxed<'_, '_> {
             let mut compensated = phi.clone();
             problem.compensate(&mut compensated, &self.noise, &new_noise);
             problem.set_gain_noise(&new_noise);
-            // with the new R the gain may break diag(KC) ≤ 1: reduce the process noise
-            let entries = problem.layout.process_noise_entries();
-            for _ in 0..30 {
-                if problem.constraint_holds(&compensated) {
-                    break;
-                }
-                entries.iter().for_each(|&j| compensated[j] *= 0.5);
-            }
+            // with the new R the gain may break diag(KC) ≤ 1: scale the process noise back by the
+            // least common factor that restores it
+            problem.scale_into_constraint(&mut compensated);
             match problem.predict_all(&compensated) {
                 Ok(p) => {
                     *phi = compensated;
