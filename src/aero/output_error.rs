@@ -526,6 +526,119 @@ fn fit_model(
     })
 }
 
+/// A wider fit of the longitudinal axis: `names` freed on top of the options' choices. Returns the fit, the fall
+/// in cost from `held` (J is the negative log-likelihood, so 2 ΔJ is the likelihood-ratio statistic, Klein &
+/// Morelli §5.4), whether it converged, and whether the user named any of `names` in `--free` (then a check only
+/// reports). `None` when the wider fit fails.
+struct Wider {
+    fit: AxisFit,
+    drop: f64,
+    converged: bool,
+    user_chose: bool,
+}
+
+fn wider_fit(
+    records: &[&(String, data::FlightRecord)],
+    setup: FitSetup,
+    held: &AxisFit,
+    names: &[&'static str],
+) -> Option<Wider> {
+    let options = setup.options;
+    let user_chose = options
+        .free
+        .iter()
+        .any(|c| c.names.iter().any(|n| names.contains(n)));
+    let mut wider = options.clone();
+    wider.free.push(FreeChoice {
+        names: names.to_vec(),
+        free: true,
+    });
+    let mut wider_notes = Vec::new();
+    let wider_setup = FitSetup {
+        options: &wider,
+        ..setup
+    };
+    let fit = fit_longitudinal(records, wider_setup, &mut wider_notes).ok()?;
+    let drop = held.estimate.cost - fit.estimate.cost;
+    let converged = fit.estimate.stop == estimate::StopReason::Converged;
+    Some(Wider {
+        fit,
+        drop,
+        converged,
+        user_chose,
+    })
+}
+
+/// The speed derivatives.
+const SPEED: [&str; 3] = ["CL_V", "CD_V", "Cm_V"];
+
+/// The α̇ terms, with C_Lq (nearly collinear with C_Lα̇ in a short-period response).
+const ALPHADOT: [&str; 3] = ["CL_alphadot", "Cm_alphadot", "CL_q"];
+
+/// A structure check: the note and, when the records support it, the wider fit to adopt.
+type Check =
+    fn(&[&(String, data::FlightRecord)], FitSetup, &AxisFit) -> Option<(String, Option<AxisFit>)>;
+
+/// Whether a wider fit keeps the pitch derivatives C_mα, C_mq and C_mδe of the held one plausible: the same
+/// signs, and within a factor of three. A wider fit that runs off into another minimum (a positive C_mq, a
+/// C_mα twenty times the held one) is not adopted, whatever its cost.
+fn pitch_derivatives_plausible(held: &AxisFit, wider: &AxisFit) -> bool {
+    ["Cm_alpha", "Cm_q", "Cm_de"].iter().all(|n| {
+        match (held.estimate.parameter(n), wider.estimate.parameter(n)) {
+            (Some(a), Some(b)) => {
+                let ratio = b.value / a.value;
+                ratio > 1.0 / 3.0 && ratio < 3.0
+            }
+            _ => true,
+        }
+    })
+}
+
+/// χ²₃ at 1 %: the likelihood-ratio threshold of a three-parameter widening.
+const CHI2_3_1PCT: f64 = 11.34;
+
+/// When the speed derivatives were held by default: the same fit with C_LV, C_DV and C_mV free (Jategaonkar
+/// §4.11's HFB-320 model; Klein & Morelli §3.5). A record that excites the phugoid carries them, and holding
+/// them at 0 then puts the speed's share of the pitching moment and lift into C_mq, C_mδe and C_Lα (on the
+/// HFB-320 flight record C_mq came out half the published value). Adopted when the likelihood-ratio test
+/// passes at 1 % (2 ΔJ > χ²₃ = 11.34), at least one of them is significant (|t| > 3), the wider fit converged,
+/// and the short-period derivatives it brings stay within the held fit's own plausible range: C_mα, C_mq and
+/// C_mδe keep their signs and move by less than a factor of three (a wider fit that runs off into another
+/// minimum does not). When the user named them in `--free`, the check only reports.
+fn speed_check(
+    records: &[&(String, data::FlightRecord)],
+    setup: FitSetup,
+    held: &AxisFit,
+) -> Option<(String, Option<AxisFit>)> {
+    if !held.estimate.parameter("Cm_V").is_some_and(|p| p.fixed) {
+        return None;
+    }
+    let w = wider_fit(records, setup, held, &SPEED)?;
+    let t_max = SPEED
+        .iter()
+        .filter_map(|n| w.fit.estimate.parameter(n))
+        .map(|p| (p.value / p.std_error.max(f64::MIN_POSITIVE)).abs())
+        .fold(0.0, f64::max);
+    let plausible = pitch_derivatives_plausible(held, &w.fit);
+    let supported = 2.0 * w.drop > CHI2_3_1PCT && t_max > 3.0 && w.converged && plausible;
+    let verdict = if supported && w.user_chose {
+        "the records carry them; held as --free asks"
+    } else if supported {
+        "the records carry them (the phugoid is excited): C_LV, C_DV and C_mV are estimated (hold them with \
+         --free=-speed)"
+    } else if !w.converged || !plausible {
+        "the wider fit is not trusted (it did not converge, or moved C_mα, C_mq or C_mδe off their range): the \
+         speed derivatives stay held"
+    } else {
+        "not significant: the speed derivatives stay held"
+    };
+    let note = format!(
+        "longitudinal: with C_LV, C_DV, C_mV free the cost falls by {:.1} (largest |t| {t_max:.1}): {verdict}",
+        w.drop
+    );
+    Some((note, (supported && !w.user_chose).then_some(w.fit)))
+}
+
 /// When the α̇ terms were held by default: the same fit with C_Lα̇, C_mα̇ and C_Lq free. C_Lq and C_Lα̇ are
 /// nearly collinear in a short-period response, so they are freed together. Downwash lag at a tail behind the
 /// wing makes C_mα̇ negative (Etkin & Reid §5.4; Klein & Morelli §3.5). The wider fit is adopted when C_mα̇ is
@@ -539,8 +652,7 @@ fn alphadot_check(
     setup: FitSetup,
     held: &AxisFit,
 ) -> Option<(String, Option<AxisFit>)> {
-    let options = setup.options;
-    if options.method != Method::Oe
+    if setup.options.method != Method::Oe
         || !held
             .estimate
             .parameter("Cm_alphadot")
@@ -548,37 +660,24 @@ fn alphadot_check(
     {
         return None;
     }
-    let user_chose = options
-        .free
-        .iter()
-        .any(|c| c.names.iter().any(|n| n.ends_with("_alphadot")));
-    let mut wider = options.clone();
-    wider.free.push(FreeChoice {
-        names: vec!["CL_alphadot", "Cm_alphadot", "CL_q"],
-        free: true,
-    });
-    let mut wider_notes = Vec::new();
-    let wider_setup = FitSetup {
-        options: &wider,
-        ..setup
-    };
-    let f = fit_longitudinal(records, wider_setup, &mut wider_notes).ok()?;
-    let p = f.estimate.parameter("Cm_alphadot")?;
-    let drop = held.estimate.cost - f.estimate.cost;
+    let w = wider_fit(records, setup, held, &ALPHADOT)?;
+    let p = w.fit.estimate.parameter("Cm_alphadot")?;
     let t = p.value / p.std_error.max(f64::MIN_POSITIVE);
     // without an α vane the split between α̇ and q rests on the accelerometer alone: report, never adopt
     let vane = records
         .iter()
         .all(|(_, r)| r.column(Channel::Alpha).is_some());
-    let converged = f.estimate.stop == estimate::StopReason::Converged;
-    let supported = p.value < 0.0 && t.abs() > 3.0 && 2.0 * drop > 11.34 && vane && converged;
-    let verdict = if supported && user_chose {
+    let converged = w.converged && pitch_derivatives_plausible(held, &w.fit);
+    let supported =
+        p.value < 0.0 && t.abs() > 3.0 && 2.0 * w.drop > CHI2_3_1PCT && vane && converged;
+    let verdict = if supported && w.user_chose {
         "negative, as downwash lag at a tail behind the wing makes it; held as --free asks"
     } else if supported {
         "negative, as downwash lag at a tail behind the wing makes it: C_Lα̇, C_mα̇ and C_Lq are estimated \
          (hold them with --free -alphadot,-CL_q)"
     } else if p.value < 0.0 && t.abs() > 3.0 && !(vane && converged) {
-        "negative, but the wider fit is not trusted (no α vane, or it did not converge): the α̇ terms stay held"
+        "negative, but the wider fit is not trusted (no α vane, it did not converge, or it moved C_mα, C_mq or \
+         C_mδe off their range): the α̇ terms stay held"
     } else if p.value > 0.0 {
         "positive, which downwash lag does not produce: another unmodelled effect takes the α̇ shape; the \
          α̇ terms stay held"
@@ -586,10 +685,10 @@ fn alphadot_check(
         "not significant: the α̇ terms stay held"
     };
     let note = format!(
-        "longitudinal: with C_Lα̇, C_mα̇, C_Lq free the cost falls by {drop:.1} and C_mα̇ = {:.2} ± {:.2}: {verdict}",
-        p.value, p.std_error
+        "longitudinal: with C_Lα̇, C_mα̇, C_Lq free the cost falls by {:.1} and C_mα̇ = {:.2} ± {:.2}: {verdict}",
+        w.drop, p.value, p.std_error
     );
-    Some((note, (supported && !user_chose).then_some(f)))
+    Some((note, (supported && !w.user_chose).then_some(w.fit)))
 }
 
 /// Indices (in θ order) of the free parameters and their covariance block.
@@ -655,10 +754,26 @@ pub fn output_error_report(
     if axis.longitudinal() {
         let recs = records_for(records, true);
         let mut f = fit_longitudinal(&recs, setup, &mut notes)?;
-        if let Some((note, adopted)) = alphadot_check(&recs, setup, &f) {
+        // the checks run in turn, each from the structure the one before adopted: the α̇ terms (short
+        // period) first, then the speed derivatives (phugoid)
+        let mut lon_options = options.clone();
+        let checks: [(Check, [&'static str; 3]); 2] =
+            [(alphadot_check, ALPHADOT), (speed_check, SPEED)];
+        for (check, names) in checks {
+            let setup = FitSetup {
+                options: &lon_options,
+                ..setup
+            };
+            let Some((note, adopted)) = check(&recs, setup, &f) else {
+                continue;
+            };
             notes.push(note);
             if let Some(wider) = adopted {
                 f = wider;
+                lon_options.free.push(FreeChoice {
+                    names: names.to_vec(),
+                    free: true,
+                });
             }
         }
         let (free, cov) = free_block(&f.estimate);
