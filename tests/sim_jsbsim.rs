@@ -162,11 +162,19 @@ fn doublet_csv_passes_schema_validation_and_starts_at_trim() {
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let rec = flightid::data::read_csv(&csv).unwrap();
     rec.validate().unwrap();
-    // `fly` records every schema column but the measured-data ones (thrust, dynamic pressure).
+    // `fly` records every schema column but the measured-data ones (thrust, dynamic pressure, angular
+    // accelerations).
+    let measured_only = [
+        "thrust_n",
+        "qbar_pa",
+        "pdot_rad_s2",
+        "qdot_rad_s2",
+        "rdot_rad_s2",
+    ];
     for col in flightid::data::SCHEMA_COLUMNS
         .iter()
         .skip(1)
-        .filter(|c| !["thrust_n", "qbar_pa"].contains(c))
+        .filter(|c| !measured_only.contains(c))
     {
         assert!(rec.column(col).is_some(), "missing column {col}");
     }

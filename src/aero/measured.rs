@@ -161,6 +161,9 @@ pub struct MeasuredEquationError {
     pub skipped: Vec<(String, String)>,
     /// Vane time skews removed before the regression: (record, column, skew s).
     pub skews: Vec<(String, String, f64)>,
+    /// Apparent vane lags the reconstruction found but that are longer than a data system's skew can be
+    /// ([`data::skew_bound_s`]), left in: (record, column, lag s).
+    pub refused_skews: Vec<(String, String, f64)>,
 }
 
 /// One coefficient's regression over all records: term names, regressor columns, response.
@@ -210,6 +213,7 @@ pub fn equation_error_measured(
     let mut air = Vec::new();
     let mut skipped = Vec::new();
     let mut skews = Vec::new();
+    let mut refused_skews = Vec::new();
     let wanted: &[&str] = match axis {
         AxisChoice::Longitudinal => &["Cm", "CL"],
         AxisChoice::Lateral => &["Cl", "Cn", "CY"],
@@ -241,8 +245,9 @@ pub fn equation_error_measured(
             message,
         };
         let rec = moved_to_cg(raw, &airframe.sensors).map_err(|e| bad(e.to_string()))?;
-        let (rec, found) = deskewed(&rec);
+        let (rec, found, refused) = deskewed(&rec);
         skews.extend(found.into_iter().map(|(c, v)| (name.clone(), c, v)));
+        refused_skews.extend(refused.into_iter().map(|(c, v)| (name.clone(), c, v)));
         let thrust = if rec.column("thrust_n").is_some() {
             Some(airframe.thrust_line("a record with thrust_n")?)
         } else {
@@ -324,6 +329,7 @@ pub fn equation_error_measured(
         air,
         skipped,
         skews,
+        refused_skews,
     })
 }
 
@@ -597,6 +603,14 @@ pub fn equation_error_report(
     for (rec, col, v) in &ee.skews {
         notes.push(format!(
             "{rec}: {col} read {:.0} ms late (flight-path reconstruction); shifted back before the regression",
+            1000.0 * v
+        ));
+    }
+    for (rec, col, v) in &ee.refused_skews {
+        notes.push(format!(
+            "{rec}: {col} appears {:.0} ms late against the inertial data (flight-path reconstruction), longer \
+             than a data system's skew can be: not shifted (in turbulence the vane reads gusts the kinematics \
+             do not see)",
             1000.0 * v
         ));
     }

@@ -118,6 +118,59 @@ fn rms_about_mean(x: &[f64]) -> f64 {
     (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n).sqrt()
 }
 
+/// Whether an air-data signal (`output` 0 = V, 1 = α, 2 = β) moves clearly enough for a scale factor or a
+/// time skew on it to be estimated, given the residual of a fit without them: (1) the measured signal's
+/// variance about its mean exceeds its noise variance (from [`crate::signal::noise_std`]) by
+/// [`EXCITATION_Z`] standard errors of a variance estimate, (2) the motion the kinematics reconstruct
+/// (measured minus residual) is at least [`excitation_floor`] rms, and (3) it is larger than the residual,
+/// the part they do not explain. A longitudinal maneuver flown in turbulence moves β through the gusts
+/// alone: the measured β passes (1), but the reconstructed β hardly moves and fails (3), so no β scale
+/// factor is named (it was, at 4σ, on the HFB-320 flight record). `Err` carries the evidence.
+fn excitation(output: usize, signal: &[f64], residual: &[f64]) -> Result<(), String> {
+    let floor = excitation_floor(output);
+    let (k, unit) = if output == 0 {
+        (1.0, "m/s")
+    } else {
+        (1f64.to_degrees(), "°")
+    };
+    let moved = rms_about_mean(signal);
+    let noise = crate::signal::noise_std(signal);
+    let n = signal.len().max(1) as f64;
+    let z = (moved * moved - noise * noise) / (noise * noise * (2.0 / n).sqrt()).max(1e-300);
+    let explained: Vec<f64> = signal.iter().zip(residual).map(|(m, r)| m - r).collect();
+    let explained = rms_about_mean(&explained);
+    let unexplained = rms_about_mean(residual);
+    if z <= EXCITATION_Z || moved < floor {
+        return Err(format!(
+            "moves {:.3} {unit} rms against a noise of {:.3} {unit}, not clearly beyond it (variance excess \
+             z = {z:.1}, needs more than {EXCITATION_Z} and at least {:.2} {unit} rms)",
+            moved * k,
+            noise * k,
+            floor * k
+        ));
+    }
+    if explained < floor || explained <= unexplained {
+        return Err(format!(
+            "moves {:.3} {unit} rms, but the kinematics explain only {:.3} {unit} rms of it and leave {:.3} \
+             {unit} (gusts, unmodelled motion): the motion they explain is not clearly beyond what they leave",
+            moved * k,
+            explained * k,
+            unexplained * k
+        ));
+    }
+    Ok(())
+}
+
+/// The longest time skew a data system can put between its channels, s: one sample interval (the record's
+/// median step), at least 50 ms. A data system samples its channels within one frame; what remains is
+/// sampling phase and filter mismatch, a fraction of a sample to about one (Klein & Morelli §10.2). A longer
+/// apparent lag of a vane behind the inertial data is something else — in turbulence the vane reads gusts the
+/// kinematics do not see, and the reconstruction takes their response for a lag (0.22 s on the HFB-320 flight
+/// record at 10 Hz) — so the commands that correct for skews (`derivatives`) do not apply a longer one.
+pub fn skew_bound_s(rec: &FlightRecord) -> f64 {
+    rec.dt_s().unwrap_or(0.0).max(0.05)
+}
+
 /// Checks the kinematic consistency of a record and estimates instrument errors.
 ///
 /// Needs `p_rad_s q_rad_s r_rad_s phi_rad theta_rad`; with `ax/ay/az_m_s2`, `airspeed_m_s`,
@@ -175,44 +228,19 @@ pub fn check_compatibility(
         out,
     };
 
-    // Parameter set.
+    // Parameter set: biases and the initial state first; scale factors and skews after a first fit shows
+    // which signals the kinematics move (below).
     let mut params: Vec<Param> = (0..3).map(Param::GyroBias).collect();
     let mut not_excited = Vec::new();
+    let mut wanted = Vec::new();
     if translational {
         params.extend((0..3).map(Param::AccelBias));
         params.extend([Param::OutBias(1), Param::OutBias(2)]);
-        // Scale factors and skews only on what the maneuver moves.
-        let mut wanted = Vec::new();
         if opts.time_skews {
             wanted.extend([Param::OutSkew(1), Param::OutSkew(2)]);
         }
         if opts.scale_factors {
             wanted.extend([Param::OutScale(0), Param::OutScale(1), Param::OutScale(2)]);
-        }
-        for p in wanted {
-            let (Param::OutSkew(j) | Param::OutScale(j)) = p else {
-                continue;
-            };
-            let signal = data.out[j].as_deref().unwrap_or(&[]);
-            let moved = rms_about_mean(signal);
-            let noise = crate::signal::noise_std(signal);
-            let n = signal.len().max(1) as f64;
-            let z =
-                (moved * moved - noise * noise) / (noise * noise * (2.0 / n).sqrt()).max(1e-300);
-            if moved >= excitation_floor(j) && z > EXCITATION_Z {
-                params.push(p);
-            } else {
-                let k = if j == 0 { 1.0 } else { 1f64.to_degrees() };
-                let unit = if j == 0 { "m/s" } else { "°" };
-                not_excited.push(format!(
-                    "{}: {} moves {:.3} {unit} rms against a noise of {:.3} {unit}, not clearly beyond it \
-                     (variance excess z = {z:.1}, needs more than {EXCITATION_Z} and at least {:.2} {unit} rms)",
-                    p.name().0,
-                    OUT_NAMES[j],
-                    moved * k,
-                    noise * k,
-                    excitation_floor(j) * k                ));
-            }
         }
         params.extend((0..3).map(Param::Init));
     }
@@ -263,6 +291,28 @@ pub fn check_compatibility(
         for (p, v) in att_params.iter().zip(&stage1.theta) {
             if let Some(k) = params.iter().position(|q| q == p) {
                 theta_p[k] = *v;
+            }
+        }
+    }
+    // Stage 2: biases and initial state only. Its reconstruction of V, α and β is the motion the kinematics
+    // explain; a scale factor or skew on a signal is estimated only when that motion is clear of both the
+    // signal's noise and what the kinematics leave unexplained (turbulence, unmodelled motion).
+    if !wanted.is_empty() {
+        let base = fit(&data, &params, theta_p.clone(), opts.max_iterations);
+        theta_p = base.theta;
+        for p in wanted {
+            let (Param::OutSkew(j) | Param::OutScale(j)) = p else {
+                continue;
+            };
+            let signal = data.out[j].as_deref().unwrap_or(&[]);
+            match excitation(j, signal, &base.residuals[j]) {
+                Ok(()) => {
+                    params.push(p);
+                    theta_p.push(0.0);
+                }
+                Err(evidence) => {
+                    not_excited.push(format!("{}: {} {evidence}", p.name().0, OUT_NAMES[j]))
+                }
             }
         }
     }

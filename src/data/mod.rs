@@ -31,4 +31,4 @@ pub use segments::{
     SegmentRef, SegmentScan, SEGMENT_LEAD_IN_S, SEGMENT_TAIL_S,
 };
 pub mod check;
-pub use check::{check_compatibility, CheckOptions, CheckReport, Estimate};
+pub use check::{check_compatibility, skew_bound_s, CheckOptions, CheckReport, Estimate};

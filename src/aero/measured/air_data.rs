@@ -120,23 +120,33 @@ pub fn moved_to_cg(
 /// The time skews of the α and β vanes (s, the vane reads late) estimated by the flight-path reconstruction
 /// of [`data::check_compatibility`] on a record already moved to the CG, and the record with α and β shifted
 /// back by them (α(t) = α_m(t + τ), linear interpolation; the ends hold). Skews the reconstruction does not
-/// find significant are left alone.
-pub fn deskewed(rec: &data::FlightRecord) -> (data::FlightRecord, Vec<(String, f64)>) {
+/// find significant are left alone, and so are skews longer than a data system can have
+/// ([`data::skew_bound_s`]): those come back as the second list, for a note.
+#[allow(clippy::type_complexity)]
+pub fn deskewed(
+    rec: &data::FlightRecord,
+) -> (data::FlightRecord, Vec<(String, f64)>, Vec<(String, f64)>) {
     let opts = data::CheckOptions {
         scale_factors: false,
         time_skews: true,
         ..data::CheckOptions::default()
     };
     let Ok(report) = data::check_compatibility(rec, &opts) else {
-        return (rec.clone(), Vec::new());
+        return (rec.clone(), Vec::new(), Vec::new());
     };
     let mut out = rec.clone();
     let mut skews = Vec::new();
+    let mut refused = Vec::new();
+    let bound_s = data::skew_bound_s(rec);
     for e in report
         .instrument
         .iter()
         .filter(|e| e.name.starts_with("skew_") && e.significant)
     {
+        if e.value.abs() > bound_s {
+            refused.push((e.column.clone(), e.value));
+            continue;
+        }
         let Some(x) = rec.column(&e.column) else {
             continue;
         };
@@ -148,7 +158,7 @@ pub fn deskewed(rec: &data::FlightRecord) -> (data::FlightRecord, Vec<(String, f
         out.push_column(&e.column, shifted);
         skews.push((e.column.clone(), e.value));
     }
-    (out, skews)
+    (out, skews, refused)
 }
 
 /// Linear interpolation of (t, x) at `at`, holding the end values outside.

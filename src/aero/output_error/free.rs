@@ -65,7 +65,8 @@ pub fn parse_free(entries: &[String]) -> Result<Vec<FreeChoice>, String> {
 }
 
 /// Parameters held by default (module doc); every other parameter of the axis starts free.
-pub(super) const LON_HELD: [&str; 7] = [
+pub(super) const LON_HELD: [&str; 8] = [
+    "tau_alpha_s",
     "CL_q",
     "CL_alphadot",
     "CL_V",

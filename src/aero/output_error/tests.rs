@@ -137,13 +137,18 @@ fn longitudinal_output_error_recovers_the_derivatives_it_simulated() {
             )
         })
         .collect();
+    // the vane skew is held by default (the skew check frees it on evidence): free it, as `--free skew`
+    let options = OutputErrorOptions {
+        free: parse_free(&["skew".into()]).unwrap(),
+        ..OutputErrorOptions::default()
+    };
     let params = parameters(
         &LONGITUDINAL_PARAMETERS,
         &LON_HELD,
         &starts,
         &BTreeMap::new(),
         &BTreeSet::new(),
-        &OutputErrorOptions::default(),
+        &options,
         &mut notes,
     );
     let nuisance = Nuisance {
