@@ -75,7 +75,7 @@ pub(super) const LON_HELD: [&str; 8] = [
     "Cm_alphadot",
     "Cm_V",
 ];
-pub(super) const LAT_HELD: [&str; 3] = ["CY_p", "CY_r", "CY_da"];
+pub(super) const LAT_HELD: [&str; 4] = ["tau_beta_s", "CY_p", "CY_r", "CY_da"];
 
 /// Start value and free flag of every parameter of a model (module doc), with the choices applied.
 #[allow(clippy::too_many_arguments)]
