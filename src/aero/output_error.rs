@@ -584,10 +584,10 @@ const ALPHADOT: [&str; 3] = ["CL_alphadot", "Cm_alphadot", "CL_q"];
 type Check =
     fn(&[&(String, data::FlightRecord)], FitSetup, &AxisFit) -> Option<(String, Option<AxisFit>)>;
 
-/// Whether a wider fit keeps the pitch derivatives C_mα, C_mq and C_mδe of the held one plausible: the same
-/// signs, and within a factor of three. A wider fit that runs off into another minimum (a positive C_mq, a
-/// C_mα twenty times the held one) is not adopted, whatever its cost.
-fn pitch_derivatives_plausible(held: &AxisFit, wider: &AxisFit) -> bool {
+/// Whether a wider fit keeps the key derivatives of the held one plausible (C_mα, C_mq, C_mδe; C_lp, C_lβ,
+/// C_nr, C_nβ): the same signs, and within a factor of three. A wider fit that runs off into another minimum
+/// (a positive C_mq, a C_mα twenty times the held one) is not adopted, whatever its cost.
+fn key_derivatives_plausible(held: &AxisFit, wider: &AxisFit) -> bool {
     // the lateral axis's damping and stiffness derivatives are held to the same rule
     [
         "Cm_alpha", "Cm_q", "Cm_de", "Cl_p", "Cl_beta", "Cn_r", "Cn_beta",
@@ -635,7 +635,7 @@ fn speed_check(
         .filter_map(|n| w.fit.estimate.parameter(n))
         .map(|p| (p.value / p.std_error.max(f64::MIN_POSITIVE)).abs())
         .fold(0.0, f64::max);
-    let plausible = pitch_derivatives_plausible(held, &w.fit);
+    let plausible = key_derivatives_plausible(held, &w.fit);
     let supported = 2.0 * w.drop > CHI2_3_1PCT && t_max > 3.0 && w.converged && plausible;
     let verdict = if supported && w.user_chose {
         "the records carry them; held as --free asks"
@@ -658,10 +658,11 @@ fn speed_check(
 /// When the α vane's time skew was held by default: the same fit with τ_α free (α_vane = α − τ_α α̇). A skew
 /// is a property of the data system, but from a maneuver it is told apart from the α̇ and q̂ terms only by
 /// the likelihood, so it is adopted, like them, on evidence: the likelihood-ratio test at 1 % (2 ΔJ > χ²₁ =
-/// 6.63), |t| > 3, a converged wider fit, C_mα, C_mq, C_mδe in range ([`pitch_derivatives_plausible`]) —
-/// and a skew within [`data::skew_bound_s`] (one sample interval, at least 50 ms). A longer apparent lag is something the model does not describe: on the HFB-320 flight
-/// record (10 Hz, light turbulence) the fit wants 0.24 s, the flight-path reconstruction 0.22 s, and taking it
-/// moves C_mα and C_mq by 20 % off the book's values; the book's model has no skew, and records generated in
+/// 6.63), |t| > 3, a converged wider fit, C_mα, C_mq, C_mδe in range ([`key_derivatives_plausible`]) —
+/// and a skew within [`data::skew_bound_s`] (one sample interval, at least 50 ms). A longer apparent lag is
+/// something the model does not describe: on the HFB-320 flight record (10 Hz, light turbulence) the fit
+/// wants 0.24 s, the flight-path reconstruction 0.22 s, and taking it moves C_mα and C_mq by 20 % off the
+/// book's values; the book's model has no skew, and records generated in
 /// gusts without a skew show none. When the user named it in `--free`, the check only reports.
 fn skew_check(
     records: &[&(String, data::FlightRecord)],
@@ -698,7 +699,7 @@ fn vane_skew_check(
     let w = wider_fit(records, setup, held, &[name])?;
     let p = w.fit.estimate.parameter(name)?;
     let t = (p.value / p.std_error.max(f64::MIN_POSITIVE)).abs();
-    let plausible = pitch_derivatives_plausible(held, &w.fit);
+    let plausible = key_derivatives_plausible(held, &w.fit);
     let bound_s = records
         .iter()
         .map(|(_, r)| data::skew_bound_s(r))
@@ -765,7 +766,7 @@ fn alphadot_check(
     let vane = records
         .iter()
         .all(|(_, r)| r.column(Channel::Alpha).is_some());
-    let converged = w.converged && pitch_derivatives_plausible(held, &w.fit);
+    let converged = w.converged && key_derivatives_plausible(held, &w.fit);
     let supported =
         p.value < 0.0 && t.abs() > 3.0 && 2.0 * w.drop > CHI2_3_1PCT && vane && converged;
     let verdict = if supported && w.user_chose {

@@ -128,12 +128,13 @@ fn rms_about_mean(x: &[f64]) -> f64 {
 /// variance about its mean exceeds its noise variance (from [`crate::signal::noise_std`]) by
 /// [`EXCITATION_Z`] standard errors of a variance estimate, (2) the motion the kinematics reconstruct
 /// (measured minus residual) is at least [`excitation_floor`] rms, and (3) it is [`EXPLAINED_RATIO`] times the
-/// coloured part of the residual (its rms beyond the white sensor noise), the motion they do not explain. A scale factor is in effect the regression of the residual on the
-/// explained motion; with coloured residuals (gusts) of only a few independent events its error is about
-/// (unexplained / explained) / √n_eff, which the coloured-residual bound still underrates. A longitudinal
-/// maneuver flown in turbulence moves β through gusts and a little lateral drift: the measured β passes (1),
-/// the reconstructed β moves 0.34° against 0.24° unexplained and fails (3), so no β scale factor is named
-/// (it was, −0.36 ± 0.08, on the HFB-320 flight record). `Err` carries the evidence.
+/// coloured part of the residual (its rms beyond the white sensor noise), the motion they do not explain. A
+/// scale factor is in effect the regression of the residual on the explained motion; with coloured residuals
+/// (gusts) of only a few independent events its error is about (unexplained / explained) / √n_eff, which the
+/// coloured-residual bound still underrates. A longitudinal maneuver flown in turbulence moves β through
+/// gusts and a little lateral drift: the measured β passes (1); fitted with a scale factor, the reconstructed
+/// β moves 0.23° against 0.21° left beyond the noise and fails (3), so no β scale factor is named (it was,
+/// −0.36 ± 0.08, on the HFB-320 flight record). `Err` carries the evidence.
 fn excitation(
     output: usize,
     signal: &[f64],
