@@ -584,6 +584,36 @@ const ALPHADOT: [&str; 3] = ["CL_alphadot", "Cm_alphadot", "CL_q"];
 type Check =
     fn(&[&(String, data::FlightRecord)], FitSetup, &AxisFit) -> Option<(String, Option<AxisFit>)>;
 
+/// Runs structure checks in turn, each from the structure the one before adopted: a check's note goes into
+/// `notes`, and a wider fit it adopts replaces `f` and frees its parameters (`names`) in the options returned.
+fn run_checks(
+    records: &[&(String, data::FlightRecord)],
+    setup: FitSetup,
+    f: &mut AxisFit,
+    checks: &[(Check, &[&'static str])],
+    notes: &mut Vec<String>,
+) -> OutputErrorOptions {
+    let mut options = setup.options.clone();
+    for (check, names) in checks {
+        let setup = FitSetup {
+            options: &options,
+            ..setup
+        };
+        let Some((note, adopted)) = check(records, setup, f) else {
+            continue;
+        };
+        notes.push(note);
+        if let Some(wider) = adopted {
+            *f = wider;
+            options.free.push(FreeChoice {
+                names: names.to_vec(),
+                free: true,
+            });
+        }
+    }
+    options
+}
+
 /// Whether a wider fit keeps the key derivatives of the held one plausible (C_mα, C_mq, C_mδe; C_lp, C_lβ,
 /// C_nr, C_nβ): the same signs, and within a factor of three. A wider fit that runs off into another minimum
 /// (a positive C_mq, a C_mα twenty times the held one) is not adopted, whatever its cost.
@@ -841,18 +871,12 @@ fn refit_options(oe: &AxisFit) -> Option<OutputErrorOptions> {
     if oe.estimate.method != Method::Oe {
         return None;
     }
-    let free: Vec<&'static str> = LONGITUDINAL_PARAMETERS
+    let (free, held): (Vec<&'static str>, Vec<&'static str>) = LONGITUDINAL_PARAMETERS
         .iter()
         .chain(LATERAL_PARAMETERS.iter())
         .copied()
-        .filter(|n| oe.estimate.parameter(n).is_some_and(|p| !p.fixed))
-        .collect();
-    let held: Vec<&'static str> = LONGITUDINAL_PARAMETERS
-        .iter()
-        .chain(LATERAL_PARAMETERS.iter())
-        .copied()
-        .filter(|n| oe.estimate.parameter(n).is_some_and(|p| p.fixed))
-        .collect();
+        .filter(|n| oe.estimate.parameter(n).is_some())
+        .partition(|n| oe.estimate.parameter(n).is_some_and(|p| !p.fixed));
     Some(OutputErrorOptions {
         method: Method::Fem,
         free: vec![
@@ -932,31 +956,18 @@ pub fn output_error_report(
     if axis.longitudinal() {
         let recs = records_for(records, true);
         let mut f = fit_longitudinal(&recs, setup, &mut notes)?;
-        // the checks run in turn, each from the structure the one before adopted: the vane skew, the α̇ terms
-        // (short period), then the speed derivatives (phugoid)
-        let mut lon_options = options.clone();
-        let checks: [(Check, &[&'static str]); 3] = [
-            (skew_check, &SKEW),
-            (alphadot_check, &ALPHADOT),
-            (speed_check, &SPEED),
-        ];
-        for (check, names) in checks {
-            let setup = FitSetup {
-                options: &lon_options,
-                ..setup
-            };
-            let Some((note, adopted)) = check(&recs, setup, &f) else {
-                continue;
-            };
-            notes.push(note);
-            if let Some(wider) = adopted {
-                f = wider;
-                lon_options.free.push(FreeChoice {
-                    names: names.to_vec(),
-                    free: true,
-                });
-            }
-        }
+        // the vane skew, the α̇ terms (short period), then the speed derivatives (phugoid)
+        let lon_options = run_checks(
+            &recs,
+            setup,
+            &mut f,
+            &[
+                (skew_check, &SKEW),
+                (alphadot_check, &ALPHADOT),
+                (speed_check, &SPEED),
+            ],
+            &mut notes,
+        );
         let lon_setup = FitSetup {
             options: &lon_options,
             ..setup
@@ -981,17 +992,13 @@ pub fn output_error_report(
     if axis.lateral() {
         let recs = records_for(records, false);
         let mut f = fit_lateral(&recs, setup, &mut notes)?;
-        let mut lat_options = options.clone();
-        if let Some((note, adopted)) = beta_skew_check(&recs, setup, &f) {
-            notes.push(note);
-            if let Some(wider) = adopted {
-                f = wider;
-                lat_options.free.push(FreeChoice {
-                    names: vec!["tau_beta_s"],
-                    free: true,
-                });
-            }
-        }
+        let lat_options = run_checks(
+            &recs,
+            setup,
+            &mut f,
+            &[(beta_skew_check, &["tau_beta_s"])],
+            &mut notes,
+        );
         let setup = FitSetup {
             options: &lat_options,
             ..setup
