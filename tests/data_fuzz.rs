@@ -312,7 +312,7 @@ proptest! {
         let n = rows.len();
         let mut rec = FlightRecord::new((0..n).map(|i| i as f64 * dt).collect());
         for k in 0..3 {
-            rec.push_column(&format!("c{k}"), rows.iter().map(|r| r[k]).collect());
+            rec.push_column(format!("c{k}"), rows.iter().map(|r| r[k]).collect());
         }
         let mut buf = Vec::new();
         write_csv_to(&mut buf, &rec).unwrap();

@@ -69,7 +69,7 @@ fn srivc_and_oe_match_the_c172x_linearization_short_period_and_dutch_roll_within
                 }],
             })
             .unwrap();
-        let u = rec.require(&format!("{surface}_rad"), "input").unwrap();
+        let u = rec.require(format!("{surface}_rad"), "input").unwrap();
         let y = rec.require(output, "output").unwrap();
         let lin = dominant(&truth[key].poles());
         for method in [Method::Srivc, Method::Oe] {

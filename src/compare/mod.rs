@@ -77,7 +77,7 @@ pub fn perturbations(
     surface: &str,
     tf_key: &str,
 ) -> Result<(Vec<f64>, Vec<f64>), CompareError> {
-    let u = rec.require(&format!("{surface}_rad"), "the identification input")?;
+    let u = rec.require(format!("{surface}_rad"), "the identification input")?;
     let y = rec.require(output_column(tf_key), "the identification output")?;
     Ok((
         u.iter().map(|x| x - u[0]).collect(),

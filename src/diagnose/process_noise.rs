@@ -294,9 +294,12 @@ mod tests {
     use super::{filter_for, fit_error_dynamics};
     use faer::Mat;
 
+    /// A, C, the responses, the segment starts and the number of samples.
+    type System = (Mat<f64>, Mat<f64>, Vec<Vec<f64>>, Vec<usize>, usize);
+
     /// A lightly damped 9-state system (rotations of pairs of states, plus a decay), its output matrix
     /// (12 channels), and the responses to unit perturbations of each state at the starts of two segments.
-    fn system() -> (Mat<f64>, Mat<f64>, Vec<Vec<f64>>, Vec<usize>, usize) {
+    fn system() -> System {
         let n = 9;
         let mut a = Mat::<f64>::zeros(n, n);
         for i in 0..n {

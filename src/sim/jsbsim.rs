@@ -606,7 +606,7 @@ impl JsbsimSim {
                 .collect()
         };
         for (j, s) in SURFACES.iter().enumerate() {
-            rec.push_column(&format!("{s}_rad"), column(j, 1.0));
+            rec.push_column(format!("{s}_rad"), column(j, 1.0));
         }
         for (i, (name, _, factor)) in RECORDED.iter().enumerate() {
             let values = column(SURFACES.len() + i, *factor);

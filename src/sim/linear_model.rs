@@ -91,7 +91,7 @@ impl Simulator for LinearSim {
             let base = self.trim.surfaces_rad.get(surface).copied().unwrap_or(0.0);
             let j = self.lin.inputs.iter().position(|i| i == surface);
             rec.push_column(
-                &format!("{surface}_rad"),
+                format!("{surface}_rad"),
                 (0..=n).map(|k| base + j.map_or(0.0, |j| u[j][k])).collect(),
             );
         }

@@ -1,0 +1,266 @@
+//! After forward selection has stopped: backward elimination (every named effect must still pass the
+//! selection's tests with the others in the model) and sequential replacement (each named effect against the
+//! members of its ambiguity group, with all the others modelled); Miller, *Subset Selection in Regression*,
+//! 2nd ed., §3.2–3.3.
+
+use super::{rejection, score_test, with_candidate, FullFit, RoundContext};
+use crate::diagnose::extension::Extension;
+use crate::diagnose::progress::Progress;
+use crate::diagnose::search::{
+    effective_n, fit, lag_window, par_map, residuals, Active, FitOutcome, Weighted, Worker,
+};
+use crate::diagnose::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
+
+/// The fit `o` with free parameter `i` moved last, where the selection's tests read the candidate's.
+fn with_last(o: &FitOutcome, i: usize) -> FitOutcome {
+    let mut out = o.clone();
+    if i + 1 < o.values.len() {
+        for v in [
+            &mut out.values,
+            &mut out.std_errors,
+            &mut out.crb_std_errors,
+        ] {
+            let x = v.remove(i);
+            v.push(x);
+        }
+        if i < out.sensitivities.len() {
+            let s = out.sensitivities.remove(i);
+            out.sensitivities.push(s);
+        }
+    }
+    out
+}
+
+/// Backward elimination (Miller, Subset Selection in Regression, 2nd ed., §3.2, the backward step of Efroymson's
+/// stepwise method): with every named effect in the model, each one, latest first, must still pass every test
+/// of the selection against the model without it (fitted again, the others free). An effect named early can
+/// lose its reason once a later one is modelled: a Cm_α ×0.43 in gusts first came out as an elevator
+/// effectiveness of ×1.25, which fell to ×1.02 once Cm_α was named. A dropped effect goes back to the
+/// candidates with the reason.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn eliminate_backward<'e>(
+    workers: &mut [Worker],
+    w: &Weighted,
+    catalogue: &[&'e dyn Extension],
+    resolution: &[f64],
+    masks: &[Vec<bool>],
+    opts: &DiagnoseOptions,
+    progress: &Progress,
+    state: Replacement<'_, 'e>,
+) -> Result<(), DiagnoseError> {
+    let Replacement {
+        selected,
+        named,
+        candidates,
+        cost,
+        round,
+    } = state;
+    if selected.len() < 2 {
+        return Ok(());
+    }
+    progress.stage("backward elimination", selected.len() + 1);
+    let mut full: Vec<Active<'e>> = selected
+        .iter()
+        .map(|s| Active {
+            free: true,
+            ..s.clone()
+        })
+        .collect();
+    let mut o_full = fit(&mut workers[0], w, &mut full, 10, true).map_err(sim_err("replay"))?;
+    progress.fitted(o_full.evaluations);
+    let mut i = full.len();
+    while i > 0 && full.len() >= 2 {
+        i -= 1;
+        let Some(ci) = catalogue
+            .iter()
+            .position(|e| e.effect() == full[i].ext.effect() && e.target() == full[i].ext.target())
+        else {
+            continue;
+        };
+        let starts: Vec<Vec<Active<'e>>> = vec![full
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != i)
+            .map(|(_, a)| a.clone())
+            .collect()];
+        let without = par_map(workers, &starts, |wk, active| {
+            let mut a = active.clone();
+            let out = fit(wk, w, &mut a, 10, true);
+            progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
+            out.map(|o| (o, a))
+        });
+        let Some(Ok((o_without, a_without))) = without.into_iter().next() else {
+            continue;
+        };
+        let o_last = with_last(&o_full, i);
+        let ctx = RoundContext {
+            round,
+            base_cost: o_without.cost_after,
+            floor: opts.residual_floor * w.n() as f64,
+        };
+        let e = catalogue[ci];
+        let mut c = ctx.candidate(e, &o_last, true, resolution[ci]);
+        let Some(reason) = rejection(&c, e, &o_last, o_without.cost_after, opts, &masks[ci]) else {
+            continue;
+        };
+        c.rejected_because = Some(format!(
+            "dropped by backward elimination, with the other named effects in the model: {reason}"
+        ));
+        candidates.push(c);
+        named.remove(i);
+        full = a_without;
+        o_full = o_without;
+    }
+    for (k, n) in named.iter_mut().enumerate() {
+        n.value = full[k].params[0];
+        n.std_error = o_full.std_errors.get(k).copied().unwrap_or(f64::NAN);
+    }
+    *cost = o_full.cost_after;
+    *selected = full;
+    for s in selected.iter_mut() {
+        s.free = false;
+    }
+    Ok(())
+}
+
+/// The state of the selection that [`replace_ambiguous`] may change.
+pub(super) struct Replacement<'a, 'e> {
+    pub(super) selected: &'a mut Vec<Active<'e>>,
+    pub(super) named: &'a mut Vec<NamedCause>,
+    pub(super) candidates: &'a mut Vec<Candidate>,
+    pub(super) cost: &'a mut f64,
+    pub(super) round: usize,
+}
+
+/// Sequential replacement (Miller, Subset Selection in Regression, 2nd ed., §3.3): once forward selection has
+/// stopped, every named effect is fitted again against the members of its ambiguity group with all the other
+/// named effects in the model, and the one with the lower cost is kept. Two candidates whose sensitivities are
+/// nearly parallel (an input delay and an actuator lag on doublets) differ in cost by little, and while other
+/// effects are still unmodelled their residual decides which fits better; the choice is made only once those are
+/// modelled. Both models have the same number of parameters, so the lower cost is the better criterion value;
+/// the alternative must also pass every significance test against the model without the effect it replaces.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn replace_ambiguous<'e>(
+    workers: &mut [Worker],
+    w: &Weighted,
+    catalogue: &[&'e dyn Extension],
+    sens: &[Vec<f64>],
+    resolution: &[f64],
+    masks: &[Vec<bool>],
+    opts: &DiagnoseOptions,
+    progress: &Progress,
+    state: Replacement<'_, 'e>,
+) -> Result<(), DiagnoseError> {
+    let Replacement {
+        selected,
+        named,
+        candidates,
+        cost,
+        round,
+    } = state;
+    for i in 0..named.len() {
+        let alternatives: Vec<usize> = named[i]
+            .ambiguous_with
+            .iter()
+            .filter_map(|key| {
+                catalogue
+                    .iter()
+                    .position(|e| format!("{}/{}", e.effect(), e.target()) == *key)
+            })
+            .collect();
+        if alternatives.is_empty() {
+            continue;
+        }
+        progress.stage("ambiguity groups", alternatives.len());
+        // The model without effect i, its residual and cost: the base the alternatives are judged against.
+        let without: Vec<Active<'e>> = selected
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != i)
+            .map(|(_, a)| a.clone())
+            .collect();
+        let r = residuals(&mut workers[0], w, &without).map_err(sim_err("replay"))?;
+        progress.simulated(1);
+        let cost_without: f64 = r.iter().map(|v| v * v).sum();
+        let n_eff = effective_n(&r, w.case.len(), lag_window(w.case));
+        // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate.
+        let starts: Vec<Vec<Active<'e>>> = alternatives
+            .iter()
+            .map(|&j| {
+                let start = score_test(catalogue[j], &sens[j], &r, cost_without, n_eff).values[0];
+                let mut a: Vec<Active<'e>> = selected
+                    .iter()
+                    .map(|s| Active {
+                        free: true,
+                        ..s.clone()
+                    })
+                    .collect();
+                let one = with_candidate(&[], catalogue[j], start, true);
+                a[i] = one[0].clone();
+                a
+            })
+            .collect();
+        let fits: Vec<FullFit> = par_map(workers, &starts, |wk, active| {
+            let mut a = active.clone();
+            let out = fit(wk, w, &mut a, 10, true);
+            progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
+            out.map(|o| (o, a))
+        });
+        let ctx = RoundContext {
+            round,
+            base_cost: cost_without,
+            floor: opts.residual_floor * w.n() as f64,
+        };
+        let mut best: Option<(usize, FitOutcome, Vec<Active<'e>>)> = None;
+        for (&j, out) in alternatives.iter().zip(fits) {
+            let Ok((o, a)) = out else { continue };
+            // The candidate's own parameter is the last of the fit's values: move effect i's to the end.
+            let o_last = with_last(&o, i);
+            let mut c = ctx.candidate(catalogue[j], &o_last, true, resolution[j]);
+            c.rejected_because =
+                rejection(&c, catalogue[j], &o_last, cost_without, opts, &masks[j]);
+            if c.rejected_because.is_none()
+                && o.cost_after < *cost
+                && best
+                    .as_ref()
+                    .is_none_or(|(_, b, _)| o.cost_after < b.cost_after)
+            {
+                best = Some((j, o, a));
+            } else if c.rejected_because.is_none() {
+                c.rejected_because = Some(format!(
+                    "in place of {}/{}: cost {:.1} not below {:.1}",
+                    named[i].effect, named[i].target, o.cost_after, *cost
+                ));
+            }
+            candidates.push(c);
+        }
+        let Some((j, o, a)) = best else { continue };
+        let replaced = format!("{}/{}", named[i].effect, named[i].target);
+        let kept = format!("{}/{}", catalogue[j].effect(), catalogue[j].target());
+        *selected = a;
+        for s in selected.iter_mut() {
+            s.free = false;
+        }
+        *cost = o.cost_after;
+        let mut group: Vec<String> = std::iter::once(replaced)
+            .chain(
+                named[i]
+                    .ambiguous_with
+                    .iter()
+                    .filter(|g| **g != kept)
+                    .cloned(),
+            )
+            .collect();
+        group.dedup();
+        for (k, (n, s)) in named.iter_mut().zip(selected.iter()).enumerate() {
+            n.effect = s.ext.effect().into();
+            n.target = s.ext.target().into();
+            n.value = s.params[0];
+            n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
+            if k == i {
+                n.ambiguous_with = group.clone();
+            }
+        }
+    }
+    Ok(())
+}
