@@ -5,7 +5,9 @@
 //! (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
-//! [--first K] [--random-mix] [--out DIR]`
+//! [--first K] [--random-mix] [--process-noise] [--out DIR]`
+//! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
+//!   (`flightid diagnose --process-noise`).
 //! - the mix is stratified by case index (i mod 4 = 0 clean, 3 two or three effects, else one: 40 cases give
 //!   10 clean, 20 single, 10 multiple); `--random-mix` draws it by chance (a quarter clean, a quarter multiple).
 //! - `--clean`: every case clean (the acceptance's maneuver sequence, lengths 30–90 s).
@@ -31,6 +33,7 @@ struct Args {
     clean: bool,
     false_alarm: bool,
     random_mix: bool,
+    process_noise: bool,
     out: PathBuf,
     first: usize,
 }
@@ -43,6 +46,7 @@ fn args() -> Args {
         clean: false,
         false_alarm: false,
         random_mix: false,
+        process_noise: false,
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
     };
@@ -72,6 +76,11 @@ fn args() -> Args {
             }
             "--random-mix" => {
                 a.random_mix = true;
+                i += 1;
+                continue;
+            }
+            "--process-noise" => {
+                a.process_noise = true;
                 i += 1;
                 continue;
             }
@@ -188,6 +197,7 @@ fn main() {
             .collect();
         let opts = DiagnoseOptions {
             progress: false,
+            process_noise: a.process_noise,
             ..Default::default()
         };
         let d = match diagnose(&mut workers, &train, Some(&valid), &opts) {

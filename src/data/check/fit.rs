@@ -2,7 +2,8 @@
 //! diagonal residual covariance re-estimated every iteration (Klein & Morelli §6.2, eq. 6.51–6.56), and the
 //! Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein, J. Aircraft 1997).
 
-use faer::Mat;
+use faer::linalg::solvers::DenseSolveCore;
+use faer::{Mat, Side};
 
 use super::kinematics::{residuals, Data, Param};
 use crate::estimate::covariance;
@@ -190,51 +191,23 @@ fn information(j: &[Vec<Vec<f64>>], var: &[f64], np: usize) -> Vec<f64> {
     m
 }
 
-/// Solves A x = b (Gaussian elimination with partial pivoting on an equilibrated copy).
-fn solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
-    // Symmetric scaling D A D to cope with parameters of very different units.
+/// Inverse of a symmetric positive-definite matrix (row-major, n×n): Cholesky factorisation (faer) of the
+/// equilibrated copy D A D, D = diag(1/√a_ii), which copes with parameters of very different units. `None`
+/// when the matrix is not positive definite or a pivot of the equilibrated copy falls below 1e-14 (a
+/// parameter the data do not determine).
+pub(super) fn invert(a: &[f64], n: usize) -> Option<Vec<f64>> {
     let d: Vec<f64> = (0..n)
         .map(|i| 1.0 / a[i * n + i].abs().sqrt().max(1e-300))
         .collect();
-    let mut m: Vec<f64> = (0..n * n).map(|k| a[k] * d[k / n] * d[k % n]).collect();
-    let mut x: Vec<f64> = (0..n).map(|i| b[i] * d[i]).collect();
-    for c in 0..n {
-        let piv = (c..n).max_by(|&i, &j| m[i * n + c].abs().total_cmp(&m[j * n + c].abs()))?;
-        if m[piv * n + c].abs() < 1e-14 {
-            return None;
-        }
-        if piv != c {
-            for k in 0..n {
-                m.swap(c * n + k, piv * n + k);
-            }
-            x.swap(c, piv);
-        }
-        for i in c + 1..n {
-            let f = m[i * n + c] / m[c * n + c];
-            if f != 0.0 {
-                for k in c..n {
-                    m[i * n + k] -= f * m[c * n + k];
-                }
-                x[i] -= f * x[c];
-            }
-        }
+    let m = Mat::from_fn(n, n, |i, j| a[i * n + j] * d[i] * d[j]);
+    let llt = m.llt(Side::Lower).ok()?;
+    let l = llt.L();
+    if (0..n).any(|i| l[(i, i)] * l[(i, i)] < 1e-14) {
+        return None;
     }
-    for c in (0..n).rev() {
-        let s: f64 = (c + 1..n).map(|k| m[c * n + k] * x[k]).sum();
-        x[c] = (x[c] - s) / m[c * n + c];
-    }
-    Some(x.iter().zip(&d).map(|(xi, di)| xi * di).collect())
-}
-
-/// Inverse of a symmetric positive-definite matrix (column by column through [`solve`]).
-pub(super) fn invert(a: &[f64], n: usize) -> Option<Vec<f64>> {
-    let mut inv = vec![0.0; n * n];
-    for c in 0..n {
-        let e: Vec<f64> = (0..n).map(|i| f64::from(u8::from(i == c))).collect();
-        let col = solve(a, &e, n)?;
-        for r in 0..n {
-            inv[r * n + c] = col[r];
-        }
-    }
-    Some(inv)
+    let inv = llt.inverse();
+    let out: Vec<f64> = (0..n * n)
+        .map(|k| inv[(k / n, k % n)] * d[k / n] * d[k % n])
+        .collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
 }
