@@ -251,8 +251,14 @@ fn main() {
             .filter(|c| c.full_fit && c.round == 0)
             .map(|c| c.criterion_delta)
             .fold(f64::INFINITY, f64::min);
+        // Whether the search ran on the filter's innovations (`--process-noise` and turbulence found).
+        let filter = if d.process_noise.as_ref().is_some_and(|p| p.used) {
+            " filter"
+        } else {
+            ""
+        };
         println!(
-            "case {i:3} [{}] {:12} {:5.1} s {:3.0} Hz noise {:3.1} {:4} sims {:5.1} s, round-0 min dBIC {min_bic:8.1}: hidden [{}] named [{}]",
+            "case {i:3} [{}]{filter} {:12} {:5.1} s {:3.0} Hz noise {:3.1} {:4} sims {:5.1} s, round-0 min dBIC {min_bic:8.1}: hidden [{}] named [{}]",
             if ok_v { "ok " } else if ok { "set" } else { "BAD" },
             truth["plan"].as_str().unwrap_or("full"),
             truth["duration_s"].as_f64().unwrap_or(0.0),
