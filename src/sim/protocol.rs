@@ -273,20 +273,18 @@ pub struct ExportReply {
 /// The reply to `linearize` is the [`Linearization`] itself.
 pub type LinearizeReply = Linearization;
 
-/// The status fields every reply carries: `ok`, the size of its payload and, on failure, what went wrong.
-#[derive(Debug, Clone, Deserialize)]
+/// The status fields every reply carries: `ok`, the size of its payload and, on failure, what went wrong. A field
+/// left out takes its default (a reply without `ok` failed; without `payload_f64` it has no payload).
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(default)]
 pub struct ReplyStatus {
-    /// Whether the command succeeded (a reply without it failed).
-    #[serde(default)]
+    /// Whether the command succeeded.
     pub ok: bool,
     /// Number of float64 after the line.
-    #[serde(default)]
     pub payload_f64: usize,
     /// Error kind (`trim_failed`, `unknown_aircraft`, `sim_stopped`, `protocol`, `jsbsim`, …).
-    #[serde(default)]
     pub kind: Option<String>,
     /// Error message.
-    #[serde(default)]
     pub error: Option<String>,
 }
 
