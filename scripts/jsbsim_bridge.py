@@ -6,6 +6,8 @@ Protocol (one request = one whole job, arrays come back whole):
   response : one JSON line on the protocol stream; if it has "payload_f64": N, N float64 follow as raw bytes.
              {"ok": false, "kind": "...", "error": "..."} on failure; the process stays usable unless
              "fatal" is true.
+  commands : `COMMANDS` below names each command's handler and the keys it takes; a missing or unknown key, or an
+             unknown command, is a "protocol" error. flightid's side of the messages: src/sim/protocol.rs.
 
 The protocol stream is a duplicate of the original stdout; file descriptor 1 itself is pointed at stderr so that
 JSBSim's C++ console output (trim reports, warnings) cannot corrupt the protocol.
@@ -732,11 +734,125 @@ def export_aircraft(sim, req):
     return path
 
 
+# ----------------------------------------------------------------------------------------------------------
+# Commands: one handler each, with the keys it takes (the Rust side's types: src/sim/protocol.rs)
+# ----------------------------------------------------------------------------------------------------------
+
+class Server:
+    """What lives between requests: the loaded aircraft (None before the first 'load')."""
+
+    def __init__(self):
+        self.sim = None
+
+    def close(self):
+        if self.sim is not None:
+            self.sim.close()
+            self.sim = None
+
+
+# Each handler takes (server, request, payload) and returns (reply fields, reply payload or None).
+
+def do_load(server, req, _payload):
+    server.close()
+    server.sim = Sim(req)
+    return {"knobs": server.sim.knobs, "axes": AXIS_OF, "added_terms": sorted(set(ADDED)),
+            "jsbsim_version": jsbsim.__version__}, None
+
+
+def do_quit(_server, _req, _payload):
+    return {}, None
+
+
+def do_trim(server, req, _payload):
+    values = server.sim.restore_trim(req) if req.get("reuse") else server.sim.trim(req)
+    return {"values": values}, None
+
+
+def do_rate(server, req, _payload):
+    server.sim.set_rate(float(req["dt_s"]))
+    return {}, None
+
+
+def do_get(server, req, _payload):
+    return {"values": {k: server.sim.node(k).get_double_value() for k in req["properties"]}}, None
+
+
+def do_set(server, req, _payload):
+    server.sim.set_many(req["values"])
+    return {}, None
+
+
+def do_probe(server, req, _payload):
+    return server.sim.probe(req), None
+
+
+def do_linearize(server, req, _payload):
+    return server.sim.linearize(req), None
+
+
+def do_export(server, req, _payload):
+    return {"path": export_aircraft(server.sim, req)}, None
+
+
+def do_fly(server, req, payload):
+    return server.sim.fly(req, payload)
+
+
+class Command:
+    """A command's handler and keys; `needs_load`: refused with `not_loaded` before the first 'load'."""
+
+    def __init__(self, handler, required=(), optional=(), needs_load=True):
+        self.handler = handler
+        self.required = required
+        self.optional = optional
+        self.needs_load = needs_load
+
+
+COMMANDS = {
+    "load": Command(do_load, ("aircraft", "dt_s", "surfaces", "scratch_dir"),
+                    ("engine_running", "gear_up", "engines", "aircraft_dir"), needs_load=False),
+    "quit": Command(do_quit, needs_load=False),
+    "trim": Command(do_trim, ("altitude_ft", "speed_kts"),
+                    ("heading_deg", "gamma_deg", "latitude_deg", "longitude_deg", "ic", "knobs", "report",
+                     "reuse")),
+    "rate": Command(do_rate, ("dt_s",)),
+    "get": Command(do_get, ("properties",)),
+    "set": Command(do_set, ("values",)),
+    "probe": Command(do_probe, ("perturb",), ("condition", "extra")),
+    "linearize": Command(do_linearize, (), ("per_radian_surfaces",)),
+    "export": Command(do_export, ("dir",), ("knobs", "added")),
+    "fly": Command(do_fly, ("n_steps", "drives", "record"), ("set_before", "resets", "record_every")),
+}
+
+# Keys of the framing, allowed in every request.
+FRAMING_KEYS = ("cmd", "payload_f64")
+
+
+def command_of(req, server):
+    """The request's Command once its name and keys are checked (a `protocol` error naming what is wrong), and
+    the aircraft is loaded if it needs one (`not_loaded`)."""
+    name = req.get("cmd")
+    command = COMMANDS.get(name)
+    if command is None:
+        raise BridgeError("protocol", f"unknown command '{name}'")
+    missing = [k for k in command.required if k not in req]
+    if missing:
+        raise BridgeError("protocol", f"'{name}' needs the key(s) {', '.join(missing)}")
+    allowed = set(command.required) | set(command.optional) | set(FRAMING_KEYS)
+    unknown = sorted(k for k in req if k not in allowed)
+    if unknown:
+        raise BridgeError("protocol", f"'{name}' has no key(s) {', '.join(unknown)} "
+                                      f"(it takes: {', '.join(command.required + command.optional) or 'none'})")
+    if command.needs_load and server.sim is None:
+        raise BridgeError("not_loaded", f"'{name}' before 'load'")
+    return command
+
+
 def main():
     # A Ctrl-C reaches the whole process group: flightid handles it (kills this process, removes the scratch
     # directory), so the bridge must not die first and be reported as a crash.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    sim = None
+    server = Server()
     stdin = sys.stdin.buffer
     while True:
         line = stdin.readline()
@@ -751,48 +867,18 @@ def main():
         if req.get("payload_f64"):
             payload = array.array("d")
             payload.frombytes(read_exact(8 * int(req["payload_f64"])))
-        cmd = req.get("cmd")
         try:
-            if cmd == "load":
-                if sim is not None:
-                    sim.close()
-                    sim = None
-                sim = Sim(req)
-                send({"ok": True, "knobs": sim.knobs, "axes": AXIS_OF, "added_terms": sorted(set(ADDED)),
-                      "jsbsim_version": jsbsim.__version__})
-            elif cmd == "quit":
-                send({"ok": True})
-                break
-            elif sim is None:
-                raise BridgeError("not_loaded", f"'{cmd}' before 'load'")
-            elif cmd == "trim":
-                values = sim.restore_trim(req) if req.get("reuse") else sim.trim(req)
-                send({"ok": True, "values": values})
-            elif cmd == "rate":
-                sim.set_rate(float(req["dt_s"]))
-                send({"ok": True})
-            elif cmd == "get":
-                send({"ok": True, "values": {k: sim.node(k).get_double_value() for k in req["properties"]}})
-            elif cmd == "set":
-                sim.set_many(req["values"])
-                send({"ok": True})
-            elif cmd == "probe":
-                send(dict(ok=True, **sim.probe(req)))
-            elif cmd == "linearize":
-                send(dict(ok=True, **sim.linearize(req)))
-            elif cmd == "export":
-                send({"ok": True, "path": export_aircraft(sim, req)})
-            elif cmd == "fly":
-                header, out = sim.fly(req, payload)
-                send(dict(ok=True, **header), out)
-            else:
-                raise BridgeError("protocol", f"unknown command '{cmd}'")
+            command = command_of(req, server)
+            fields, out = command.handler(server, req, payload)
+            send(dict(ok=True, **fields), out)
         except BridgeError as e:
             send({"ok": False, "kind": e.kind, "error": str(e)})
         except Exception as e:  # a JSBSim exception: report it, keep serving
             send({"ok": False, "kind": "jsbsim", "error": f"{type(e).__name__}: {e}"})
-    if sim is not None:
-        sim.close()
+        else:
+            if command.handler is do_quit:
+                break
+    server.close()
 
 
 if __name__ == "__main__":

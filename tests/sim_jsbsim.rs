@@ -734,3 +734,54 @@ fn a_rate_switch_flies_like_a_process_started_at_that_rate() {
     }
     assert!(switched.set_rate_hz(0.0).is_err());
 }
+
+/// The bridge checks every request against its command table before running it: an unknown command, a missing
+/// key and an unknown key are `protocol` errors naming what is wrong, a well-formed command before `load` is
+/// `not_loaded`, and the process keeps serving until `quit`. (flightid itself sends only typed requests,
+/// `flightid::sim::protocol::Request`, so these lines are written by hand.)
+#[test]
+fn the_bridge_refuses_malformed_requests_by_name_and_keeps_serving() {
+    use std::io::Write;
+    let python = flightid::sim::env::python().unwrap();
+    let script = flightid::sim::env::bridge_script().unwrap();
+    let mut child = Command::new(python)
+        .arg("-u")
+        .arg(script)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let requests = [
+        r#"{"cmd": "fly_away"}"#,
+        r#"{"cmd": "get"}"#,
+        r#"{"cmd": "get", "properties": [], "colour": "red"}"#,
+        r#"{"cmd": "get", "properties": []}"#,
+        r#"{"cmd": "quit"}"#,
+    ];
+    let mut stdin = child.stdin.take().unwrap();
+    for r in requests {
+        writeln!(stdin, "{r}").unwrap();
+    }
+    drop(stdin);
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "the bridge exits 0 after quit");
+    let replies: Vec<serde_json::Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(replies.len(), requests.len(), "{replies:?}");
+    let expected = [
+        ("protocol", "fly_away"),
+        ("protocol", "properties"),
+        ("protocol", "colour"),
+        ("not_loaded", "'get' before 'load'"),
+    ];
+    for (reply, (kind, named)) in replies.iter().zip(expected) {
+        assert_eq!(reply["ok"], false, "{reply}");
+        assert_eq!(reply["kind"], kind, "{reply}");
+        assert!(reply["error"].as_str().unwrap().contains(named), "{reply}");
+    }
+    assert_eq!(replies[4], serde_json::json!({"ok": true}));
+}

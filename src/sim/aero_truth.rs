@@ -4,9 +4,8 @@
 
 use std::collections::BTreeMap;
 
-use serde_json::json;
-
-use super::jsbsim::{probe_steps, values_map, JsbsimSim};
+use super::jsbsim::{probe_steps, JsbsimSim};
+use super::protocol::{ProbeReply, Request};
 use super::{SimError, FT_TO_M};
 
 /// Slug to kilogram.
@@ -114,8 +113,7 @@ const NONSMOOTH_MIN_JUMP: f64 = 0.01;
 /// function `(f(x+h) − f(x))/h − (f(x) − f(x−h))/h = f''·h` vanishes with h, for a kink it stays the jump in
 /// slope. Reported when the jump exceeds [`NONSMOOTH_MIN_JUMP`] and a quarter of the larger slope.
 fn nonsmooth_terms(
-    probe: &serde_json::Value,
-    base: &BTreeMap<String, f64>,
+    probe: &ProbeReply,
     axes: &BTreeMap<String, String>,
     norm: &dyn Fn(&str) -> f64,
     pitch_rate: f64,
@@ -132,21 +130,18 @@ fn nonsmooth_terms(
         ("surface:aileron", 1.0),
         ("surface:rudder", 1.0),
     ] {
-        let p = &probe["perturbed"][var];
-        let Some(step) = p["h"].as_f64() else {
+        let Some(p) = probe.perturbed.get(var) else {
             continue;
         };
         for (coefficient, axis) in axes {
             let axis = axis.as_str();
             let key = coefficient_property(coefficient);
-            let (Some(plus), Some(minus), Some(at)) = (
-                p["plus"][&key].as_f64(),
-                p["minus"][&key].as_f64(),
-                base.get(&key),
-            ) else {
+            let (Some(plus), Some(minus), Some(at)) =
+                (p.plus.get(&key), p.minus.get(&key), probe.base.get(&key))
+            else {
                 continue;
             };
-            let per_unit = scale / (step * norm(axis));
+            let per_unit = scale / (p.h * norm(axis));
             let (above, below) = ((plus - at) * per_unit, (at - minus) * per_unit);
             let jump = (above - below).abs();
             if jump > NONSMOOTH_MIN_JUMP && jump > 0.25 * above.abs().max(below.abs()) {
@@ -174,7 +169,6 @@ impl JsbsimSim {
             .trim
             .clone()
             .ok_or_else(|| SimError::Usage("aero_truth needs a successful trim first".into()))?;
-        let perturb = probe_steps();
         let condition = [
             "aero/qbar-psf",
             "velocities/vt-fps",
@@ -192,7 +186,8 @@ impl JsbsimSim {
         ]
         .into_iter()
         .chain(ARM_PROPERTIES)
-        .collect::<Vec<_>>();
+        .map(|p| p.to_string())
+        .collect();
         // the CG moments, and every coefficient function on its own (for its one-sided slopes: kinks)
         let extra: Vec<String> = [
             "moments/m-aero-lbsft",
@@ -207,13 +202,13 @@ impl JsbsimSim {
                 .map(|c| coefficient_property(c)),
         )
         .collect();
-        let resp = self.bridge.request(
-            json!({"cmd": "probe", "perturb": perturb, "condition": condition, "extra": extra}),
-            &[],
-        )?;
-        let h = &resp.header;
-        let cond = values_map(&h["condition"]);
-        let c = |k: &str| cond.get(k).copied().unwrap_or(f64::NAN);
+        let req = Request::Probe {
+            perturb: probe_steps(),
+            condition,
+            extra,
+        };
+        let probe: ProbeReply = self.bridge.request(&req, &[])?.reply;
+        let c = |k: &str| probe.condition.get(k).copied().unwrap_or(f64::NAN);
         let qbar_psf = c("aero/qbar-psf");
         let (s_ft2, b_ft, cbar_ft, v_fps) = (
             c("metrics/Sw-sqft"),
@@ -228,21 +223,17 @@ impl JsbsimSim {
             "ROLL" | "YAW" => qs * b_ft,
             _ => qs,
         };
-        let base = values_map(&h["base"]);
+        let base = &probe.base;
         let coef = |axis: &str| base.get(axis).copied().unwrap_or(0.0) / norm(axis);
-        let slope = |var: &str, axis: &str| -> f64 {
-            let p = &h["perturbed"][var];
-            let plus = p["plus"][axis].as_f64().unwrap_or(0.0);
-            let minus = p["minus"][axis].as_f64().unwrap_or(0.0);
-            let step = p["h"].as_f64().unwrap_or(1.0);
-            (plus - minus) / (2.0 * step) / norm(axis)
-        };
+        // d(prop)/d(var) divided by n; 0 when the probe did not read it
         let slope_of = |var: &str, prop: &str, n: f64| -> f64 {
-            let p = &h["perturbed"][var];
-            let plus = p["plus"][prop].as_f64().unwrap_or(0.0);
-            let minus = p["minus"][prop].as_f64().unwrap_or(0.0);
-            (plus - minus) / (2.0 * p["h"].as_f64().unwrap_or(1.0)) / n
+            let difference = probe
+                .perturbed
+                .get(var)
+                .and_then(|p| p.central_difference(prop));
+            difference.unwrap_or(0.0) / n
         };
+        let slope = |var: &str, axis: &str| -> f64 { slope_of(var, axis, norm(axis)) };
         let pitch_rate = 2.0 * v_fps / cbar_ft;
         let lat_rate = 2.0 * v_fps / b_ft;
         // Moments about the CG (what the dynamics see) are JSBSim's own body-axis aero moments, which include the
@@ -315,14 +306,8 @@ impl JsbsimSim {
             };
             d.insert(name.to_string(), about_cg * scale);
         }
-        let nonsmooth = nonsmooth_terms(
-            h,
-            &base,
-            &self.coefficient_axes,
-            &norm,
-            pitch_rate,
-            lat_rate,
-        );
+        let nonsmooth =
+            nonsmooth_terms(&probe, &self.coefficient_axes, &norm, pitch_rate, lat_rate);
         let cl = coef("LIFT");
         let cd = coef("DRAG");
         let cd_alpha = slope("alpha", "DRAG");

@@ -1,10 +1,13 @@
 //! The JSBSim bridge process: a long-lived Python subprocess (`scripts/jsbsim_bridge.py`) spoken to with a
-//! batch protocol — one JSON line per request, whole float64 arrays as raw little-endian bytes.
+//! batch protocol — one JSON line per request, whole float64 arrays as raw little-endian bytes. The messages are
+//! typed in [`super::protocol`]; this module frames them and runs the process.
 
 use super::env;
+use super::protocol::{ReplyStatus, Request};
 use super::scratch::ScratchDir;
 use super::SimError;
-use serde_json::{json, Value};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
@@ -22,12 +25,22 @@ pub struct Bridge {
     scratch: ScratchDir,
 }
 
-/// A response: its JSON header and the float64 payload (empty when there is none).
-pub struct Response {
-    /// The JSON header (`ok` is true).
-    pub header: Value,
-    /// Raw float64 array sent after the header.
+/// A successful response: the command's reply (a struct of [`super::protocol`]) and the float64 payload (empty
+/// when there is none).
+pub struct Response<R> {
+    /// The reply line, `ok` true.
+    pub reply: R,
+    /// Raw float64 array sent after the reply line.
     pub payload: Vec<f64>,
+}
+
+/// A request as framed on the wire: its fields and, when a payload follows, its length.
+#[derive(Serialize)]
+struct Framed<'a> {
+    #[serde(flatten)]
+    request: &'a Request,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    payload_f64: Option<usize>,
 }
 
 impl Bridge {
@@ -95,17 +108,19 @@ impl Bridge {
         self.child.id()
     }
 
-    /// Sends one request (with an optional float64 payload) and waits for its response.
-    pub fn request(&mut self, mut req: Value, payload: &[f64]) -> Result<Response, SimError> {
-        let cmd = req
-            .get("cmd")
-            .and_then(Value::as_str)
-            .unwrap_or("?")
-            .to_string();
-        if !payload.is_empty() {
-            req["payload_f64"] = json!(payload.len());
-        }
-        let mut buf = serde_json::to_vec(&req).map_err(|e| SimError::Protocol(e.to_string()))?;
+    /// Sends one request (with an optional float64 payload) and waits for its response; `R` is the command's
+    /// reply struct. A failed reply is the error it names (see [`ReplyStatus::into_error`]).
+    pub fn request<R: DeserializeOwned>(
+        &mut self,
+        req: &Request,
+        payload: &[f64],
+    ) -> Result<Response<R>, SimError> {
+        let cmd = req.command();
+        let framed = Framed {
+            request: req,
+            payload_f64: (!payload.is_empty()).then_some(payload.len()),
+        };
+        let mut buf = serde_json::to_vec(&framed).map_err(|e| SimError::Protocol(e.to_string()))?;
         buf.push(b'\n');
         buf.reserve(payload.len() * 8);
         for x in payload {
@@ -117,46 +132,33 @@ impl Bridge {
             .and_then(|_| self.stdin.flush())
             .is_err()
         {
-            return Err(self.crashed(&cmd));
+            return Err(self.crashed(cmd));
         }
         let mut line = String::new();
         match self.stdout.read_line(&mut line) {
-            Ok(0) | Err(_) => return Err(self.crashed(&cmd)),
+            Ok(0) | Err(_) => return Err(self.crashed(cmd)),
             Ok(_) => {}
         }
-        let header: Value = serde_json::from_str(&line).map_err(|e| {
+        let bad_response = |e: serde_json::Error| {
             SimError::Protocol(format!("bad response to '{cmd}': {e}: {}", line.trim()))
-        })?;
-        let n = header
-            .get("payload_f64")
-            .and_then(Value::as_u64)
-            .unwrap_or(0) as usize;
+        };
+        let status: ReplyStatus = serde_json::from_str(&line).map_err(bad_response)?;
         let mut payload_out = Vec::new();
-        if n > 0 {
-            let mut bytes = vec![0u8; n * 8];
+        if status.payload_f64 > 0 {
+            let mut bytes = vec![0u8; status.payload_f64 * 8];
             if self.stdout.read_exact(&mut bytes).is_err() {
-                return Err(self.crashed(&cmd));
+                return Err(self.crashed(cmd));
             }
             payload_out = bytes
                 .chunks_exact(8)
                 .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
                 .collect();
         }
-        if header.get("ok").and_then(Value::as_bool) != Some(true) {
-            let kind = header
-                .get("kind")
-                .and_then(Value::as_str)
-                .unwrap_or("error")
-                .to_string();
-            let message = header
-                .get("error")
-                .and_then(Value::as_str)
-                .unwrap_or("unknown error")
-                .to_string();
-            return Err(SimError::Bridge { kind, message });
+        if !status.ok {
+            return Err(status.into_error());
         }
         Ok(Response {
-            header,
+            reply: serde_json::from_str(&line).map_err(bad_response)?,
             payload: payload_out,
         })
     }
@@ -210,7 +212,10 @@ impl Drop for Bridge {
     /// Asks the process to quit, kills it if it does not, and waits for it; the scratch directory field is
     /// dropped (removed) after this, so the process can no longer write into it.
     fn drop(&mut self) {
-        let _ = self.stdin.write_all(b"{\"cmd\":\"quit\"}\n");
+        if let Ok(mut line) = serde_json::to_vec(&Request::Quit) {
+            line.push(b'\n');
+            let _ = self.stdin.write_all(&line);
+        }
         let _ = self.stdin.flush();
         // Give it a short while to clean up its private directory, then make sure it is gone.
         for _ in 0..100 {
@@ -221,5 +226,34 @@ impl Drop for Bridge {
         }
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    /// A request is framed as its own keys plus `payload_f64` when float64 follow; `quit` (sent on drop) is the
+    /// bare command.
+    #[test]
+    fn framing_adds_the_payload_length_only_when_a_payload_follows() {
+        let req = Request::Rate { dt_s: 0.5 };
+        let framed = |payload_f64| {
+            serde_json::to_value(Framed {
+                request: &req,
+                payload_f64,
+            })
+            .unwrap()
+        };
+        assert_eq!(framed(None), json!({"cmd": "rate", "dt_s": 0.5}));
+        assert_eq!(
+            framed(Some(3)),
+            json!({"cmd": "rate", "dt_s": 0.5, "payload_f64": 3})
+        );
+        assert_eq!(
+            serde_json::to_string(&Request::Quit).unwrap(),
+            r#"{"cmd":"quit"}"#
+        );
     }
 }

@@ -1,20 +1,34 @@
 //! [`Simulator`] backed by the official JSBSim through the bridge process.
 
 use super::bridge::Bridge;
+use super::protocol::{
+    DriveInput, EmptyReply, ExportReply, FlyReply, LoadReply, ProbeReply, PropertyValues, Request,
+    ResetState, StateResetAt, SurfaceReads, ValuesReply,
+};
 use super::{
     FlightPlan, Linearization, SimError, Simulator, StateReset, TrimPoint, TrimState, FT_TO_M,
 };
 use crate::aircraft::{AircraftConfig, Drive};
 use crate::data::FlightRecord;
-use serde_json::{json, Value};
 use std::collections::BTreeMap;
 
 /// Perturbation of each aero input in the bridge's probe: rad for angles and surfaces, rad/s for rates.
-pub(super) fn probe_steps() -> Value {
-    json!({
-        "alpha": 1e-3, "beta": 1e-3, "p": 1e-2, "q": 1e-2, "r": 1e-2, "alphadot": 1e-2, "betadot": 1e-2,
-        "surface:elevator": 1e-3, "surface:aileron": 1e-3, "surface:rudder": 1e-3,
-    })
+pub(super) fn probe_steps() -> PropertyValues {
+    [
+        ("alpha", 1e-3),
+        ("beta", 1e-3),
+        ("p", 1e-2),
+        ("q", 1e-2),
+        ("r", 1e-2),
+        ("alphadot", 1e-2),
+        ("betadot", 1e-2),
+        ("surface:elevator", 1e-3),
+        ("surface:aileron", 1e-3),
+        ("surface:rudder", 1e-3),
+    ]
+    .into_iter()
+    .map(|(input, h)| (input.to_string(), h))
+    .collect()
 }
 
 /// Recorded channels: (CSV column, JSBSim property, factor to SI). Surfaces are added per aircraft.
@@ -106,43 +120,38 @@ impl JsbsimSim {
         rate_hz: f64,
         model_dir: Option<&std::path::Path>,
     ) -> Result<Self, SimError> {
-        let surfaces: serde_json::Map<String, Value> = config
+        let surfaces = config
             .surfaces
             .iter()
             .map(|(name, s)| {
-                (
-                    name.clone(),
-                    json!({"command": s.command, "aero_reads": s.aero_reads, "aero_reads_abs": s.aero_reads_abs}),
-                )
+                let reads = SurfaceReads {
+                    command: s.command.clone(),
+                    aero_reads: s.aero_reads.clone(),
+                    aero_reads_abs: s.aero_reads_abs.clone(),
+                };
+                (name.clone(), reads)
             })
             .collect();
-        let mut req = json!({
-            "cmd": "load", "aircraft": config.model, "dt_s": 1.0 / rate_hz, "surfaces": surfaces,
-            "engine_running": config.engine_running, "gear_up": config.gear_up, "engines": config.engines,
-            "scratch_dir": bridge.scratch_dir().display().to_string(),
-        });
-        if let Some(dir) = model_dir {
-            let abs = std::fs::canonicalize(dir).map_err(|e| {
-                SimError::UnknownModel(format!("model directory {}: {e}", dir.display()))
-            })?;
-            req["aircraft_dir"] = json!(abs.display().to_string());
-        }
-        let resp = bridge.request(req, &[]).map_err(|e| match e {
-            SimError::Bridge { kind, message } if kind == "unknown_aircraft" => {
-                SimError::UnknownModel(message)
+        let aircraft_dir = match model_dir {
+            Some(dir) => {
+                let abs = std::fs::canonicalize(dir).map_err(|e| {
+                    SimError::UnknownModel(format!("model directory {}: {e}", dir.display()))
+                })?;
+                Some(abs.display().to_string())
             }
-            other => other,
-        })?;
-        let coefficient_knobs = string_list(&resp.header["knobs"]);
-        let added_terms = string_list(&resp.header["added_terms"]);
-        let coefficient_axes = resp.header["axes"]
-            .as_object()
-            .map(|m| {
-                m.iter()
-                    .filter_map(|(k, v)| Some((k.clone(), v.as_str()?.to_string())))
-                    .collect()
-            })
-            .unwrap_or_default();
+            None => None,
+        };
+        let req = Request::Load {
+            aircraft: config.model.clone(),
+            dt_s: 1.0 / rate_hz,
+            surfaces,
+            engine_running: config.engine_running,
+            gear_up: config.gear_up,
+            engines: config.engines,
+            scratch_dir: bridge.scratch_dir().display().to_string(),
+            aircraft_dir,
+        };
+        let loaded: LoadReply = bridge.request(&req, &[])?.reply;
         Ok(JsbsimSim {
             bridge,
             config: config.clone(),
@@ -150,9 +159,9 @@ impl JsbsimSim {
             trim: None,
             knob_values: BTreeMap::new(),
             reuse_trims: false,
-            coefficient_knobs,
-            added_terms,
-            coefficient_axes,
+            coefficient_knobs: loaded.knobs,
+            added_terms: loaded.added_terms,
+            coefficient_axes: loaded.axes,
             extra_record: Vec::new(),
         })
     }
@@ -169,29 +178,27 @@ impl JsbsimSim {
                 "probe_slopes needs a successful trim first".into(),
             ));
         }
-        let perturb = probe_steps();
-        let resp = self.bridge.request(
-            json!({"cmd": "probe", "perturb": perturb, "condition": [], "extra": properties}),
-            &[],
-        )?;
-        let h = &resp.header;
-        let base = values_map(&h["base"]);
-        let mut slopes = PropertySlopes::new();
-        if let Some(per) = h["perturbed"].as_object() {
-            for (var, p) in per {
-                let step = p["h"].as_f64().unwrap_or(1.0);
+        let req = Request::Probe {
+            perturb: probe_steps(),
+            condition: vec![],
+            extra: properties.to_vec(),
+        };
+        let probe: ProbeReply = self.bridge.request(&req, &[])?.reply;
+        let slopes = probe
+            .perturbed
+            .iter()
+            .map(|(var, p)| {
                 let row = properties
                     .iter()
                     .map(|prop| {
-                        let plus = p["plus"][prop].as_f64().unwrap_or(f64::NAN);
-                        let minus = p["minus"][prop].as_f64().unwrap_or(f64::NAN);
-                        (prop.clone(), (plus - minus) / (2.0 * step))
+                        let slope = p.central_difference(prop).unwrap_or(f64::NAN);
+                        (prop.clone(), slope)
                     })
                     .collect();
-                slopes.insert(var.clone(), row);
-            }
-        }
-        Ok((base, slopes))
+                (var.clone(), row)
+            })
+            .collect();
+        Ok((probe.base, slopes))
     }
 
     /// The bridge's process id (for supervision and tests).
@@ -217,8 +224,10 @@ impl JsbsimSim {
                 "simulation rate must be positive, got {rate_hz} Hz"
             )));
         }
-        self.bridge
-            .request(json!({"cmd": "rate", "dt_s": 1.0 / rate_hz}), &[])?;
+        let req = Request::Rate {
+            dt_s: 1.0 / rate_hz,
+        };
+        self.bridge.request::<EmptyReply>(&req, &[])?;
         self.rate_hz = rate_hz;
         self.trim = None;
         Ok(())
@@ -273,32 +282,12 @@ impl JsbsimSim {
 
     /// Reads arbitrary JSBSim properties (current state).
     pub fn get_properties(&mut self, names: &[&str]) -> Result<BTreeMap<String, f64>, SimError> {
-        let resp = self
-            .bridge
-            .request(json!({"cmd": "get", "properties": names}), &[])?;
-        Ok(values_map(&resp.header["values"]))
+        let req = Request::Get {
+            properties: names.iter().map(|n| n.to_string()).collect(),
+        };
+        let got: ValuesReply = self.bridge.request(&req, &[])?.reply;
+        Ok(got.values)
     }
-}
-
-/// The strings of a JSON array (empty for anything else).
-fn string_list(v: &Value) -> Vec<String> {
-    v.as_array()
-        .map(|a| {
-            a.iter()
-                .filter_map(|v| v.as_str().map(String::from))
-                .collect()
-        })
-        .unwrap_or_default()
-}
-
-pub(super) fn values_map(v: &Value) -> BTreeMap<String, f64> {
-    v.as_object()
-        .map(|o| {
-            o.iter()
-                .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(f64::NAN)))
-                .collect()
-        })
-        .unwrap_or_default()
 }
 
 impl Simulator for JsbsimSim {
@@ -322,18 +311,17 @@ impl Simulator for JsbsimSim {
             report.push(surface_property(name));
             report.push(s.command.clone());
         }
-        let req = json!({
-            "cmd": "trim", "altitude_ft": point.altitude_ft, "speed_kts": point.speed_kts,
-            "heading_deg": point.heading_deg, "gamma_deg": point.gamma_deg,
-            "knobs": self.knob_values, "report": report, "reuse": self.reuse_trims,
-        });
-        let resp = self.bridge.request(req, &[]).map_err(|e| match e {
-            SimError::Bridge { kind, message } if kind == "trim_failed" => {
-                SimError::TrimFailed(message)
-            }
-            other => other,
-        })?;
-        let v = values_map(&resp.header["values"]);
+        let req = Request::Trim {
+            altitude_ft: point.altitude_ft,
+            speed_kts: point.speed_kts,
+            heading_deg: point.heading_deg,
+            gamma_deg: point.gamma_deg,
+            knobs: self.knob_values.clone(),
+            report,
+            reuse: self.reuse_trims,
+        };
+        let trimmed: ValuesReply = self.bridge.request(&req, &[])?.reply;
+        let v = trimmed.values;
         let get = |k: &str| v.get(k).copied().unwrap_or(f64::NAN);
         let mut surfaces_rad = BTreeMap::new();
         let mut commands_norm = BTreeMap::new();
@@ -381,16 +369,14 @@ impl Simulator for JsbsimSim {
                 "linearize needs a successful trim first".into(),
             ));
         }
-        let per_radian: Vec<&str> = match self.config.drive {
-            Drive::Surface => SURFACES.to_vec(),
+        let per_radian_surfaces = match self.config.drive {
+            Drive::Surface => SURFACES.iter().map(|s| s.to_string()).collect(),
             Drive::Command => vec![],
         };
-        let resp = self.bridge.request(
-            json!({"cmd": "linearize", "per_radian_surfaces": per_radian}),
-            &[],
-        )?;
-        let mut lin: Linearization = serde_json::from_value(resp.header)
-            .map_err(|e| SimError::Protocol(format!("linearize: {e}")))?;
+        let req = Request::Linearize {
+            per_radian_surfaces,
+        };
+        let mut lin: Linearization = self.bridge.request(&req, &[])?.reply;
         // JSBSim names its inputs ThtlCmd, DaCmd, DeCmd, DrCmd; make them per radian of surface deflection.
         for (j, name) in lin.inputs.clone().iter().enumerate() {
             let surface = match name.as_str() {
@@ -463,7 +449,7 @@ impl JsbsimSim {
         let n = plan.n_steps;
         let mut drives = Vec::new();
         let mut payload = Vec::with_capacity(n * plan.inputs.len());
-        let mut set_before = serde_json::Map::new();
+        let mut set_before = PropertyValues::new();
         for input in &plan.inputs {
             if input.deflection_rad.len() != n {
                 return Err(SimError::Usage(format!(
@@ -484,7 +470,10 @@ impl JsbsimSim {
                         .map(|d| (base + d).clamp(0.0, 1.0)),
                 );
                 for i in 0..self.config.engines {
-                    drives.push(json!({"property": format!("fcs/throttle-cmd-norm[{i}]"), "offset": offset}));
+                    drives.push(DriveInput {
+                        property: format!("fcs/throttle-cmd-norm[{i}]"),
+                        offset,
+                    });
                 }
                 continue;
             }
@@ -497,12 +486,12 @@ impl JsbsimSim {
                 Drive::Surface => {
                     let base = trim.surfaces_rad[&input.surface];
                     payload.extend(input.deflection_rad.iter().map(|d| base + d));
-                    set_before.insert(format!("flightid/override/{}", input.surface), json!(1.0));
-                    set_before.insert(
-                        format!("flightid/override/{}-rad", input.surface),
-                        json!(base),
-                    );
-                    drives.push(json!({"property": format!("flightid/override/{}-rad", input.surface), "offset": offset}));
+                    set_before.insert(format!("flightid/override/{}", input.surface), 1.0);
+                    set_before.insert(format!("flightid/override/{}-rad", input.surface), base);
+                    drives.push(DriveInput {
+                        property: format!("flightid/override/{}-rad", input.surface),
+                        offset,
+                    });
                 }
                 Drive::Command => {
                     let base = trim.commands_norm[&input.surface];
@@ -512,7 +501,10 @@ impl JsbsimSim {
                             .iter()
                             .map(|d| base + d / sc.rad_per_norm),
                     );
-                    drives.push(json!({"property": sc.command, "offset": offset}));
+                    drives.push(DriveInput {
+                        property: sc.command.clone(),
+                        offset,
+                    });
                 }
             }
         }
@@ -527,15 +519,15 @@ impl JsbsimSim {
                     continue;
                 }
                 if let Some(base) = trim.surfaces_rad.get(s) {
-                    set_before.insert(held, json!(1.0));
-                    set_before.insert(format!("flightid/override/{s}-rad"), json!(base));
+                    set_before.insert(held, 1.0);
+                    set_before.insert(format!("flightid/override/{s}-rad"), *base);
                 }
             }
         }
         let mut record: Vec<String> = SURFACES.iter().map(|s| surface_property(s)).collect();
         record.extend(RECORDED.iter().map(|(_, p, _)| p.to_string()));
         record.extend(self.extra_record.iter().cloned());
-        let mut resets_json = Vec::new();
+        let mut resets_wire = Vec::new();
         for r in resets {
             if r.step > n || (r.relative && r.airspeed_alpha_beta.is_some()) {
                 return Err(SimError::Usage(format!(
@@ -548,50 +540,28 @@ impl JsbsimSim {
                     }
                 )));
             }
-            let mut st = serde_json::Map::new();
-            let mut put = |k: &str, v: f64| {
-                st.insert(k.into(), json!(v));
-            };
-            if let Some(v) = r.phi_rad {
-                put("phi", v);
-            }
-            if let Some(v) = r.theta_rad {
-                put("theta", v);
-            }
-            if let Some([p, q, rr]) = r.rates_rad_s {
-                put("p", p);
-                put("q", q);
-                put("r", rr);
-            }
-            if let Some((v_m_s, alpha, beta)) = r.airspeed_alpha_beta {
-                // Body axes, no wind: u = V cos α cos β, v = V sin β, w = V sin α cos β.
-                let v_fps = v_m_s / FT_TO_M;
-                put("u", v_fps * alpha.cos() * beta.cos());
-                put("v", v_fps * beta.sin());
-                put("w", v_fps * alpha.sin() * beta.cos());
-            }
-            if let Some(h) = r.altitude_m {
-                put("h", h / FT_TO_M);
-            }
-            if let Some([u, v, w]) = r.uvw_m_s {
-                put("u", u / FT_TO_M);
-                put("v", v / FT_TO_M);
-                put("w", w / FT_TO_M);
-            }
-            if r.relative {
-                st.insert("relative".into(), json!(true));
-            }
-            resets_json.push(json!({"step": r.step, "state": st}));
+            resets_wire.push(StateResetAt {
+                step: r.step,
+                state: reset_state_ft(r),
+            });
         }
-        let req = json!({"cmd": "fly", "n_steps": n, "drives": drives, "record": record,
-                         "set_before": set_before, "resets": resets_json, "record_every": every});
-        let resp = self.bridge.request(req, &payload)?;
         let width = record.len();
+        let req = Request::Fly {
+            n_steps: n,
+            drives,
+            record,
+            set_before,
+            resets: resets_wire,
+            record_every: every,
+        };
+        let resp = self.bridge.request::<FlyReply>(&req, &payload)?;
         let rows = resp.payload.len() / width;
-        if rows != n / every + 1 || resp.payload.len() % width != 0 {
+        if rows != n / every + 1 || resp.payload.len() % width != 0 || resp.reply.n_records != rows
+        {
             return Err(SimError::Protocol(format!(
-                "fly returned {} values, expected {}",
+                "fly returned {} values in {} records, expected {}",
                 resp.payload.len(),
+                resp.reply.n_records,
                 (n / every + 1) * width
             )));
         }
@@ -635,6 +605,41 @@ impl JsbsimSim {
     }
 }
 
+/// A state reset in the bridge's units (ft, ft/s): the body velocity from `uvw_m_s` if given, else from the airspeed,
+/// angle of attack and sideslip.
+fn reset_state_ft(r: &StateReset) -> ResetState {
+    let rates = r
+        .rates_rad_s
+        .map(|rates| rates.map(Some))
+        .unwrap_or_default();
+    let uvw_fps = match (r.uvw_m_s, r.airspeed_alpha_beta) {
+        (Some(uvw), _) => Some(uvw.map(|x| x / FT_TO_M)),
+        (None, Some((v_m_s, alpha, beta))) => {
+            // Body axes, no wind: u = V cos α cos β, v = V sin β, w = V sin α cos β.
+            let v_fps = v_m_s / FT_TO_M;
+            Some([
+                v_fps * alpha.cos() * beta.cos(),
+                v_fps * beta.sin(),
+                v_fps * alpha.sin() * beta.cos(),
+            ])
+        }
+        (None, None) => None,
+    };
+    let uvw = uvw_fps.map(|uvw| uvw.map(Some)).unwrap_or_default();
+    ResetState {
+        phi_rad: r.phi_rad,
+        theta_rad: r.theta_rad,
+        p_rad_s: rates[0],
+        q_rad_s: rates[1],
+        r_rad_s: rates[2],
+        u_fps: uvw[0],
+        v_fps: uvw[1],
+        w_fps: uvw[2],
+        altitude_ft: r.altitude_m.map(|h| h / FT_TO_M),
+        relative: r.relative,
+    }
+}
+
 impl JsbsimSim {
     /// Sets the coefficient of an added aerodynamic term (e.g. `Cm_alpha2`: ΔC_m = k α²), from the next trim on.
     pub fn set_added_term(&mut self, term: &str, coefficient: f64) -> Result<(), SimError> {
@@ -659,18 +664,18 @@ impl JsbsimSim {
             .map_err(|e| SimError::Usage(format!("creating {}: {e}", dir.display())))?;
         let abs = std::fs::canonicalize(dir)
             .map_err(|e| SimError::Usage(format!("{}: {e}", dir.display())))?;
-        let pick = |prefix: &str| -> serde_json::Map<String, Value> {
+        let pick = |prefix: &str| -> PropertyValues {
             self.knob_values
                 .iter()
-                .filter_map(|(k, v)| k.strip_prefix(prefix).map(|n| (n.to_string(), json!(v))))
+                .filter_map(|(k, v)| k.strip_prefix(prefix).map(|n| (n.to_string(), *v)))
                 .collect()
         };
-        let req = json!({"cmd": "export", "dir": abs.display().to_string(),
-                         "knobs": pick("flightid/knob/"), "added": pick("flightid/added/")});
-        let resp = self.bridge.request(req, &[])?;
-        Ok(resp.header["path"]
-            .as_str()
-            .map(std::path::PathBuf::from)
-            .unwrap_or_else(|| abs.join(format!("{}.xml", self.config.model))))
+        let req = Request::Export {
+            dir: abs.display().to_string(),
+            knobs: pick("flightid/knob/"),
+            added: pick("flightid/added/"),
+        };
+        let exported: ExportReply = self.bridge.request(&req, &[])?.reply;
+        Ok(exported.path)
     }
 }

@@ -1,4 +1,5 @@
-//! The simulator: a trait, the JSBSim bridge (Python subprocess), and a linear-model stand-in.
+//! The simulator: a trait, the JSBSim bridge (Python subprocess; its messages in [`protocol`]), and a linear-model
+//! stand-in.
 //!
 //! Units: SI and radians inside flightid; feet and knots only at this edge (JSBSim's own units).
 
@@ -8,6 +9,7 @@ pub mod env;
 pub mod jsbsim;
 pub mod linear;
 pub mod linear_model;
+pub mod protocol;
 pub mod scratch;
 
 use crate::data::FlightRecord;
