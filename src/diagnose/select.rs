@@ -396,6 +396,30 @@ fn drop_below_resolution(
     dropped
 }
 
+/// [`drop_below_resolution`] on the selection's state, and the model's cost evaluated again when an effect
+/// went (one replay). `entries` pairs the catalogue with each entry's resolution.
+fn drop_and_recost(
+    worker: &mut Worker,
+    w: &Weighted,
+    entries: (&[&dyn Extension], &[f64]),
+    progress: &Progress,
+    state: Replacement<'_, '_>,
+) -> Result<(), DiagnoseError> {
+    let (catalogue, resolution) = entries;
+    if drop_below_resolution(
+        state.selected,
+        state.named,
+        state.candidates,
+        catalogue,
+        resolution,
+    ) {
+        let r = residuals(worker, w, state.selected).map_err(sim_err("replay"))?;
+        progress.simulated(1);
+        *state.cost = r.iter().map(|v| v * v).sum();
+    }
+    Ok(())
+}
+
 type FullFit<'e> = Result<(FitOutcome, Vec<Active<'e>>), crate::sim::SimError>;
 
 /// Forward selection over the prepared catalogue.
@@ -536,17 +560,20 @@ pub fn select<'e>(
             })
             .collect();
         base_cost = best_cost;
-        if drop_below_resolution(
-            &mut selected,
-            &mut named,
-            &mut candidates,
-            &catalogue,
-            &resolution,
-        ) {
-            let r = residuals(&mut workers[0], &w, &selected).map_err(sim_err("replay"))?;
-            progress.simulated(1);
-            base_cost = r.iter().map(|v| v * v).sum();
-        }
+        let state = Replacement {
+            selected: &mut selected,
+            named: &mut named,
+            candidates: &mut candidates,
+            cost: &mut base_cost,
+            round,
+        };
+        drop_and_recost(
+            &mut workers[0],
+            &w,
+            (&catalogue, &resolution),
+            progress,
+            state,
+        )?;
         // The validation record only reports the gain of the accepted effects.
         if let (Some(vw), Some(before)) = (&vw, valid_cost) {
             let r =
@@ -575,17 +602,6 @@ pub fn select<'e>(
             round: rounds,
         },
     )?;
-    if drop_below_resolution(
-        &mut selected,
-        &mut named,
-        &mut candidates,
-        &catalogue,
-        &resolution,
-    ) {
-        let r = residuals(&mut workers[0], &w, &selected).map_err(sim_err("replay"))?;
-        progress.simulated(1);
-        base_cost = r.iter().map(|v| v * v).sum();
-    }
     if opts.backward_elimination {
         eliminate_backward(
             workers,

@@ -3,7 +3,7 @@
 //! members of its ambiguity group, with all the others modelled); Miller, *Subset Selection in Regression*,
 //! 2nd ed., §3.2–3.3.
 
-use super::{rejection, score_test, with_candidate, FullFit, RoundContext};
+use super::{drop_and_recost, rejection, score_test, with_candidate, FullFit, RoundContext};
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
 use crate::diagnose::search::{
@@ -262,5 +262,13 @@ pub(super) fn replace_ambiguous<'e>(
             }
         }
     }
-    Ok(())
+    // The replacement frees every named effect: one may now sit within its resolution of no effect.
+    let state = Replacement {
+        selected,
+        named,
+        candidates,
+        cost,
+        round,
+    };
+    drop_and_recost(&mut workers[0], w, (catalogue, resolution), progress, state)
 }
