@@ -610,16 +610,13 @@ pub fn output_error_report(
             options: &lon_options,
             ..setup
         };
-        notes.extend(process_noise_note("longitudinal", &f, |s, n| {
-            fit_longitudinal(
-                &recs,
-                FitSetup {
-                    options: s,
-                    ..lon_setup
-                },
-                n,
-            )
-        }));
+        notes.extend(process_noise_note(
+            "longitudinal",
+            &f,
+            &recs,
+            lon_setup,
+            fit_longitudinal,
+        ));
         let (free, cov) = free_block(&f.estimate);
         let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| {
             longitudinal_modes_at(&f.constants, &cond, t, false)
@@ -637,20 +634,17 @@ pub fn output_error_report(
             &[(beta_skew_check, &["tau_beta_s"])],
             &mut notes,
         );
-        let setup = FitSetup {
+        let lat_setup = FitSetup {
             options: &lat_options,
             ..setup
         };
-        notes.extend(process_noise_note("lateral", &f, |s, n| {
-            fit_lateral(
-                &recs,
-                FitSetup {
-                    options: s,
-                    ..setup
-                },
-                n,
-            )
-        }));
+        notes.extend(process_noise_note(
+            "lateral",
+            &f,
+            &recs,
+            lat_setup,
+            fit_lateral,
+        ));
         let (free, cov) = free_block(&f.estimate);
         let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| {
             lateral_modes_at(&f.constants, &cond, t)

@@ -65,6 +65,13 @@ pub(super) const SPEED: [&str; 3] = ["CL_V", "CD_V", "Cm_V"];
 pub(super) const ALPHADOT: [&str; 3] = ["CL_alphadot", "Cm_alphadot", "CL_q"];
 
 /// A structure check: the note and, when the records support it, the wider fit to adopt.
+/// The fit of one axis ([`fit_longitudinal`], [`fit_lateral`]).
+pub(super) type AxisFitter = fn(
+    &[&(String, data::FlightRecord)],
+    FitSetup,
+    &mut Vec<String>,
+) -> Result<AxisFit, MeasuredError>;
+
 type Check =
     fn(&[&(String, data::FlightRecord)], FitSetup, &AxisFit) -> Option<(String, Option<AxisFit>)>;
 
@@ -316,10 +323,16 @@ const CHI2_4_1PCT: f64 = 13.28;
 pub(super) fn process_noise_note(
     axis: &str,
     oe: &AxisFit,
-    refit: impl Fn(&OutputErrorOptions, &mut Vec<String>) -> Result<AxisFit, MeasuredError>,
+    records: &[&(String, data::FlightRecord)],
+    setup: FitSetup,
+    refit: AxisFitter,
 ) -> Option<String> {
     let options = refit_options(oe)?;
-    let fem = refit(&options, &mut Vec::new()).ok()?;
+    let setup = FitSetup {
+        options: &options,
+        ..setup
+    };
+    let fem = refit(records, setup, &mut Vec::new()).ok()?;
     let drop = oe.estimate.cost - fem.estimate.cost;
     if 2.0 * drop <= CHI2_4_1PCT {
         return None;
