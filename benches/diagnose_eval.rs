@@ -209,6 +209,10 @@ fn main() {
             }
         };
         wall += d.wall_s;
+        // The whole diagnosis beside the record, for a look at the candidates afterwards.
+        if let Ok(text) = serde_json::to_string_pretty(&d) {
+            let _ = std::fs::write(p("diagnosis.json"), text);
+        }
         let (ok, ok_v) = score(&d, &effects);
         n += 1;
         exact += usize::from(ok);

@@ -14,6 +14,7 @@ pub mod model;
 pub mod prepare;
 pub mod process_noise;
 pub mod progress;
+pub mod refit;
 pub mod replay;
 pub mod report;
 pub mod residual;
@@ -82,6 +83,10 @@ pub struct DiagnoseOptions {
     /// Estimate the process noise (turbulence) of the training record and, when the likelihood says it is
     /// there, search on the filter error method's innovations (`process_noise`; docs/diagnose.md, Turbulence).
     pub process_noise: bool,
+    /// On a record without the filter in the search: once causes are named, estimate the process noise from the
+    /// extended model's residual and, when it is there, refit the named values by the filter error method
+    /// (`refit::refit_in_turbulence`).
+    pub filter_values: bool,
     /// After forward selection, drop every named effect that no longer passes the tests with the others in the
     /// model (`select::eliminate_backward`).
     pub backward_elimination: bool,
@@ -100,6 +105,7 @@ impl Default for DiagnoseOptions {
             refinement_share: 1.0 / 3.0,
             progress: true,
             process_noise: false,
+            filter_values: true,
             backward_elimination: false,
         }
     }
@@ -257,13 +263,22 @@ pub fn diagnose(
     let columns =
         search::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
     let process_noise = if opts.process_noise {
-        turbulence(&mut workers[0], &mut p, columns)?
+        turbulence(&mut workers[0], &mut p, columns.clone())?
     } else {
         p.nuisance = search::orthonormal_basis(&columns);
         None
     };
     let base = baseline::baseline(&mut workers[0], &p)?;
-    let sel = select::select(workers, &p, &base, opts, &progress)?;
+    let mut sel = select::select(workers, &p, &base, opts, &progress)?;
+    let (process_noise, refit_note) = match process_noise {
+        None if opts.filter_values => {
+            progress.stage("values in turbulence", 0);
+            let found = refit::refit_in_turbulence(&mut workers[0], &p, &columns, &mut sel)?;
+            let note = found.as_ref().filter(|n| n.used).map(refit::warning);
+            (found, note)
+        }
+        found => (found, None),
+    };
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
     progress.finish();
@@ -280,7 +295,7 @@ pub fn diagnose(
             .cloned()
             .chain(sel.unidentifiable)
             .collect(),
-        warnings: p.warnings,
+        warnings: p.warnings.into_iter().chain(refit_note).collect(),
         process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.sigma).collect(),
         n_residuals: p.case.len() * p.case.outputs.len(),

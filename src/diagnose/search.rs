@@ -498,10 +498,9 @@ pub fn fit(
         .collect();
     let s2 = c / (r.len() as f64 - p as f64).max(1.0);
     let m = w.case.len();
-    let lags = hac_lags(w.case.dt_s(), m);
     let (crb_std_errors, std_errors) = match linalg::inverse(&a, p) {
         Some(inv) => {
-            let cov = covariance::sandwich(&inv, &coloured_products(&cols, &r, m, lags), p);
+            let cov = covariance::sandwich(&inv, &coloured_products(&cols, &r, m), p);
             let crb: Vec<f64> = (0..p)
                 .map(|i| (s2 * inv[i * p + i]).max(0.0).sqrt())
                 .collect();
@@ -512,7 +511,7 @@ pub fn fit(
         }
         None => (vec![f64::INFINITY; p], vec![f64::INFINITY; p]),
     };
-    let n_eff = effective_n(&r, m, lags);
+    let n_eff = effective_n(&r, m);
     // Restore the cache to the fitted values (the last simulation was a perturbed one).
     Ok(FitOutcome {
         cost_before,
@@ -596,29 +595,26 @@ pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
-/// Lag window for coloured residuals: one second of samples, at most a quarter of the record.
-fn hac_lags(dt_s: f64, samples_per_channel: usize) -> usize {
-    ((1.0 / dt_s).round() as usize).clamp(1, (samples_per_channel / 4).max(1))
-}
-
 /// `Σ_c Σ_i Σ_j s_c[i] R_c(|i−j|) s_c[j]ᵀ` (row-major p × p) over the output channels c, with R_c the
-/// Bartlett-tapered autocorrelation of channel c's residual up to `lags` (channel-major vectors of `m`
-/// samples each; the channels are taken as mutually uncorrelated).
-fn coloured_products(cols: &[Vec<f64>], r: &[f64], m: usize, lags: usize) -> Vec<f64> {
+/// Bartlett-tapered autocorrelation of channel c's residual over the lags where it is correlated
+/// ([`covariance::lag_weights`], the estimation core's window; channel-major vectors of `m` samples each; the
+/// channels are taken as mutually uncorrelated). A window fitted to the residual matters in gusts: their
+/// response stays correlated over the phugoid and Dutch-roll periods, and a fixed one-second window made the
+/// standard errors of the effects that absorb it several times too small.
+fn coloured_products(cols: &[Vec<f64>], r: &[f64], m: usize) -> Vec<f64> {
     let p = cols.len();
     let mut total = vec![0.0; p * p];
     for (c, rc) in r.chunks(m.max(1)).enumerate() {
         let slices: Vec<&[f64]> = cols.iter().map(|s| &s[c * m..c * m + rc.len()]).collect();
-        let taper = covariance::bartlett_taper(&covariance::autocorrelation(rc, lags), lags);
-        let w = covariance::lag_weighted_products(&slices, &taper);
+        let w = covariance::lag_weighted_products(&slices, &covariance::lag_weights(rc));
         total.iter_mut().zip(w).for_each(|(t, v)| *t += v);
     }
     total
 }
 
 /// Effective number of independent residuals: the sum over channels of
-/// [`covariance::effective_samples`] of the mean-removed residual with a Bartlett window of `lags`.
-pub fn effective_n(r: &[f64], m: usize, lags: usize) -> f64 {
+/// [`covariance::effective_samples`] of the mean-removed residual with the window of [`coloured_products`].
+pub fn effective_n(r: &[f64], m: usize) -> f64 {
     if m == 0 {
         return 0.0;
     }
@@ -626,15 +622,7 @@ pub fn effective_n(r: &[f64], m: usize, lags: usize) -> f64 {
         .map(|e| {
             let mean = e.iter().sum::<f64>() / e.len() as f64;
             let centred: Vec<f64> = e.iter().map(|v| v - mean).collect();
-            let lags = lags.min(e.len().saturating_sub(1));
-            let taper =
-                covariance::bartlett_taper(&covariance::autocorrelation(&centred, lags), lags);
-            covariance::effective_samples(&taper, e.len())
+            covariance::effective_samples(&covariance::lag_weights(&centred), e.len())
         })
         .sum()
-}
-
-/// Lag window used for a case (exposed for the selection criterion).
-pub fn lag_window(case: &ReplayCase) -> usize {
-    hac_lags(case.dt_s(), case.len())
 }

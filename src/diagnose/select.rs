@@ -33,8 +33,8 @@ use super::extension::Extension;
 use super::prepare::Prepared;
 use super::progress::Progress;
 use super::search::{
-    self, effective_n, fit, lag_window, null_sensitivity, par_map, residuals, Active, FitOutcome,
-    Weighted, Worker,
+    self, effective_n, fit, null_sensitivity, par_map, residuals, Active, FitOutcome, Weighted,
+    Worker,
 };
 use super::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause, Skipped};
 
@@ -354,41 +354,35 @@ fn identifiable<'e>(
     Ok(out)
 }
 
-/// Drops every named effect that a later joint fit (the effects named before are free in each round's fits, and
-/// in the sequential replacement) has moved to within its resolution of "no effect": the test a candidate must
-/// pass to be named holds for every named effect in the final model, not only at the round it was named in.
-/// In gusts an elevator effectiveness of ×1.48 named first fell to ×1.02 once the hidden C_mα ×0.43 was
-/// named beside it. The accepted candidate's entry says why it went. Returns whether any was dropped (the
-/// model's cost must then be evaluated again).
-fn drop_below_resolution(
+/// Drops every named effect that a later joint fit (the effects named before are free in each round's fits, in
+/// the sequential replacement and in the filter error refit) has moved to within its resolution of "no effect":
+/// the test a candidate must pass to be named holds for every named effect in the final model, not only at the
+/// round it was named in. In gusts an elevator effectiveness of ×1.48 named first fell to ×1.02 once the hidden
+/// C_mα ×0.43 was named beside it. The resolution is the one the effect's accepted candidate entry was tested
+/// against, and that entry says why it went. Returns whether any was dropped (the model's cost must then be
+/// evaluated again).
+pub(super) fn drop_below_resolution(
     selected: &mut Vec<Active>,
     named: &mut Vec<NamedCause>,
     candidates: &mut [Candidate],
-    catalogue: &[&dyn Extension],
-    resolution: &[f64],
 ) -> bool {
     let mut dropped = false;
     let mut k = 0;
     while k < named.len() {
-        let (effect, target) = (named[k].effect.clone(), named[k].target.clone());
-        let res = catalogue
-            .iter()
-            .position(|e| e.effect() == effect && e.target() == target)
-            .map_or(0.0, |i| resolution[i]);
+        let (effect, target) = (&named[k].effect, &named[k].target);
         let null = selected[k].ext.params()[0].null;
-        if (named[k].value - null).abs() >= res {
+        let accepted = candidates.iter_mut().rev().find(|c| {
+            &c.effect == effect && &c.target == target && c.full_fit && c.rejected_because.is_none()
+        });
+        let Some(c) = accepted.filter(|c| (named[k].value - null).abs() < c.resolution) else {
             k += 1;
             continue;
-        }
-        if let Some(c) = candidates.iter_mut().rev().find(|c| {
-            c.effect == effect && c.target == target && c.full_fit && c.rejected_because.is_none()
-        }) {
-            c.rejected_because = Some(format!(
-                "dropped after a later joint fit with the other named effects: its value {:.4} is within \
-                 the resolution {res:.3} of no effect",
-                named[k].value
-            ));
-        }
+        };
+        c.rejected_because = Some(format!(
+            "dropped after a later joint fit with the other named effects: its value {:.4} is within the \
+             resolution {:.3} of no effect",
+            named[k].value, c.resolution
+        ));
         named.remove(k);
         selected.remove(k);
         dropped = true;
@@ -397,22 +391,14 @@ fn drop_below_resolution(
 }
 
 /// [`drop_below_resolution`] on the selection's state, and the model's cost evaluated again when an effect
-/// went (one replay). `entries` pairs the catalogue with each entry's resolution.
+/// went (one replay).
 fn drop_and_recost(
     worker: &mut Worker,
     w: &Weighted,
-    entries: (&[&dyn Extension], &[f64]),
     progress: &Progress,
     state: Replacement<'_, '_>,
 ) -> Result<(), DiagnoseError> {
-    let (catalogue, resolution) = entries;
-    if drop_below_resolution(
-        state.selected,
-        state.named,
-        state.candidates,
-        catalogue,
-        resolution,
-    ) {
+    if drop_below_resolution(state.selected, state.named, state.candidates) {
         let r = residuals(worker, w, state.selected).map_err(sim_err("replay"))?;
         progress.simulated(1);
         *state.cost = r.iter().map(|v| v * v).sum();
@@ -449,7 +435,6 @@ pub fn select<'e>(
         masks,
         skipped: unidentifiable,
     } = identifiable(workers, &w, p, opts, progress)?;
-    let n_eff_lags = lag_window(&p.case);
     let mut selected: Vec<Active> = Vec::new();
     let mut named: Vec<NamedCause> = Vec::new();
     let mut candidates = Vec::new();
@@ -468,7 +453,7 @@ pub fn select<'e>(
         // Screening: the score test of every remaining entry at the current model's residual.
         let r = residuals(&mut workers[0], &w, &selected).map_err(sim_err("replay"))?;
         progress.simulated(1);
-        let n_eff_now = effective_n(&r, p.case.len(), n_eff_lags);
+        let n_eff_now = effective_n(&r, p.case.len());
         let cost_now: f64 = r.iter().map(|v| v * v).sum();
         let quick: Vec<FitOutcome> = pool
             .iter()
@@ -567,13 +552,7 @@ pub fn select<'e>(
             cost: &mut base_cost,
             round,
         };
-        drop_and_recost(
-            &mut workers[0],
-            &w,
-            (&catalogue, &resolution),
-            progress,
-            state,
-        )?;
+        drop_and_recost(&mut workers[0], &w, progress, state)?;
         // The validation record only reports the gain of the accepted effects.
         if let (Some(vw), Some(before)) = (&vw, valid_cost) {
             let r =
@@ -670,7 +649,7 @@ mod tests {
     use crate::diagnose::{Candidate, NamedCause};
 
     /// The accepted candidate entry of a named effect.
-    fn accepted(effect: &str, target: &str, value: f64) -> Candidate {
+    fn accepted(effect: &str, target: &str, value: f64, resolution: f64) -> Candidate {
         Candidate {
             effect: effect.into(),
             target: target.into(),
@@ -682,7 +661,7 @@ mod tests {
             criterion_delta: -100.0,
             z: 30.0,
             n_eff: 1000.0,
-            resolution: 0.1,
+            resolution,
             validation_gain: None,
             rejected_because: None,
             round: 0,
@@ -695,9 +674,7 @@ mod tests {
         let no_coefficients: Vec<String> = Vec::new();
         let gain = make("control_effectiveness", "elevator", &no_coefficients).unwrap();
         let delay = make("input_delay", "rudder", &no_coefficients).unwrap();
-        let catalogue = [gain.as_ref(), delay.as_ref()];
-        let resolution = [0.1, 0.02];
-        // ×1.02 is within 0.1 of 1 (no effect); a 0.08 s delay is four resolutions from 0.
+        // resolutions 0.1 and 0.02 (the accepted entries'): ×1.02 is within 0.1 of 1 (no effect); a 0.08 s delay is four resolutions from 0.
         let mut selected = vec![
             Active {
                 ext: gain.as_ref(),
@@ -722,16 +699,10 @@ mod tests {
             named_as("input_delay", "rudder", 0.08),
         ];
         let mut candidates = vec![
-            accepted("control_effectiveness", "elevator", 1.48),
-            accepted("input_delay", "rudder", 0.08),
+            accepted("control_effectiveness", "elevator", 1.48, 0.1),
+            accepted("input_delay", "rudder", 0.08, 0.02),
         ];
-        let dropped = drop_below_resolution(
-            &mut selected,
-            &mut named,
-            &mut candidates,
-            &catalogue,
-            &resolution,
-        );
+        let dropped = drop_below_resolution(&mut selected, &mut named, &mut candidates);
         assert!(dropped);
         assert_eq!(named.len(), 1);
         assert_eq!(named[0].target, "rudder");
@@ -747,9 +718,7 @@ mod tests {
         assert!(!drop_below_resolution(
             &mut selected,
             &mut named,
-            &mut candidates,
-            &catalogue,
-            &resolution
+            &mut candidates
         ));
     }
 

@@ -7,7 +7,7 @@ use super::{drop_and_recost, rejection, score_test, with_candidate, FullFit, Rou
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
 use crate::diagnose::search::{
-    effective_n, fit, lag_window, par_map, residuals, Active, FitOutcome, Weighted, Worker,
+    effective_n, fit, par_map, residuals, Active, FitOutcome, Weighted, Worker,
 };
 use crate::diagnose::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 
@@ -182,7 +182,7 @@ pub(super) fn replace_ambiguous<'e>(
         let r = residuals(&mut workers[0], w, &without).map_err(sim_err("replay"))?;
         progress.simulated(1);
         let cost_without: f64 = r.iter().map(|v| v * v).sum();
-        let n_eff = effective_n(&r, w.case.len(), lag_window(w.case));
+        let n_eff = effective_n(&r, w.case.len());
         // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate.
         let starts: Vec<Vec<Active<'e>>> = alternatives
             .iter()
@@ -270,5 +270,5 @@ pub(super) fn replace_ambiguous<'e>(
         cost,
         round,
     };
-    drop_and_recost(&mut workers[0], w, (catalogue, resolution), progress, state)
+    drop_and_recost(&mut workers[0], w, progress, state)
 }
