@@ -1,0 +1,293 @@
+//! Accuracy evaluation of `flightid derivatives` on records it never saw the making of:
+//! `scripts/gen_foreign_records.py` flies JSBSim aircraft (p51d, c310) through JSBSim's own Python API and logs
+//! them as a data logger would (deg, ft, kts, g; noise, biases, sensors away from the CG, a vane skew, light
+//! turbulence), with JSBSim's own derivatives about the CG as the truth. For each aircraft × seed × method the
+//! release binary estimates the derivatives from the four records (both axes) and every target derivative is
+//! scored: relative error against the truth and whether the 3σ interval (σ the reported Cramér–Rao bound)
+//! covers it.
+//!
+//! The targets: output error and filter error within 5 % on C_mα, C_mq, C_mδe, C_Lα, C_lp, C_lδa, C_nβ, C_nr,
+//! C_nδr with the 3σ interval covering the truth in at least 90 % of the estimates; equation error within 10 %.
+//! The bench prints a MET / NOT MET line per method and exits 1 when a target is not met.
+//!
+//! Run: `cargo bench --bench derivatives_eval -- [--seeds 3] [--seed0 1] [--aircraft p51d,c310]
+//! [--methods ee,oe,fem] [--json OUT.json] [--out DIR]`
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use serde_json::{json, Value};
+
+/// The nine target derivatives, flightid's names.
+const TARGETS: [&str; 9] = [
+    "Cm_alpha", "Cm_q", "Cm_de", "CL_alpha", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr",
+];
+
+/// Required fraction of 3σ intervals covering the truth (output error, filter error).
+const COVERAGE_TARGET: f64 = 0.90;
+
+struct Args {
+    seeds: u64,
+    seed0: u64,
+    aircraft: Vec<String>,
+    methods: Vec<String>,
+    json: Option<PathBuf>,
+    out: PathBuf,
+}
+
+fn args() -> Args {
+    let list = |s: &str| s.split(',').map(str::to_string).collect::<Vec<_>>();
+    let mut a = Args {
+        seeds: 3,
+        seed0: 1,
+        aircraft: list("p51d,c310"),
+        methods: list("ee,oe,fem"),
+        json: None,
+        out: std::env::temp_dir().join("flightid-derivatives-eval"),
+    };
+    let v: Vec<String> = std::env::args().skip(1).collect();
+    let mut i = 0;
+    while i < v.len() {
+        let next = v.get(i + 1).cloned().unwrap_or_default();
+        match v[i].as_str() {
+            "--seeds" => a.seeds = next.parse().unwrap_or(a.seeds),
+            "--seed0" => a.seed0 = next.parse().unwrap_or(a.seed0),
+            "--aircraft" => a.aircraft = list(&next),
+            "--methods" => a.methods = list(&next),
+            "--json" => a.json = Some(PathBuf::from(next)),
+            "--out" => a.out = PathBuf::from(next),
+            // `cargo bench` passes `--bench`; anything else unknown is skipped alone
+            _ => {
+                i += 1;
+                continue;
+            }
+        }
+        i += 2;
+    }
+    a
+}
+
+/// Relative error within which a method's estimates must lie: 10 % for equation error, 5 % otherwise.
+fn error_target(method: &str) -> f64 {
+    if method == "ee" {
+        0.10
+    } else {
+        0.05
+    }
+}
+
+/// Whether the coverage target applies (output error and filter error report Cramér–Rao bounds to be judged).
+fn coverage_applies(method: &str) -> bool {
+    method != "ee"
+}
+
+/// Writes the records of `aircraft` for `seed` into `dir` with the generator; false (and a message) on failure.
+fn generate(aircraft: &str, seed: u64, dir: &Path) -> bool {
+    let python = flightid::sim::env::python().expect("the project's Python environment");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_foreign_records.py");
+    let out = Command::new(python)
+        .arg(script)
+        .args(["--aircraft", aircraft, "--seed", &seed.to_string(), "--out"])
+        .arg(dir)
+        .output()
+        .expect("running the generator");
+    if !out.status.success() {
+        println!(
+            "{aircraft} seed {seed}: the generator failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    out.status.success()
+}
+
+/// `flightid derivatives --method METHOD --json` on the four records of `dir` (both axes), its JSON or the
+/// reason it failed.
+fn derivatives(dir: &Path, aircraft: &str, method: &str) -> Result<Value, String> {
+    let json_path = dir.join(format!("{method}.json"));
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_flightid"));
+    cmd.arg("derivatives");
+    for kind in ["lon1", "lon2", "lat1", "lat2"] {
+        cmd.arg("--data")
+            .arg(dir.join(format!("{aircraft}_{kind}.csv")));
+    }
+    cmd.arg("--airframe")
+        .arg(dir.join(format!("{aircraft}.airframe.toml")))
+        .arg("--columns")
+        .arg(dir.join(format!("{aircraft}.columns.toml")))
+        .args(["--method", method, "--json"])
+        .arg(&json_path);
+    let out = cmd
+        .output()
+        .map_err(|e| format!("flightid did not start: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "exit {}: {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    let text = std::fs::read_to_string(&json_path).map_err(|e| e.to_string())?;
+    serde_json::from_str(&text).map_err(|e| e.to_string())
+}
+
+/// One scored estimate.
+struct Score {
+    name: &'static str,
+    estimate: f64,
+    truth: f64,
+    /// Cramér–Rao bound as reported (NaN when the method reports none).
+    sigma: f64,
+}
+
+impl Score {
+    /// (estimate − truth)/|truth|.
+    fn error(&self) -> f64 {
+        (self.estimate - self.truth) / self.truth.abs()
+    }
+    /// Whether |estimate − truth| ≤ 3σ (false without a σ).
+    fn covered(&self) -> bool {
+        self.sigma.is_finite() && (self.estimate - self.truth).abs() <= 3.0 * self.sigma
+    }
+}
+
+/// Per-method tallies over every aircraft and seed.
+#[derive(Default)]
+struct Tally {
+    estimates: usize,
+    within: usize,
+    covered: usize,
+    failed_runs: usize,
+    misses: Vec<String>,
+}
+
+fn main() {
+    let a = args();
+    let t0 = Instant::now();
+    let mut tallies: Vec<Tally> = a.methods.iter().map(|_| Tally::default()).collect();
+    let mut cases = Vec::new();
+    for aircraft in &a.aircraft {
+        for seed in a.seed0..a.seed0 + a.seeds {
+            let dir = a.out.join(format!("{aircraft}-seed{seed}"));
+            std::fs::create_dir_all(&dir).expect("scratch directory");
+            if !generate(aircraft, seed, &dir) {
+                for t in &mut tallies {
+                    t.failed_runs += 1;
+                }
+                continue;
+            }
+            let truth_path = dir.join(format!("{aircraft}.truth.json"));
+            let truth: Value =
+                serde_json::from_str(&std::fs::read_to_string(&truth_path).expect("truth"))
+                    .expect("truth JSON");
+            for (method, tally) in a.methods.iter().zip(&mut tallies) {
+                let started = Instant::now();
+                let fit = match derivatives(&dir, aircraft, method) {
+                    Ok(v) => v,
+                    Err(e) => {
+                        println!("{aircraft} seed {seed} {method}: FAILED {e}");
+                        tally.failed_runs += 1;
+                        continue;
+                    }
+                };
+                let converged = fit["converged"].as_bool().unwrap_or(true);
+                println!(
+                    "\n{aircraft} seed {seed} {method} ({:.1} s{})",
+                    started.elapsed().as_secs_f64(),
+                    if converged { "" } else { ", NOT CONVERGED" }
+                );
+                println!(
+                    "  {:<10} {:>10} {:>10} {:>8} {:>10} {:>7} covered",
+                    "", "estimate", "truth", "error", "sigma", "|e|/σ"
+                );
+                let mut rows = Vec::new();
+                for name in TARGETS {
+                    let d = &fit["derivatives"][name];
+                    let s = Score {
+                        name,
+                        estimate: d["value"].as_f64().unwrap_or(f64::NAN),
+                        truth: truth["derivatives"][name].as_f64().unwrap_or(f64::NAN),
+                        sigma: d["std_error"].as_f64().unwrap_or(f64::NAN),
+                    };
+                    let within = s.error().abs() <= error_target(method);
+                    tally.estimates += 1;
+                    tally.within += usize::from(within);
+                    tally.covered += usize::from(s.covered());
+                    if !within || (coverage_applies(method) && !s.covered()) {
+                        tally.misses.push(format!(
+                            "{aircraft}/{seed} {} {:+.1} %{}",
+                            s.name,
+                            100.0 * s.error(),
+                            if s.covered() { "" } else { " (not in 3σ)" }
+                        ));
+                    }
+                    println!(
+                        "  {:<10} {:>10.4} {:>10.4} {:>+7.1} % {:>10.4} {:>7.1} {}{}",
+                        s.name,
+                        s.estimate,
+                        s.truth,
+                        100.0 * s.error(),
+                        s.sigma,
+                        (s.estimate - s.truth).abs() / s.sigma,
+                        if s.covered() { "yes" } else { "NO " },
+                        if within { "" } else { "  MISS" }
+                    );
+                    rows.push(json!({"name": s.name, "estimate": s.estimate, "truth": s.truth,
+                        "error": s.error(), "sigma": s.sigma, "covered": s.covered(), "within": within}));
+                }
+                cases.push(json!({"aircraft": aircraft, "seed": seed, "method": method,
+                    "converged": converged, "derivatives": rows}));
+            }
+        }
+    }
+    println!(
+        "\nsummary ({} aircraft × {} seeds from seed {}, {:.0} s)",
+        a.aircraft.len(),
+        a.seeds,
+        a.seed0,
+        t0.elapsed().as_secs_f64()
+    );
+    let pct = |k: usize, n: usize| 100.0 * k as f64 / n.max(1) as f64;
+    let mut all_met = true;
+    let mut summary = Vec::new();
+    for (method, t) in a.methods.iter().zip(&tallies) {
+        let within_ok = t.within == t.estimates;
+        let cover_ok = !coverage_applies(method)
+            || t.covered as f64 >= COVERAGE_TARGET * t.estimates as f64;
+        let met = t.estimates > 0 && t.failed_runs == 0 && within_ok && cover_ok;
+        all_met &= met;
+        println!(
+            "{method:>3}: within {:.0} %: {}/{} ({:.0} %); 3σ covers the truth: {}/{} ({:.0} %{}); failed runs {} \
+             -> {}",
+            100.0 * error_target(method),
+            t.within,
+            t.estimates,
+            pct(t.within, t.estimates),
+            t.covered,
+            t.estimates,
+            pct(t.covered, t.estimates),
+            if coverage_applies(method) {
+                ", target 90 %"
+            } else {
+                ", no target"
+            },
+            t.failed_runs,
+            if met { "MET" } else { "NOT MET" }
+        );
+        for m in &t.misses {
+            println!("       miss: {m}");
+        }
+        summary.push(json!({"method": method, "error_target": error_target(method),
+            "estimates": t.estimates, "within": t.within, "covered": t.covered,
+            "coverage_target": if coverage_applies(method) { Some(COVERAGE_TARGET) } else { None },
+            "failed_runs": t.failed_runs, "met": met, "misses": t.misses}));
+    }
+    if let Some(path) = &a.json {
+        let doc = json!({"seeds": a.seeds, "seed0": a.seed0, "aircraft": a.aircraft,
+            "targets": TARGETS, "cases": cases, "summary": summary});
+        std::fs::write(path, serde_json::to_string_pretty(&doc).expect("JSON")).expect("--json");
+    }
+    if !all_met {
+        std::process::exit(1);
+    }
+}
