@@ -166,6 +166,8 @@ struct Tally {
     covered: [usize; 2],
     failed_runs: usize,
     misses: Vec<String>,
+    /// (aircraft, derivative, relative error against the local truth, σ relative to |truth|) per estimate.
+    scored: Vec<(String, &'static str, f64, f64)>,
 }
 
 fn main() {
@@ -205,7 +207,16 @@ fn main() {
                 );
                 println!(
                     "  {:<10} {:>10} {:>10} {:>8} {:>10} {:>7} {:>7}  {:>10} {:>8} {:>7}",
-                    "", "estimate", "truth", "error", "sigma", "|e|/σ", "in 3σ", "range", "error", "in 3σ"
+                    "",
+                    "estimate",
+                    "truth",
+                    "error",
+                    "sigma",
+                    "|e|/σ",
+                    "in 3σ",
+                    "range",
+                    "error",
+                    "in 3σ"
                 );
                 let mut rows = Vec::new();
                 for name in TARGETS {
@@ -220,10 +231,16 @@ fn main() {
                             .unwrap_or(local),
                         sigma: d["std_error"].as_f64().unwrap_or(f64::NAN),
                     };
-                    let within = [s.truth, s.truth_range]
-                        .map(|t| s.error(t).abs() <= error_target(method));
+                    let within =
+                        [s.truth, s.truth_range].map(|t| s.error(t).abs() <= error_target(method));
                     let covered = [s.truth, s.truth_range].map(|t| s.covered(t));
                     tally.estimates += 1;
+                    tally.scored.push((
+                        aircraft.clone(),
+                        name,
+                        s.error(s.truth),
+                        s.sigma / s.truth.abs(),
+                    ));
                     for k in 0..2 {
                         tally.within[k] += usize::from(within[k]);
                         tally.covered[k] += usize::from(covered[k]);
@@ -307,12 +324,17 @@ fn main() {
         for m in &t.misses {
             println!("       miss: {m}");
         }
-        summary.push(json!({"method": method, "error_target": error_target(method),
+        if a.seeds > 1 {
+            bias_and_scatter(&a.aircraft, t);
+        }
+        summary.push(
+            json!({"method": method, "error_target": error_target(method),
             "estimates": t.estimates, "within": t.within[0], "covered": t.covered[0], "met": met[0],
             "within_over_records": t.within[1], "covered_over_records": t.covered[1],
             "met_over_records": met[1],
             "coverage_target": if coverage_applies(method) { Some(COVERAGE_TARGET) } else { None },
-            "failed_runs": t.failed_runs, "misses": t.misses}));
+            "failed_runs": t.failed_runs, "misses": t.misses}),
+        );
     }
     if let Some(path) = &a.json {
         let doc = json!({"seeds": a.seeds, "seed0": a.seed0, "aircraft": a.aircraft,
@@ -321,5 +343,39 @@ fn main() {
     }
     if !all_met {
         std::process::exit(1);
+    }
+}
+
+/// Over the seeds, per aircraft and derivative: the mean error (a bias the seeds share), the scatter of the
+/// errors (their sample standard deviation) and the mean reported σ, all relative to |truth|. A miss with the
+/// scatter near σ and a mean error beyond 3σ is a bias of the model or the truth, not an optimistic σ.
+fn bias_and_scatter(aircraft: &[String], t: &Tally) {
+    println!(
+        "       {:<6} {:<10} {:>8} {:>8} {:>8}  (over seeds, % of |truth|)",
+        "", "", "mean", "scatter", "mean σ"
+    );
+    for ac in aircraft {
+        for name in TARGETS {
+            let rows: Vec<(f64, f64)> = t
+                .scored
+                .iter()
+                .filter(|r| &r.0 == ac && r.1 == name)
+                .map(|r| (r.2, r.3))
+                .collect();
+            if rows.len() < 2 {
+                continue;
+            }
+            let n = rows.len() as f64;
+            let mean = rows.iter().map(|r| r.0).sum::<f64>() / n;
+            let scatter =
+                (rows.iter().map(|r| (r.0 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+            let sigma = rows.iter().map(|r| r.1).sum::<f64>() / n;
+            println!(
+                "       {ac:<6} {name:<10} {:>+7.1}% {:>7.2}% {:>7.2}%",
+                100.0 * mean,
+                100.0 * scatter,
+                100.0 * sigma
+            );
+        }
     }
 }

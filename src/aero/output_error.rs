@@ -49,8 +49,8 @@ use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signatur
 mod checks;
 mod free;
 use checks::{
-    alphadot_check, beta_skew_check, process_noise_note, run_checks, side_force_rate_check, skew_check,
-    speed_check, ALPHADOT, SIDE_RATES_AND_SKEW, SKEW, SPEED,
+    alphadot_check, beta_skew_check, process_noise_note, run_checks, side_force_rate_check,
+    skew_check, speed_check, ALPHADOT, SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
 use free::{equation_error_starts, parameters, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
