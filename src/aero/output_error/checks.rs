@@ -148,17 +148,13 @@ pub(super) fn speed_check(
     held: &AxisFit,
 ) -> Option<(String, Option<AxisFit>)> {
     let g = group_check(records, setup, held, &SPEED, &SPEED)?;
-    let verdict = if g.supported && g.wider.user_chose {
-        "the records carry them; held as --free asks"
-    } else if g.supported {
+    let verdict = g.verdict(
         "the records carry them (the phugoid is excited): C_LV, C_DV and C_mV are estimated (hold them with \
-         --free=-speed)"
-    } else if !g.trusted {
+         --free=-speed)",
         "the wider fit is not trusted (it did not converge, or moved C_mα, C_mq or C_mδe off their range): the \
-         speed derivatives stay held"
-    } else {
-        "not significant: the speed derivatives stay held"
-    };
+         speed derivatives stay held",
+        "not significant: the speed derivatives stay held",
+    );
     let note = format!(
         "longitudinal: with C_LV, C_DV, C_mV free the cost falls by {:.1} (largest |t| {:.1}): {verdict}",
         g.wider.drop, g.t_max
@@ -187,10 +183,7 @@ pub(super) fn side_force_rate_check(
     held: &AxisFit,
 ) -> Option<(String, Option<AxisFit>)> {
     let mut g = group_check(records, setup, held, &SIDE_RATES, &SIDE_RATES_AND_SKEW)?;
-    let bound_s = records
-        .iter()
-        .map(|(_, r)| data::skew_bound_s(r))
-        .fold(0.0, f64::max);
+    let bound_s = skew_bound_of(records);
     let skew_ok = g
         .wider
         .fit
@@ -204,16 +197,12 @@ pub(super) fn side_force_rate_check(
         .free
         .iter()
         .any(|c| c.names.iter().any(|n| SIDE_RATES.contains(n)));
-    let verdict = if g.supported && g.wider.user_chose {
-        "the records carry them; held as --free asks"
-    } else if g.supported {
-        "the records carry them: C_Yp and C_Yr are estimated (hold them with --free=-CY_p,-CY_r)"
-    } else if !g.trusted {
+    let verdict = g.verdict(
+        "the records carry them: C_Yp and C_Yr are estimated (hold them with --free=-CY_p,-CY_r)",
         "the wider fit is not trusted (it did not converge, moved C_lp, C_lβ, C_nr or C_nβ off their range, or \
-         wants a β skew beyond the bound): they stay held"
-    } else {
-        "not significant: they stay held"
-    };
+         wants a β skew beyond the bound): they stay held",
+        "not significant: they stay held",
+    );
     let note = format!(
         "lateral: with C_Yp, C_Yr (and τ_β) free the cost falls by {:.1} (largest |t| {:.1}): {verdict}",
         g.wider.drop, g.t_max
@@ -233,6 +222,24 @@ struct GroupCheck {
 }
 
 impl GroupCheck {
+    /// The note's verdict: `adopted`, `untrusted` or `not_significant`, or that `--free` holds them.
+    fn verdict(
+        &self,
+        adopted: &'static str,
+        untrusted: &'static str,
+        not_significant: &'static str,
+    ) -> &'static str {
+        if self.supported && self.wider.user_chose {
+            "the records carry them; held as --free asks"
+        } else if self.supported {
+            adopted
+        } else if !self.trusted {
+            untrusted
+        } else {
+            not_significant
+        }
+    }
+
     /// The wider fit when it is adopted (supported, and not a choice the user made with `--free`).
     fn adopted(self) -> Option<AxisFit> {
         (self.supported && !self.wider.user_chose).then_some(self.wider.fit)
@@ -304,6 +311,14 @@ pub(super) fn beta_skew_check(
     vane_skew_check(records, setup, held, "tau_beta_s", Channel::Beta)
 }
 
+/// The longest skew a data system can have on any of `records` ([`data::skew_bound_s`]).
+fn skew_bound_of(records: &[&(String, data::FlightRecord)]) -> f64 {
+    records
+        .iter()
+        .map(|(_, r)| data::skew_bound_s(r))
+        .fold(0.0, f64::max)
+}
+
 /// The skew check of the vane measuring `vane` (its skew parameter `name`); see [`skew_check`].
 fn vane_skew_check(
     records: &[&(String, data::FlightRecord)],
@@ -320,10 +335,7 @@ fn vane_skew_check(
     let p = w.fit.estimate.parameter(name)?;
     let t = (p.value / p.std_error.max(f64::MIN_POSITIVE)).abs();
     let plausible = key_derivatives_plausible(held, &w.fit);
-    let bound_s = records
-        .iter()
-        .map(|(_, r)| data::skew_bound_s(r))
-        .fold(0.0, f64::max);
+    let bound_s = skew_bound_of(records);
     let within = p.value.abs() <= bound_s;
     let supported = 2.0 * w.drop > CHI2_1_1PCT && t > 3.0 && w.converged && plausible && within;
     let beyond = format!(
