@@ -9,7 +9,8 @@ An independent generator: it drives JSBSim through its own Python API (not fligh
         biases, an IMU and an α/β vane away from the CG, a time skew on the vanes, and light Dryden turbulence;
   NAME.airframe.toml     mass, inertia, geometry, thrust line and sensor positions (the airframe description);
   NAME.columns.toml      the column map onto the flight-data schema;
-  NAME.truth.json        JSBSim's own derivatives about the CG at the trim the records start from.
+  NAME.truth.json        JSBSim's own derivatives about the CG at the trim the records start from
+        (`derivatives`), and the α and β derivatives over the range the records fly (`derivatives_over_records`).
 
 Truth: each aero input (α, β, p, q, r and the three surfaces) is perturbed by ±h about the trimmed state through
 run_ic (integration suspended, engines keep their state), and the aero coefficients are differenced: forces in
@@ -17,6 +18,12 @@ wind axes (C_L, C_D, C_Y), moments in body axes about the CG (JSBSim's moments/*
 α̇ that the unbalanced state implies; the α̇ coefficient functions (names containing `adot`) are subtracted, their
 lift moved from the aero reference point to the CG (as scripts/oracle_aero.py does for the c172x). The α̇
 derivatives themselves are those functions' values divided by α̇ c̄/(2V).
+
+A local derivative is the slope of a table at the trim, and a piecewise-linear table (the p51d's C_L(α): 6.67
+per rad between 1.5° and 2°, 6.1 between 1° and 1.5°) changes slope within the few degrees a maneuver flies.
+A linear model fitted to the records can only find the slope over the range flown, so the truth also holds
+the α and β derivatives as the least-squares slope of the coefficient over quantiles of the α (β) the
+longitudinal (lateral) records flew, every other state at the trim (`derivatives_over_records`).
 
 Private copy: the aircraft directory is copied to a temporary root (engine/ and systems/ linked); top-level
 <input> and <output> elements are removed (no listeners, no files), and the aero model reads each surface as
@@ -137,6 +144,7 @@ class Aircraft:
             fdm.disable_output()
         self.fdm = fdm
         self.dt = 1.0 / sim_hz
+        self.flown = {}
 
     def __getitem__(self, k):
         return self.fdm[k]
@@ -286,6 +294,24 @@ class Aircraft:
                                        qdot_rad_s2=b0["qdot"]))
         return d, cond
 
+    def truth_over_records(self, base, offsets, kinds, points=21):
+        """The α and β derivatives the records determine where the aero tables are not linear over the range
+        flown: the least-squares slope of each coefficient over `points` quantiles of the true α (longitudinal
+        records) or β (lateral records), every other state at the trim (equal weights: each quantile stands for
+        the same share of the samples)."""
+        out = {}
+        for angle, var, kind, coefs in (("alpha", "ic/alpha-rad", "lon", ("CL", "CD", "Cm")),
+                                        ("beta", "ic/beta-rad", "lat", ("CY", "Cl", "Cn"))):
+            flown = [x for k, x in zip(kinds, self.flown.get(angle, [])) if k.startswith(kind)]
+            if not flown:
+                continue
+            x = np.quantile(np.concatenate(flown), np.linspace(0.0, 1.0, points + 2)[1:-1])
+            ys = [self.aero_at(base, {var: float(v)}, offsets) for v in x]
+            for coef in coefs:
+                out[f"{coef}_{angle}"] = float(np.polyfit(x, [y[coef] for y in ys], 1)[0])
+        self.aero_at(base, {}, offsets)
+        return out
+
     def airframe(self, imu_m, vane_m):
         f = self.fdm
         thrust = self.thrust_lbf()
@@ -393,6 +419,9 @@ def fly(ac, kind, rng, sensors, sim_hz, log_hz, imu_m, vane_m, tau_s=0.05, rate_
         rows["dr"].append(f[ac.reads["rudder"]] + pos["rudder"])
         rows["thrust"].append(ac.thrust_lbf())
     a = {k: np.array(v) for k, v in rows.items()}
+    # the aerodynamic angles flown (true, at the CG), for the truth over the records' range
+    ac.flown.setdefault("alpha", []).append(np.arctan2(a["w"], a["u"]))
+    ac.flown.setdefault("beta", []).append(np.arcsin(a["v"] / np.sqrt(a["u"] ** 2 + a["v"] ** 2 + a["w"] ** 2)))
     # sensors away from the CG (body axes, x fwd, y right, z down; ft)
     ri = np.array(imu_m) / FT
     rv = np.array(vane_m) / FT
@@ -514,9 +543,11 @@ def main():
             write_csv(path, cols, [f"JSBSim {args.aircraft}, {kind}, {alt:g} ft, {spd:g} kts, seed {args.seed}",
                                    f"logged at {args.log_hz:g} Hz from a {args.sim_hz:g} Hz simulation"])
             written.append(path)
+        over_records = ac.truth_over_records(base, offsets, args.records.split(","))
     write_airframe(os.path.join(args.out, f"{args.aircraft}.airframe.toml"), af)
     write_columns(os.path.join(args.out, f"{args.aircraft}.columns.toml"))
     json.dump({"aircraft": args.aircraft, "flight_condition": cond, "derivatives": truth,
+               "derivatives_over_records": over_records,
                "sensors": {"bias": sensors.bias, "sigma": sensors.sigma, "vane_skew_s": sensors.vane_skew_s,
                            "imu_m": imu_m, "vane_m": vane_m},
                "surface_reads": ac.reads, "records": written},

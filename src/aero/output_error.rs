@@ -49,8 +49,8 @@ use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signatur
 mod checks;
 mod free;
 use checks::{
-    alphadot_check, beta_skew_check, process_noise_note, run_checks, skew_check, speed_check,
-    ALPHADOT, SKEW, SPEED,
+    alphadot_check, beta_skew_check, process_noise_note, run_checks, side_force_rate_check,
+    skew_check, speed_check, ALPHADOT, SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
 use free::{equation_error_starts, parameters, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
@@ -631,7 +631,11 @@ pub fn output_error_report(
             &recs,
             setup,
             &mut f,
-            &[(beta_skew_check, &["tau_beta_s"])],
+            // the skew, then the side-force rate terms (with the skew: each takes the other's shape)
+            &[
+                (beta_skew_check, &["tau_beta_s"]),
+                (side_force_rate_check, &SIDE_RATES_AND_SKEW),
+            ],
             &mut notes,
         );
         let lat_setup = FitSetup {

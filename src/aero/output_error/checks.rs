@@ -147,33 +147,139 @@ pub(super) fn speed_check(
     setup: FitSetup,
     held: &AxisFit,
 ) -> Option<(String, Option<AxisFit>)> {
-    if !held.estimate.parameter("Cm_V").is_some_and(|p| p.fixed) {
+    let g = group_check(records, setup, held, &SPEED, &SPEED)?;
+    let verdict = g.verdict(
+        "the records carry them (the phugoid is excited): C_LV, C_DV and C_mV are estimated (hold them with \
+         --free=-speed)",
+        "the wider fit is not trusted (it did not converge, or moved C_mα, C_mq or C_mδe off their range): the \
+         speed derivatives stay held",
+        "not significant: the speed derivatives stay held",
+    );
+    let note = format!(
+        "longitudinal: with C_LV, C_DV, C_mV free the cost falls by {:.1} (largest |t| {:.1}): {verdict}",
+        g.wider.drop, g.t_max
+    );
+    Some((note, g.adopted()))
+}
+
+/// The side-force rate derivatives.
+const SIDE_RATES: [&str; 2] = ["CY_p", "CY_r"];
+
+/// What the side-force check frees: the rate derivatives with the β vane's skew, which takes their shape.
+pub(super) const SIDE_RATES_AND_SKEW: [&str; 3] = ["CY_p", "CY_r", "tau_beta_s"];
+
+/// When C_Yp and C_Yr were held by default (at 0): the same fit with them free. A fin high and far aft gives
+/// C_Yr (the c310's JSBSim model: 0.21); held at 0, the r-shaped share of the side force that the lateral
+/// accelerometer measures (a_y = q̄S C_Y/m, Klein & Morelli §3.2) leads β by a quarter period of the Dutch
+/// roll, which the β vane's skew absorbs: filter error on the generated c310 records asked for 49–52 ms (the
+/// data system's is 30 ms, refused or adopted seed by seed) and C_nr scattered by 6 % between seeds. The
+/// reverse holds too (with τ_β held, C_Yr takes a 30 ms skew for itself), so the wider fit frees τ_β with them,
+/// and is adopted by the speed check's rule on C_Yp and C_Yr — the likelihood-ratio test at 1 %, at least one
+/// of them with |t| > 3, a converged wider fit, C_lp, C_lβ, C_nr, C_nβ in range — and a τ_β within the skew
+/// bound ([`data::skew_bound_s`]). When the user named C_Yp or C_Yr in `--free`, the check only reports.
+pub(super) fn side_force_rate_check(
+    records: &[&(String, data::FlightRecord)],
+    setup: FitSetup,
+    held: &AxisFit,
+) -> Option<(String, Option<AxisFit>)> {
+    let mut g = group_check(records, setup, held, &SIDE_RATES, &SIDE_RATES_AND_SKEW)?;
+    let bound_s = skew_bound_of(records);
+    let skew_ok = g
+        .wider
+        .fit
+        .estimate
+        .parameter("tau_beta_s")
+        .is_none_or(|p| p.value.abs() <= bound_s);
+    g.trusted &= skew_ok;
+    g.supported &= skew_ok;
+    g.wider.user_chose = setup
+        .options
+        .free
+        .iter()
+        .any(|c| c.names.iter().any(|n| SIDE_RATES.contains(n)));
+    let verdict = g.verdict(
+        "the records carry them: C_Yp and C_Yr are estimated (hold them with --free=-CY_p,-CY_r)",
+        "the wider fit is not trusted (it did not converge, moved C_lp, C_lβ, C_nr or C_nβ off their range, or \
+         wants a β skew beyond the bound): they stay held",
+        "not significant: they stay held",
+    );
+    let note = format!(
+        "lateral: with C_Yp, C_Yr (and τ_β) free the cost falls by {:.1} (largest |t| {:.1}): {verdict}",
+        g.wider.drop, g.t_max
+    );
+    Some((note, g.adopted()))
+}
+
+/// The outcome of freeing a group of derivatives held by default ([`group_check`]).
+struct GroupCheck {
+    wider: Wider,
+    /// Largest |t| among the group.
+    t_max: f64,
+    /// The wider fit converged and kept the key derivatives in range.
+    trusted: bool,
+    /// The records support the group (and the fit is trusted).
+    supported: bool,
+}
+
+impl GroupCheck {
+    /// The note's verdict: `adopted`, `untrusted` or `not_significant`, or that `--free` holds them.
+    fn verdict(
+        &self,
+        adopted: &'static str,
+        untrusted: &'static str,
+        not_significant: &'static str,
+    ) -> &'static str {
+        if self.supported && self.wider.user_chose {
+            "the records carry them; held as --free asks"
+        } else if self.supported {
+            adopted
+        } else if !self.trusted {
+            untrusted
+        } else {
+            not_significant
+        }
+    }
+
+    /// The wider fit when it is adopted (supported, and not a choice the user made with `--free`).
+    fn adopted(self) -> Option<AxisFit> {
+        (self.supported && !self.wider.user_chose).then_some(self.wider.fit)
+    }
+}
+
+/// The rule of the speed and side-force checks: when the group `tested` is held, the fit with `freed` (the
+/// group and what takes its shape) free is supported when the likelihood-ratio test passes at 1 % (2 ΔJ > χ²
+/// of the number of parameters it frees), at least one of `tested` is significant (|t| > 3), the wider fit
+/// converged and the key derivatives stay in range ([`key_derivatives_plausible`]).
+fn group_check(
+    records: &[&(String, data::FlightRecord)],
+    setup: FitSetup,
+    held: &AxisFit,
+    tested: &[&'static str],
+    freed: &[&'static str],
+) -> Option<GroupCheck> {
+    if !held.estimate.parameter(tested[0]).is_some_and(|p| p.fixed) {
         return None;
     }
-    let w = wider_fit(records, setup, held, &SPEED)?;
-    let t_max = SPEED
+    let wider = wider_fit(records, setup, held, freed)?;
+    let newly_free = freed
         .iter()
-        .filter_map(|n| w.fit.estimate.parameter(n))
+        .filter(|n| held.estimate.parameter(n).is_some_and(|p| p.fixed))
+        .count();
+    // χ² at 1 % for 1, 2, 3 degrees of freedom
+    let chi2 = [CHI2_1_1PCT, 9.21, CHI2_3_1PCT][newly_free.clamp(1, 3) - 1];
+    let t_max = tested
+        .iter()
+        .filter_map(|n| wider.fit.estimate.parameter(n))
         .map(|p| (p.value / p.std_error.max(f64::MIN_POSITIVE)).abs())
         .fold(0.0, f64::max);
-    let plausible = key_derivatives_plausible(held, &w.fit);
-    let supported = 2.0 * w.drop > CHI2_3_1PCT && t_max > 3.0 && w.converged && plausible;
-    let verdict = if supported && w.user_chose {
-        "the records carry them; held as --free asks"
-    } else if supported {
-        "the records carry them (the phugoid is excited): C_LV, C_DV and C_mV are estimated (hold them with \
-         --free=-speed)"
-    } else if !w.converged || !plausible {
-        "the wider fit is not trusted (it did not converge, or moved C_mα, C_mq or C_mδe off their range): the \
-         speed derivatives stay held"
-    } else {
-        "not significant: the speed derivatives stay held"
-    };
-    let note = format!(
-        "longitudinal: with C_LV, C_DV, C_mV free the cost falls by {:.1} (largest |t| {t_max:.1}): {verdict}",
-        w.drop
-    );
-    Some((note, (supported && !w.user_chose).then_some(w.fit)))
+    let trusted = wider.converged && key_derivatives_plausible(held, &wider.fit);
+    let supported = 2.0 * wider.drop > chi2 && t_max > 3.0 && trusted;
+    Some(GroupCheck {
+        wider,
+        t_max,
+        trusted,
+        supported,
+    })
 }
 
 /// When the α vane's time skew was held by default: the same fit with τ_α free (α_vane = α − τ_α α̇). A skew
@@ -205,6 +311,14 @@ pub(super) fn beta_skew_check(
     vane_skew_check(records, setup, held, "tau_beta_s", Channel::Beta)
 }
 
+/// The longest skew a data system can have on any of `records` ([`data::skew_bound_s`]).
+fn skew_bound_of(records: &[&(String, data::FlightRecord)]) -> f64 {
+    records
+        .iter()
+        .map(|(_, r)| data::skew_bound_s(r))
+        .fold(0.0, f64::max)
+}
+
 /// The skew check of the vane measuring `vane` (its skew parameter `name`); see [`skew_check`].
 fn vane_skew_check(
     records: &[&(String, data::FlightRecord)],
@@ -221,10 +335,7 @@ fn vane_skew_check(
     let p = w.fit.estimate.parameter(name)?;
     let t = (p.value / p.std_error.max(f64::MIN_POSITIVE)).abs();
     let plausible = key_derivatives_plausible(held, &w.fit);
-    let bound_s = records
-        .iter()
-        .map(|(_, r)| data::skew_bound_s(r))
-        .fold(0.0, f64::max);
+    let bound_s = skew_bound_of(records);
     let within = p.value.abs() <= bound_s;
     let supported = 2.0 * w.drop > CHI2_1_1PCT && t > 3.0 && w.converged && plausible && within;
     let beyond = format!(
