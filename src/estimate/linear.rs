@@ -236,6 +236,20 @@ impl LinearModel {
     }
 }
 
+/// One row of `A x + B u` (or `C x + D u`): `state_row · x + input_row · u`, the entries evaluated at `theta`.
+fn row_value(state_row: &[Entry], input_row: &[Entry], theta: &[f64], x: &[f64], u: &[f64]) -> f64 {
+    state_row
+        .iter()
+        .zip(x)
+        .map(|(e, v)| e.value(theta) * v)
+        .sum::<f64>()
+        + input_row
+            .iter()
+            .zip(u)
+            .map(|(e, v)| e.value(theta) * v)
+            .sum::<f64>()
+}
+
 impl StateModel for LinearModel {
     fn signature(&self) -> &Signature {
         &self.signature
@@ -243,16 +257,7 @@ impl StateModel for LinearModel {
 
     fn derivatives(&self, theta: &[f64], x: &[f64], u: &[f64], dx: &mut [f64]) {
         for (i, d) in dx.iter_mut().enumerate() {
-            *d = self.a[i]
-                .iter()
-                .zip(x)
-                .map(|(e, v)| e.value(theta) * v)
-                .sum::<f64>()
-                + self.b[i]
-                    .iter()
-                    .zip(u)
-                    .map(|(e, v)| e.value(theta) * v)
-                    .sum::<f64>();
+            *d = row_value(&self.a[i], &self.b[i], theta, x, u);
         }
     }
 
@@ -262,16 +267,7 @@ impl StateModel for LinearModel {
 
     fn outputs(&self, theta: &[f64], x: &[f64], u: &[f64], y: &mut [f64]) {
         for (o, yo) in y.iter_mut().enumerate() {
-            *yo = self.c[o]
-                .iter()
-                .zip(x)
-                .map(|(e, v)| e.value(theta) * v)
-                .sum::<f64>()
-                + self.d[o]
-                    .iter()
-                    .zip(u)
-                    .map(|(e, v)| e.value(theta) * v)
-                    .sum::<f64>();
+            *yo = row_value(&self.c[o], &self.d[o], theta, x, u);
         }
     }
 }
