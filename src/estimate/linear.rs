@@ -11,7 +11,7 @@
 
 use faer::Mat;
 
-use super::integrate::simulate_states;
+use super::integrate::{check_states, simulate_states};
 use super::model::{Discrete, Model, Signature, SimError, StateModel};
 use super::record::{InputHold, Run};
 use super::EstimateError;
@@ -224,11 +224,8 @@ impl LinearModel {
                 }
                 next[i] = v;
             }
-            if let Some(i) = next.iter().position(|v| !v.is_finite() || v.abs() > 1e12) {
-                return Some(Err(SimError::Diverged {
-                    time_s: t[k + 1] - t[0],
-                    what: format!("state {}", self.signature.states[i]),
-                }));
+            if let Err(e) = check_states(&next, &self.signature.states, t[k + 1] - t[0]) {
+                return Some(Err(e));
             }
             x.copy_from_slice(&next);
         }
