@@ -14,7 +14,9 @@
 use faer::{Mat, Side};
 
 use super::coefficients::{model_coefficients, relative_whitening, scales, with_values};
-use super::identifiability::{analyse_with_weights, assess_estimate, IdentifiabilityReport};
+use super::identifiability::{
+    analyse_with_weights, assess_estimate, numerical_rank, IdentifiabilityReport,
+};
 use super::model::{AeroModel, Axis, TfOutput};
 use super::params::Derivative;
 use super::AeroError;
@@ -379,11 +381,7 @@ pub fn estimate_derivatives(
         .svd()
         .map_err(|_| AeroError::Numerical("SVD of the Jacobian"))?;
     let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-    let s_max = s.first().copied().unwrap_or(0.0);
-    let rank = s
-        .iter()
-        .filter(|&&x| x > options.null_tolerance * s_max)
-        .count();
+    let rank = numerical_rank(&s, options.null_tolerance);
     // With a coefficient covariance the residual should be χ²(N − rank); when the cost is larger the model
     // cannot reproduce the identified coefficients within their stated uncertainty (model-structure error or
     // an identification bias the covariance does not hold), and the covariance is scaled by the reduced χ²
@@ -419,10 +417,7 @@ pub fn estimate_derivatives(
             let sv: Vec<f64> = sub
                 .singular_values()
                 .map_err(|_| AeroError::Numerical("SVD of the Jacobian"))?;
-            let top = sv.first().copied().unwrap_or(0.0);
-            sv.iter()
-                .filter(|&&x| x > options.null_tolerance * top && top > 0.0)
-                .count()
+            numerical_rank(&sv, options.null_tolerance)
         };
         let cost_g: f64 = rows.iter().map(|&i| r[i] * r[i]).sum();
         let dof = rows.len().saturating_sub(rank_g);

@@ -219,11 +219,7 @@ fn core(
         .svd()
         .map_err(|_| AeroError::Numerical("SVD of the identifiability Jacobian"))?;
     let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-    let s_max = s.first().copied().unwrap_or(0.0);
-    let rank = s
-        .iter()
-        .filter(|&&x| x > NULL_TOLERANCE * s_max && s_max > 0.0)
-        .count();
+    let rank = numerical_rank(&s, NULL_TOLERANCE);
     let column_norms = (0..p)
         .map(|k| {
             (0..n_res)
@@ -357,6 +353,15 @@ const COMBINATION_CORRELATION: f64 = HIGH_CORRELATION;
 /// Relative standard error σ/|estimate| above which an estimate is weakly determined (20 %: its 3σ interval
 /// spans more than ±60 % of the value).
 const WEAK_RELATIVE_SE: f64 = 0.2;
+
+/// Numerical rank from singular values `s` (largest first): how many exceed `tolerance` times the largest
+/// (none when the largest is not positive).
+pub(super) fn numerical_rank(s: &[f64], tolerance: f64) -> usize {
+    let s_max = s.first().copied().unwrap_or(0.0);
+    s.iter()
+        .filter(|&&x| x > tolerance * s_max && s_max > 0.0)
+        .count()
+}
 
 /// Pseudo-inverse of a symmetric positive semi-definite matrix (eigenvalues below 1e-12 of the largest dropped).
 fn pinv_symmetric(m: &Mat<f64>) -> Result<Mat<f64>, AeroError> {

@@ -50,10 +50,13 @@ mod checks;
 mod free;
 use checks::{
     alphadot_check, beta_skew_check, process_noise_note, run_checks, side_force_rate_check,
-    skew_check, speed_check, ALPHADOT, SIDE_RATES_AND_SKEW, SKEW, SPEED,
+    skew_check, speed_check, AxisFitter, Check, ALPHADOT, SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
 use free::{equation_error_starts, parameters, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
+
+/// The modes of one axis's model at θ (the flight-model constants and the reference condition given).
+type ModesAt = fn(&Constants, &ReferenceCondition, &[f64]) -> Vec<fm::NamedMode>;
 
 /// Column of the air density input (a constant per record).
 const DENSITY: &str = "density_kg_m3";
@@ -591,70 +594,54 @@ pub fn output_error_report(
         cond: &cond,
         options,
     };
-    if axis.longitudinal() {
-        let recs = records_for(records, true);
-        let mut f = fit_longitudinal(&recs, setup, &mut notes)?;
-        // the vane skew, the α̇ terms (short period), then the speed derivatives (phugoid)
-        let lon_options = run_checks(
-            &recs,
-            setup,
-            &mut f,
-            &[
-                (skew_check, &SKEW),
-                (alphadot_check, &ALPHADOT),
-                (speed_check, &SPEED),
-            ],
-            &mut notes,
-        );
-        let lon_setup = FitSetup {
-            options: &lon_options,
-            ..setup
-        };
-        notes.extend(process_noise_note(
+    // Per axis: the fit, its structure checks in turn (longitudinal: the vane skew, the α̇ terms (short
+    // period), then the speed derivatives (phugoid)), the filter-error comparison and the modes.
+    let lon_checks: &[(Check, &[&'static str])] = &[
+        (skew_check, &SKEW),
+        (alphadot_check, &ALPHADOT),
+        (speed_check, &SPEED),
+    ];
+    // lateral: the skew, then the side-force rate terms (with the skew: each takes the other's shape)
+    let lat_checks: &[(Check, &[&'static str])] = &[
+        (beta_skew_check, &["tau_beta_s"]),
+        (side_force_rate_check, &SIDE_RATES_AND_SKEW),
+    ];
+    let lon_modes: ModesAt = |c, cond, t| longitudinal_modes_at(c, cond, t, false);
+    // (name, asked for, longitudinal, fit, checks, modes)
+    let axes: [(&str, bool, bool, AxisFitter, _, ModesAt); 2] = [
+        (
             "longitudinal",
-            &f,
-            &recs,
-            lon_setup,
+            axis.longitudinal(),
+            true,
             fit_longitudinal,
-        ));
-        let (free, cov) = free_block(&f.estimate);
-        let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| {
-            longitudinal_modes_at(&f.constants, &cond, t, false)
-        });
-        modes.extend(if no_sigma(&f) { unknown_sigma(m) } else { m });
-        fits.push(("longitudinal", f, recs.len()));
-    }
-    if axis.lateral() {
-        let recs = records_for(records, false);
-        let mut f = fit_lateral(&recs, setup, &mut notes)?;
-        let lat_options = run_checks(
-            &recs,
-            setup,
-            &mut f,
-            // the skew, then the side-force rate terms (with the skew: each takes the other's shape)
-            &[
-                (beta_skew_check, &["tau_beta_s"]),
-                (side_force_rate_check, &SIDE_RATES_AND_SKEW),
-            ],
-            &mut notes,
-        );
-        let lat_setup = FitSetup {
-            options: &lat_options,
+            lon_checks,
+            lon_modes,
+        ),
+        (
+            "lateral",
+            axis.lateral(),
+            false,
+            fit_lateral,
+            lat_checks,
+            lateral_modes_at,
+        ),
+    ];
+    for (name, wanted, longitudinal, fit_axis, checks, modes_at) in axes {
+        if !wanted {
+            continue;
+        }
+        let recs = records_for(records, longitudinal);
+        let mut f = fit_axis(&recs, setup, &mut notes)?;
+        let checked = run_checks(&recs, setup, &mut f, checks, &mut notes);
+        let checked_setup = FitSetup {
+            options: &checked,
             ..setup
         };
-        notes.extend(process_noise_note(
-            "lateral",
-            &f,
-            &recs,
-            lat_setup,
-            fit_lateral,
-        ));
+        notes.extend(process_noise_note(name, &f, &recs, checked_setup, fit_axis));
         let (free, cov) = free_block(&f.estimate);
-        let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| {
-            lateral_modes_at(&f.constants, &cond, t)
-        });
+        let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| modes_at(&f.constants, &cond, t));
         modes.extend(if no_sigma(&f) { unknown_sigma(m) } else { m });
-        fits.push(("lateral", f, recs.len()));
+        fits.push((name, f, recs.len()));
     }
     for (name, f, n_records) in &fits {
         let est = &f.estimate;

@@ -47,7 +47,7 @@ fn a_response_lagging_half_a_sample_is_fitted_exactly_once_the_regressors_lag_to
 
 use super::*;
 use crate::aero::model::tests::{c172x_model, CL_TRIM, RHO_KG_M3, V_M_S};
-use crate::aero::model::LinearModel;
+use crate::aero::model::{AeroModel, LinearModel};
 use crate::aero::params::{Assumptions, Derivative as D};
 
 /// RK4 of ẋ = A x + B u(t) with the input evaluated inside the step (a held input would put a half-sample
@@ -126,35 +126,36 @@ fn savitzky_golay_differentiates_a_sine_with_the_predicted_smoothing_error() {
     assert!(savitzky_golay_derivative(&y, dt, 5, 11).is_err());
 }
 
-fn lateral_record() -> (Vec<f64>, Vec<[f64; 4]>, Vec<Vec<f64>>) {
-    // c172x lateral model (stability axes, no wind-axis drag term so C_Y is the model's own), aileron
-    // doublet at 1 s and rudder doublet at 6 s (smooth, 0.05 rad), 50 Hz for 14 s.
-    let model = c172x_model(Assumptions {
+/// The c172x lateral model (stability axes, no wind-axis drag term so C_Y is the model's own).
+fn lateral_model() -> AeroModel {
+    c172x_model(Assumptions {
         side_force_rate_terms: true,
         ..Assumptions::paper()
-    });
+    })
+}
+
+/// `model`'s lateral response to an aileron doublet at 1 s and a rudder doublet at 6 s (smooth, 0.05 rad),
+/// 50 Hz for 14 s: time, states (β, p, r, φ), aileron and rudder.
+fn lateral_record(model: &AeroModel) -> (Vec<f64>, Vec<[f64; 4]>, Vec<f64>, Vec<f64>) {
     let lin = model.lateral().unwrap();
     let dt = 0.02;
     let t: Vec<f64> = (0..700).map(|i| i as f64 * dt).collect();
     let input = |t: f64| vec![doublet(t, 1.0, 0.7, 0.05), doublet(t, 6.0, 1.0, 0.05)];
     let u: Vec<Vec<f64>> = t.iter().map(|&t| input(t)).collect();
     let x = simulate(&lin, &input, &t);
-    (t, x, u)
+    let da: Vec<f64> = u.iter().map(|v| v[0]).collect();
+    let dr: Vec<f64> = u.iter().map(|v| v[1]).collect();
+    (t, x, da, dr)
 }
 
 #[test]
 fn equation_error_on_a_noise_free_lateral_flight_recovers_roll_and_yaw_derivatives() {
     // Noise-free simulated doublets: the regression must return the model's derivatives; the error budget
     // is the Savitzky–Golay derivative of ṗ, ṙ (≈ 1e-3) and small-angle differences (β ≈ 0.03 rad), so 2 %.
-    let model = c172x_model(Assumptions {
-        side_force_rate_terms: true,
-        ..Assumptions::paper()
-    });
-    let (t, x, u) = lateral_record();
+    let model = lateral_model();
+    let (t, x, da, dr) = lateral_record(&model);
     let col = |k: usize| -> Vec<f64> { x.iter().map(|s| s[k]).collect() };
     let (beta, p, r, phi) = (col(0), col(1), col(2), col(3));
-    let da: Vec<f64> = u.iter().map(|v| v[0]).collect();
-    let dr: Vec<f64> = u.iter().map(|v| v[1]).collect();
     let v = vec![V_M_S; t.len()];
     let zeros = vec![0.0; t.len()];
     let record = FlightRecord {
@@ -215,11 +216,8 @@ fn equation_error_with_sensor_noise_keeps_key_lateral_derivatives_within_15_perc
     // interval covers the truth for those four.
     use rand::{rngs::StdRng, SeedableRng};
     use rand_distr::{Distribution, Normal};
-    let model = c172x_model(Assumptions {
-        side_force_rate_terms: true,
-        ..Assumptions::paper()
-    });
-    let (t, x, u) = lateral_record();
+    let model = lateral_model();
+    let (t, x, da, dr) = lateral_record(&model);
     let mut rng = StdRng::seed_from_u64(42);
     let beta_noise = Normal::new(0.0, 0.1f64.to_radians()).unwrap();
     let rate_noise = Normal::new(0.0, 0.3f64.to_radians()).unwrap();
@@ -235,8 +233,6 @@ fn equation_error_with_sensor_noise_keeps_key_lateral_derivatives_within_15_perc
         .iter()
         .map(|s| s[2] + rate_noise.sample(&mut rng))
         .collect();
-    let da: Vec<f64> = u.iter().map(|v| v[0]).collect();
-    let dr: Vec<f64> = u.iter().map(|v| v[1]).collect();
     let v = vec![V_M_S; t.len()];
     let record = FlightRecord {
         time_s: &t,
@@ -400,30 +396,23 @@ fn coloured_residual_correction_inflates_errors_only_when_residuals_are_correlat
 fn missing_channels_and_bad_time_are_clear_errors() {
     let t: Vec<f64> = (0..100).map(|i| i as f64 * 0.01).collect();
     let m = c172x_model(Assumptions::paper());
-    let err = equation_error(
-        &FlightRecord {
-            time_s: &t,
-            ..Default::default()
-        },
-        &m.mass,
-        &m.geometry,
-        &EquationErrorOptions::default(),
-    )
-    .unwrap_err()
-    .to_string();
+    let error_with_time = |time_s: &[f64]| {
+        equation_error(
+            &FlightRecord {
+                time_s,
+                ..Default::default()
+            },
+            &m.mass,
+            &m.geometry,
+            &EquationErrorOptions::default(),
+        )
+        .unwrap_err()
+        .to_string()
+    };
+    let err = error_with_time(&t);
     assert!(err.contains("airspeed_m_s"), "{err}");
     let mut bad = t.clone();
     bad[50] = bad[49];
-    let err = equation_error(
-        &FlightRecord {
-            time_s: &bad,
-            ..Default::default()
-        },
-        &m.mass,
-        &m.geometry,
-        &EquationErrorOptions::default(),
-    )
-    .unwrap_err()
-    .to_string();
+    let err = error_with_time(&bad);
     assert!(err.contains("uniformly sampled"), "{err}");
 }

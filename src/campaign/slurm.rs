@@ -378,21 +378,10 @@ mod tests {
 
     #[test]
     fn the_sbatch_script_runs_one_shard_per_array_task_with_quoted_paths() {
-        let spec: CampaignSpec = toml::from_str(
-            r#"
-name = "demo run"
-methods = ["ls"]
-[[configurations]]
-name = "c"
-aircraft = "c172x"
-conditions = [ { altitude_ft = 4000.0, speed_kts = 100.0 } ]
-[[maneuvers]]
-surface = "elevator"
-shape = "doublet"
-amplitudes_deg = [1.0]
-"#,
-        )
-        .unwrap();
+        // the job name comes from the campaign's name, spaces and all
+        let spec: CampaignSpec =
+            toml::from_str(&store::tests::BASE.replace(r#"name = "t""#, r#"name = "demo run""#))
+                .unwrap();
         let opts = SubmitOptions {
             partition: Some("short".into()),
             time: Some("00:10:00".into()),

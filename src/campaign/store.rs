@@ -441,14 +441,16 @@ pub fn status(out: &Path) -> Result<StoreStatus, CampaignError> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     fn spec(text: &str) -> CampaignSpec {
         toml::from_str(text).unwrap()
     }
 
-    const BASE: &str = r#"
+    /// A small campaign for the campaign tests: one aircraft, one flight condition, elevator doublets of 1° and
+    /// 2°, the LS estimator.
+    pub(in crate::campaign) const BASE: &str = r#"
 name = "t"
 rate_hz = 60.0
 duration_s = 8.0

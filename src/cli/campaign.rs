@@ -158,6 +158,15 @@ fn failed_cases(failed_ids: &[String], total: usize) -> anyhow::Error {
     )
 }
 
+/// `, N what` for a positive count `n`, else nothing: a count the summaries mention only when it is not zero.
+fn count_note(n: usize, what: &str) -> String {
+    if n > 0 {
+        format!(", {n} {what}")
+    } else {
+        String::new()
+    }
+}
+
 fn print_run_summary(what: &str, s: &RunSummary, out: &Path) {
     let p = &s.prepared;
     if !p.rerun_changed.is_empty() || !p.retried.is_empty() || !p.removed.is_empty() {
@@ -174,11 +183,7 @@ fn print_run_summary(what: &str, s: &RunSummary, out: &Path) {
         s.skipped,
         s.ran,
         s.elapsed_s,
-        if s.claimed_elsewhere > 0 {
-            format!(", {} run by another process", s.claimed_elsewhere)
-        } else {
-            String::new()
-        },
+        count_note(s.claimed_elsewhere, "run by another process"),
         s.failed,
         out.join("cases").display()
     );
@@ -399,11 +404,7 @@ fn print_status(dir: &Path, s: &StoreStatus) {
         c.failed,
         c.pending,
         s.running,
-        if c.changed > 0 {
-            format!(", {} changed (rerun with --rerun-changed)", c.changed)
-        } else {
-            String::new()
-        }
+        count_note(c.changed, "changed (rerun with --rerun-changed)")
     );
     for (id, e) in &s.errors {
         println!("failed {id}: {e}");

@@ -85,6 +85,27 @@ pub fn emit_json<T: serde::Serialize>(target: &str, value: &T) -> anyhow::Result
     }
 }
 
+/// The outputs a command writes after its terminal summary: the HTML report in `report_dir` when given (its
+/// index named on stdout unless `quiet`), then `json` to `json_target` when given (see [`emit_json`]).
+pub fn write_report_and_json(
+    report_dir: Option<&Path>,
+    report: impl FnOnce() -> crate::report::Report,
+    json: &serde_json::Value,
+    json_target: Option<&str>,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    if let Some(dir) = report_dir {
+        let index = crate::report::write_report_dir(dir, &report(), json)?;
+        if !quiet {
+            println!("\nreport: {}", index.display());
+        }
+    }
+    if let Some(target) = json_target {
+        emit_json(target, json)?;
+    }
+    Ok(())
+}
+
 /// [`crate::compare::compare_and_explain`] behind a spinner (the `compare` and `demo` commands).
 pub fn compare_with_spinner(
     sim: &mut JsbsimSim,

@@ -1,11 +1,10 @@
 //! `flightid derivatives`: aerodynamic derivatives backed out of identified transfer functions (the paper's
 //! Section 5) and by equation error, scored against the JSBSim model's own values (Tables 1 and 3).
 
-use super::common::{emit_json, ColumnsArg, TrimArgs};
+use super::common::{emit_json, write_report_and_json, ColumnsArg, TrimArgs};
 use super::paper::text_table;
 use crate::cli::UsageError;
 use crate::ident::Method;
-use crate::report;
 use crate::report::text::{wrap, TERMINAL_WIDTH};
 use crate::study::spec::{parse_derivatives, Structure};
 use crate::study::trials::{SensorNoise, TrialOptions};
@@ -202,16 +201,13 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
         }
     }
     let json = result.to_json();
-    if let Some(dir) = &args.report {
-        let index = report::write_report_dir(dir, &result.report(), &json)?;
-        if !quiet {
-            println!("\nreport: {}", index.display());
-        }
-    }
-    if let Some(target) = &args.json {
-        emit_json(target, &json)?;
-    }
-    Ok(())
+    write_report_and_json(
+        args.report.as_deref(),
+        || result.report(),
+        &json,
+        args.json.as_deref(),
+        quiet,
+    )
 }
 
 /// The measured-data route: `--data … --airframe …`.

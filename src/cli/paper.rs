@@ -1,10 +1,10 @@
 //! `flightid paper`: reproduce Section 4 of Şahin & Kalyon 2021 (coefficients, ISE table, response overlays).
 
-use super::common::emit_json;
+use super::common::write_report_and_json;
 use crate::cli::UsageError;
 use crate::ident::Method;
 use crate::paper::{self, PaperInput, PaperOptions};
-use crate::report::{self, Table};
+use crate::report::Table;
 use std::path::PathBuf;
 
 /// Input shapes for the reproduction.
@@ -100,14 +100,11 @@ pub fn run(args: &PaperCmd) -> anyhow::Result<()> {
         }
     }
     let json = run.to_json();
-    if let Some(dir) = &args.report {
-        let index = report::write_report_dir(dir, &run.report(), &json)?;
-        if !quiet {
-            println!("\nreport: {}", index.display());
-        }
-    }
-    if let Some(target) = &args.json {
-        emit_json(target, &json)?;
-    }
-    Ok(())
+    write_report_and_json(
+        args.report.as_deref(),
+        || run.report(),
+        &json,
+        args.json.as_deref(),
+        quiet,
+    )
 }

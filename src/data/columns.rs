@@ -162,11 +162,8 @@ impl ColumnMap {
     /// Reads and checks a map file: every target a schema column, every unit known and of the
     /// target's dimension, no target named twice.
     pub fn load(path: &Path) -> Result<ColumnMap, DataError> {
-        let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
-            file: path.to_path_buf(),
-            action: "cannot read the column map",
-            source,
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(DataError::io(path, "cannot read the column map"))?;
         Self::parse(&text, path)
     }
 
@@ -399,6 +396,11 @@ mod tests {
         ColumnMap::parse(text, Path::new("map.toml"))
     }
 
+    /// The message of the error a map that must be refused gives.
+    fn refusal(text: &str) -> String {
+        parse(text).unwrap_err().to_string()
+    }
+
     #[test]
     fn units_convert_to_si_with_the_maps_scale() {
         let m = parse(
@@ -417,30 +419,22 @@ mod tests {
 
     #[test]
     fn bad_maps_name_the_entry_the_unit_and_the_target() {
-        let e = parse("[columns]\nA = { to = \"alpha_rad\", unit = \"degree\" }\n")
-            .unwrap_err()
-            .to_string();
+        let e = refusal("[columns]\nA = { to = \"alpha_rad\", unit = \"degree\" }\n");
         assert!(
             e.contains("`A`") && e.contains("unknown unit `degree`") && e.contains("deg"),
             "{e}"
         );
-        let e = parse("[columns]\nA = { to = \"alpha\", unit = \"deg\" }\n")
-            .unwrap_err()
-            .to_string();
+        let e = refusal("[columns]\nA = { to = \"alpha\", unit = \"deg\" }\n");
         assert!(
             e.contains("unknown target column `alpha`") && e.contains("alpha_rad"),
             "{e}"
         );
-        let e = parse("[columns]\nV = { to = \"airspeed_m_s\", unit = \"deg\" }\n")
-            .unwrap_err()
-            .to_string();
+        let e = refusal("[columns]\nV = { to = \"airspeed_m_s\", unit = \"deg\" }\n");
         assert!(
             e.contains("measures an angle") && e.contains("a speed"),
             "{e}"
         );
-        let e = parse("[columns]\nA = { to = \"alpha_rad\" }\nB = { to = \"alpha_rad\" }\n")
-            .unwrap_err()
-            .to_string();
+        let e = refusal("[columns]\nA = { to = \"alpha_rad\" }\nB = { to = \"alpha_rad\" }\n");
         assert!(e.contains("both map to `alpha_rad`"), "{e}");
     }
 

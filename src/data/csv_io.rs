@@ -31,13 +31,7 @@ pub fn read_csv(path: &Path) -> Result<FlightRecord, DataError> {
 /// Reads a flight-data CSV whose foreign columns and units `map` renames and converts to the
 /// schema's SI columns while reading (see [`ColumnMap`]); without a map this is [`read_csv`].
 pub fn read_csv_mapped(path: &Path, map: Option<&ColumnMap>) -> Result<FlightRecord, DataError> {
-    let io_err = |action: &'static str| {
-        move |source| DataError::Io {
-            file: path.to_path_buf(),
-            action,
-            source,
-        }
-    };
+    let io_err = |action: &'static str| DataError::io(path, action);
     let mut f = File::open(path).map_err(io_err("cannot read the CSV file"))?;
     let size = f.metadata().map(|m| m.len()).unwrap_or(0);
     let file = path.display().to_string();
@@ -416,14 +410,7 @@ pub fn write_csv_atomic(path: &Path, rec: &FlightRecord) -> Result<(), DataError
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "flight.csv".into());
     let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
-    let io_err = |action: &'static str| {
-        let file = path.to_path_buf();
-        move |source| DataError::Io {
-            file,
-            action,
-            source,
-        }
-    };
+    let io_err = |action: &'static str| DataError::io(path, action);
     std::fs::create_dir_all(&dir).map_err(io_err("cannot create the output's folder"))?;
     let result = (|| {
         let f = OpenOptions::new()

@@ -1,7 +1,7 @@
 //! Errors and warnings of the `data` module.
 
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Where in-memory records are reported from when they did not come from a file.
 pub const IN_MEMORY: &str = "<in-memory record>";
@@ -164,6 +164,20 @@ pub struct Warning {
 }
 
 impl DataError {
+    /// Turns an I/O error on `path` into [`DataError::Io`], `action` saying what failed:
+    /// `.map_err(DataError::io(path, "cannot read the column map"))`.
+    pub(crate) fn io(
+        path: &Path,
+        action: &'static str,
+    ) -> impl FnOnce(std::io::Error) -> DataError {
+        let file = path.to_path_buf();
+        move |source| DataError::Io {
+            file,
+            action,
+            source,
+        }
+    }
+
     /// [`DataError::TimeNotIncreasing`] for the sample at `time_s` (line `line`) that does not exceed the one
     /// before it, `previous_s` (line `previous_line`).
     pub(crate) fn time_not_increasing(

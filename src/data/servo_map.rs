@@ -131,11 +131,8 @@ impl ServoMap {
 
     /// Reads a mapping file.
     pub fn load(path: &Path) -> Result<Self, DataError> {
-        let text = std::fs::read_to_string(path).map_err(|source| DataError::Io {
-            file: path.to_path_buf(),
-            action: "cannot read the servo mapping",
-            source,
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(DataError::io(path, "cannot read the servo mapping"))?;
         Self::from_toml_str(&text, path)
     }
 

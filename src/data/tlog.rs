@@ -199,11 +199,8 @@ pub fn read_tlog(
     servo_map: Option<&ServoMap>,
     options: &TlogOptions,
 ) -> Result<TlogReport, DataError> {
-    let bytes = std::fs::read(path).map_err(|source| DataError::Io {
-        file: path.to_path_buf(),
-        action: "cannot read the telemetry log",
-        source,
-    })?;
+    let bytes =
+        std::fs::read(path).map_err(DataError::io(path, "cannot read the telemetry log"))?;
     parse_tlog_bytes(&bytes, &path.display().to_string(), servo_map, options)
 }
 

@@ -26,7 +26,7 @@
 //!   form its ambiguity group.
 
 mod refine;
-use refine::{eliminate_backward, replace_ambiguous, Replacement};
+use refine::{eliminate_backward, replace_ambiguous, Refiner, Replacement};
 
 use super::baseline::Baseline;
 use super::extension::Extension;
@@ -58,13 +58,7 @@ fn with_candidate<'e>(
     start: f64,
     free_selected: bool,
 ) -> Vec<Active<'e>> {
-    let mut a: Vec<Active<'e>> = selected
-        .iter()
-        .map(|s| Active {
-            free: free_selected,
-            ..s.clone()
-        })
-        .collect();
+    let mut a = with_freedom(selected, free_selected);
     let mut params: Vec<f64> = e.params().iter().map(|p| p.null).collect();
     let spec = e.params()[0];
     if start.is_finite() {
@@ -76,6 +70,38 @@ fn with_candidate<'e>(
         free: true,
     });
     a
+}
+
+/// The selected effects, each free (fitted) or held as `free` says.
+fn with_freedom<'e>(selected: &[Active<'e>], free: bool) -> Vec<Active<'e>> {
+    selected
+        .iter()
+        .map(|s| Active { free, ..s.clone() })
+        .collect()
+}
+
+/// Makes `fitted` the selection, every effect held at its fitted values.
+fn adopt<'e>(selected: &mut Vec<Active<'e>>, fitted: Vec<Active<'e>>) {
+    *selected = fitted;
+    for s in selected.iter_mut() {
+        s.free = false;
+    }
+}
+
+/// Every start fitted by output error (its free effects refitted), in parallel on the workers; each fit's
+/// model evaluations are counted on `progress`.
+fn fit_starts<'e>(
+    workers: &mut [Worker],
+    w: &Weighted,
+    starts: &[Vec<Active<'e>>],
+    progress: &Progress,
+) -> Vec<FullFit<'e>> {
+    par_map(workers, starts, |wk, active| {
+        let mut a = active.clone();
+        let out = fit(wk, w, &mut a, 10, true);
+        progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
+        out.map(|o| (o, a))
+    })
 }
 
 /// Costs a round's criterion is measured against.
@@ -474,16 +500,11 @@ pub fn select<'e>(
         }
         let top_exts: Vec<&dyn Extension> = top.iter().map(|&j| catalogue[pool[j]]).collect();
         // Full pass: the top candidates jointly with the selected effects, from the score test's estimate.
-        let starts: Vec<(&dyn Extension, f64)> = top
+        let starts: Vec<Vec<Active>> = top
             .iter()
-            .map(|&j| (catalogue[pool[j]], quick[j].values[0]))
+            .map(|&j| with_candidate(&selected, catalogue[pool[j]], quick[j].values[0], true))
             .collect();
-        let full: Vec<FullFit> = par_map(workers, &starts, |wk, (e, start)| {
-            let mut a = with_candidate(&selected, *e, *start, true);
-            let out = fit(wk, &w, &mut a, 10, true);
-            progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
-            out.map(|o| (o, a))
-        });
+        let full = fit_starts(workers, &w, &starts, progress);
         // Significance of each fully fitted candidate.
         let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
         for (t, r) in full.iter().enumerate() {
@@ -526,10 +547,7 @@ pub fn select<'e>(
             opts,
         );
         // Accept: the joint fit updates the values of the effects already selected.
-        selected = best_active.clone();
-        for s in selected.iter_mut() {
-            s.free = false;
-        }
+        adopt(&mut selected, best_active.clone());
         named = selected
             .iter()
             .enumerate()
@@ -563,41 +581,27 @@ pub fn select<'e>(
             valid_cost = Some(after);
         }
     }
-    let rounds = named.len();
-    replace_ambiguous(
+    let mut refiner = Refiner {
         workers,
-        &w,
-        &catalogue,
-        &sens,
-        &resolution,
-        &masks,
+        w: &w,
+        catalogue: &catalogue,
+        resolution: &resolution,
+        masks: &masks,
         opts,
         progress,
-        Replacement {
-            selected: &mut selected,
-            named: &mut named,
-            candidates: &mut candidates,
-            cost: &mut base_cost,
-            round: rounds,
-        },
-    )?;
+    };
+    let rounds = named.len();
+    let mut state = Replacement {
+        selected: &mut selected,
+        named: &mut named,
+        candidates: &mut candidates,
+        cost: &mut base_cost,
+        round: rounds,
+    };
+    replace_ambiguous(&mut refiner, &sens, state.reborrow())?;
     if opts.backward_elimination {
-        eliminate_backward(
-            workers,
-            &w,
-            &catalogue,
-            &resolution,
-            &masks,
-            opts,
-            progress,
-            Replacement {
-                selected: &mut selected,
-                named: &mut named,
-                candidates: &mut candidates,
-                cost: &mut base_cost,
-                round: rounds + 1,
-            },
-        )?;
+        state.round += 1;
+        eliminate_backward(&mut refiner, state)?;
     }
     Ok(Selection {
         selected,

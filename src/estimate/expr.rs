@@ -409,30 +409,27 @@ impl Parser<'_> {
         }
     }
 
-    fn expr(&mut self) -> Result<Expr, ExprError> {
-        let mut e = self.term()?;
+    /// One precedence level of left-associative binary operators: `next (op next)*` for `op` in `ops`.
+    fn left_assoc(
+        &mut self,
+        ops: [char; 2],
+        next: fn(&mut Self) -> Result<Expr, ExprError>,
+    ) -> Result<Expr, ExprError> {
+        let mut e = next(self)?;
         loop {
-            if self.eat('+') {
-                e = Expr::Bin('+', Box::new(e), Box::new(self.term()?));
-            } else if self.eat('-') {
-                e = Expr::Bin('-', Box::new(e), Box::new(self.term()?));
-            } else {
+            let Some(&op) = ops.iter().find(|&&op| self.eat(op)) else {
                 return Ok(e);
-            }
+            };
+            e = Expr::Bin(op, Box::new(e), Box::new(next(self)?));
         }
     }
 
+    fn expr(&mut self) -> Result<Expr, ExprError> {
+        self.left_assoc(['+', '-'], Self::term)
+    }
+
     fn term(&mut self) -> Result<Expr, ExprError> {
-        let mut e = self.unary()?;
-        loop {
-            if self.eat('*') {
-                e = Expr::Bin('*', Box::new(e), Box::new(self.unary()?));
-            } else if self.eat('/') {
-                e = Expr::Bin('/', Box::new(e), Box::new(self.unary()?));
-            } else {
-                return Ok(e);
-            }
-        }
+        self.left_assoc(['*', '/'], Self::unary)
     }
 
     fn unary(&mut self) -> Result<Expr, ExprError> {

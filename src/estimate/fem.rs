@@ -38,7 +38,7 @@
 
 use faer::Mat;
 
-use super::integrate::{Stages, DIVERGED};
+use super::integrate::{check_output, check_states, Stages};
 use super::model::{SimError, StateModel};
 use super::record::Run;
 use super::riccati::care_filter;
@@ -189,23 +189,13 @@ pub(crate) fn filter(
                 }
                 None => stage.advance(model, theta, &mut x, run, time[k - 1], time[k], &mut u),
             }
-            if let Some(i) = x.iter().position(|v| !v.is_finite() || v.abs() > DIVERGED) {
-                return Err(SimError::Diverged {
-                    time_s: time[k] - time[0],
-                    what: format!("state {}", sig.states[i]),
-                });
-            }
+            check_states(&x, &sig.states, time[k] - time[0])?;
         }
         run.input.at(time[k], &mut u);
         model.outputs(theta, &x, &u, &mut y);
         for o in 0..ny {
             let yo = y[o] + output_bias[o];
-            if !yo.is_finite() || yo.abs() > DIVERGED {
-                return Err(SimError::Diverged {
-                    time_s: time[k] - time[0],
-                    what: format!("output {}", sig.outputs[o]),
-                });
-            }
+            check_output(yo, &sig.outputs[o], time[k] - time[0])?;
             out[o][k] = yo;
             v[o] = z[o][k] - yo;
         }

@@ -13,6 +13,30 @@ use super::record::Run;
 /// Largest magnitude a state or output may reach before the simulation counts as diverged.
 pub(crate) const DIVERGED: f64 = 1e12;
 
+/// [`SimError::Diverged`] naming the first state of `x` that is not finite or beyond [`DIVERGED`], `time_s` into
+/// the run (`states` names them).
+pub(crate) fn check_states(x: &[f64], states: &[String], time_s: f64) -> Result<(), SimError> {
+    match x.iter().position(|v| !v.is_finite() || v.abs() > DIVERGED) {
+        Some(i) => Err(SimError::Diverged {
+            time_s,
+            what: format!("state {}", states[i]),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// [`SimError::Diverged`] when output `name`'s value `y` is not finite or beyond [`DIVERGED`], `time_s` into the
+/// run.
+pub(crate) fn check_output(y: f64, name: &str, time_s: f64) -> Result<(), SimError> {
+    if !y.is_finite() || y.abs() > DIVERGED {
+        return Err(SimError::Diverged {
+            time_s,
+            what: format!("output {name}"),
+        });
+    }
+    Ok(())
+}
+
 /// Outputs `[output][k]` of `model` at the run's sample times, starting from `x0` at the first.
 pub fn simulate_states(
     model: &dyn StateModel,
@@ -33,22 +57,12 @@ pub fn simulate_states(
         if k > 0 {
             let (start, end) = (time[k - 1], time[k]);
             stage.advance(model, theta, &mut x, run, start, end, &mut u);
-            if let Some(i) = x.iter().position(|v| !v.is_finite() || v.abs() > DIVERGED) {
-                return Err(SimError::Diverged {
-                    time_s: end - time[0],
-                    what: format!("state {}", sig.states[i]),
-                });
-            }
+            check_states(&x, &sig.states, end - time[0])?;
         }
         run.input.at(time[k], &mut u);
         model.outputs(theta, &x, &u, &mut y);
         for (o, v) in y.iter().enumerate() {
-            if !v.is_finite() || v.abs() > DIVERGED {
-                return Err(SimError::Diverged {
-                    time_s: time[k] - time[0],
-                    what: format!("output {}", sig.outputs[o]),
-                });
-            }
+            check_output(*v, &sig.outputs[o], time[k] - time[0])?;
             y_out[o][k] = *v;
         }
     }

@@ -203,25 +203,31 @@ impl Layout {
                 };
                 push(slot, x, f64::NEG_INFINITY, f64::INFINITY, x.abs().max(1e-2));
             }
-            for &i in &nuisance.output_bias {
-                let slot = Slot {
-                    kind: NuisanceKind::OutputBias,
-                    record: Some(r),
-                    index: i,
-                    target: sig.outputs[i].clone(),
-                };
-                let sc = spread(&rec.outputs[i]).max(1e-6);
-                push(slot, 0.0, f64::NEG_INFINITY, f64::INFINITY, sc);
-            }
-            for &i in &nuisance.input_bias {
-                let slot = Slot {
-                    kind: NuisanceKind::InputBias,
-                    record: Some(r),
-                    index: i,
-                    target: sig.inputs[i].clone(),
-                };
-                let sc = spread(&rec.inputs[i]).max(1e-6);
-                push(slot, 0.0, f64::NEG_INFINITY, f64::INFINITY, sc);
+            // output biases, then input biases: each scaled by the spread of its signal
+            for (kind, indices, names, signals) in [
+                (
+                    NuisanceKind::OutputBias,
+                    &nuisance.output_bias,
+                    &sig.outputs,
+                    &rec.outputs,
+                ),
+                (
+                    NuisanceKind::InputBias,
+                    &nuisance.input_bias,
+                    &sig.inputs,
+                    &rec.inputs,
+                ),
+            ] {
+                for &i in indices {
+                    let slot = Slot {
+                        kind,
+                        record: Some(r),
+                        index: i,
+                        target: names[i].clone(),
+                    };
+                    let sc = spread(&signals[i]).max(1e-6);
+                    push(slot, 0.0, f64::NEG_INFINITY, f64::INFINITY, sc);
+                }
             }
         }
         // a skew is bounded to a quarter of the shortest record and 0.5 s

@@ -11,7 +11,7 @@
 
 use faer::Mat;
 
-use super::integrate::simulate_states;
+use super::integrate::{check_states, simulate_states};
 use super::model::{Discrete, Model, Signature, SimError, StateModel};
 use super::record::{InputHold, Run};
 use super::EstimateError;
@@ -224,16 +224,27 @@ impl LinearModel {
                 }
                 next[i] = v;
             }
-            if let Some(i) = next.iter().position(|v| !v.is_finite() || v.abs() > 1e12) {
-                return Some(Err(SimError::Diverged {
-                    time_s: t[k + 1] - t[0],
-                    what: format!("state {}", self.signature.states[i]),
-                }));
+            if let Err(e) = check_states(&next, &self.signature.states, t[k + 1] - t[0]) {
+                return Some(Err(e));
             }
             x.copy_from_slice(&next);
         }
         Some(Ok(y))
     }
+}
+
+/// One row of `A x + B u` (or `C x + D u`): `state_row · x + input_row · u`, the entries evaluated at `theta`.
+fn row_value(state_row: &[Entry], input_row: &[Entry], theta: &[f64], x: &[f64], u: &[f64]) -> f64 {
+    state_row
+        .iter()
+        .zip(x)
+        .map(|(e, v)| e.value(theta) * v)
+        .sum::<f64>()
+        + input_row
+            .iter()
+            .zip(u)
+            .map(|(e, v)| e.value(theta) * v)
+            .sum::<f64>()
 }
 
 impl StateModel for LinearModel {
@@ -243,16 +254,7 @@ impl StateModel for LinearModel {
 
     fn derivatives(&self, theta: &[f64], x: &[f64], u: &[f64], dx: &mut [f64]) {
         for (i, d) in dx.iter_mut().enumerate() {
-            *d = self.a[i]
-                .iter()
-                .zip(x)
-                .map(|(e, v)| e.value(theta) * v)
-                .sum::<f64>()
-                + self.b[i]
-                    .iter()
-                    .zip(u)
-                    .map(|(e, v)| e.value(theta) * v)
-                    .sum::<f64>();
+            *d = row_value(&self.a[i], &self.b[i], theta, x, u);
         }
     }
 
@@ -262,16 +264,7 @@ impl StateModel for LinearModel {
 
     fn outputs(&self, theta: &[f64], x: &[f64], u: &[f64], y: &mut [f64]) {
         for (o, yo) in y.iter_mut().enumerate() {
-            *yo = self.c[o]
-                .iter()
-                .zip(x)
-                .map(|(e, v)| e.value(theta) * v)
-                .sum::<f64>()
-                + self.d[o]
-                    .iter()
-                    .zip(u)
-                    .map(|(e, v)| e.value(theta) * v)
-                    .sum::<f64>();
+            *yo = row_value(&self.c[o], &self.d[o], theta, x, u);
         }
     }
 }

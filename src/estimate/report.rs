@@ -5,7 +5,7 @@
 use crate::report::{LinePlot, Report, Section, Series, Table};
 
 use super::fit::Estimate;
-use super::summary::HIGH_CORRELATION;
+use super::summary::{fit_list, HIGH_CORRELATION};
 
 impl Estimate {
     /// The report (write it with [`crate::report::write_report_dir`], with [`Estimate::to_json`]).
@@ -43,18 +43,12 @@ impl Estimate {
                 plots.push((format!("record{r}_{name}"), overlay));
                 plots.push((format!("record{r}_{name}_residual"), residuals));
             }
-            let fit: Vec<String> = self
-                .outputs
-                .iter()
-                .zip(&rec.fit_percent)
-                .map(|(n, f)| format!("{n} {f:.1} %"))
-                .collect();
             sections.push(Section {
                 heading: format!("Record {}", rec.name),
                 paragraphs: vec![format!(
                     "{} samples; fit {}.",
                     rec.time_s.len(),
-                    fit.join(", ")
+                    fit_list(&self.outputs, &rec.fit_percent)
                 )],
                 tables: Vec::new(),
                 plots,

@@ -204,13 +204,10 @@ impl SubspaceModel {
                 mode.omega_n_rad_s, mode.zeta
             ));
         }
-        let fit: Vec<String> = self
-            .outputs
-            .iter()
-            .zip(&self.fit_percent)
-            .map(|(n, f)| format!("{n} {f:.1} %"))
-            .collect();
-        out.push_str(&format!("fit: {}\n", fit.join(", ")));
+        out.push_str(&format!(
+            "fit: {}\n",
+            fit_list(&self.outputs, &self.fit_percent)
+        ));
         out
     }
 
@@ -288,4 +285,14 @@ fn matrix_block(name: &str, rows: &[String], cols: &[String], m: &faer::Mat<f64>
         out.push('\n');
     }
     out
+}
+
+/// Fit percent per output as `name 97.3 %`, comma-separated.
+pub(super) fn fit_list(outputs: &[String], fit_percent: &[f64]) -> String {
+    let fit: Vec<String> = outputs
+        .iter()
+        .zip(fit_percent)
+        .map(|(n, f)| format!("{n} {f:.1} %"))
+        .collect();
+    fit.join(", ")
 }

@@ -252,32 +252,33 @@ fn turbulent_record(dt_s: f64, q_psd: [f64; 2], noise: [f64; 2], seed: u64) -> R
     Record { outputs, ..clean }
 }
 
-#[test]
-fn without_process_noise_the_filter_error_method_gives_the_output_error_answer() {
-    let rec = record("a", 0.02, [0.01, -0.02], [0.002, 0.005], [0.0, 0.0], 21);
+/// The short-period model fitted to `recs` by output error and by filter error, both estimating the initial
+/// state of each record.
+fn output_error_and_filter_error(recs: &[Record]) -> (Estimate, Estimate) {
     let nuisance = Nuisance {
         initial_state: vec![0, 1],
         ..Nuisance::default()
     };
-    let oe = fit(
-        &short_period(),
-        &start(),
-        std::slice::from_ref(&rec),
-        &nuisance,
-        &Options::default(),
-    )
-    .unwrap();
-    let fem = fit(
-        &short_period(),
-        &start(),
-        &[rec],
-        &nuisance,
-        &Options {
-            method: Method::Fem,
-            ..Options::default()
-        },
-    )
-    .unwrap();
+    let fit_by = |method: Method| {
+        fit(
+            &short_period(),
+            &start(),
+            recs,
+            &nuisance,
+            &Options {
+                method,
+                ..Options::default()
+            },
+        )
+        .unwrap()
+    };
+    (fit_by(Method::Oe), fit_by(Method::Fem))
+}
+
+#[test]
+fn without_process_noise_the_filter_error_method_gives_the_output_error_answer() {
+    let rec = record("a", 0.02, [0.01, -0.02], [0.002, 0.005], [0.0, 0.0], 21);
+    let (oe, fem) = output_error_and_filter_error(&[rec]);
     assert!(fem.converged, "{:?}", fem.stop);
     // the process noise stays on its bound 0: the gain is 0 and the filter is the simulation
     for n in fem
@@ -303,29 +304,7 @@ fn with_process_noise_the_filter_error_method_finds_the_truth() {
     let recs: Vec<Record> = (0..2)
         .map(|s| turbulent_record(0.02, [2e-4, 4e-3], [0.001, 0.002], 31 + s))
         .collect();
-    let nuisance = Nuisance {
-        initial_state: vec![0, 1],
-        ..Nuisance::default()
-    };
-    let oe = fit(
-        &short_period(),
-        &start(),
-        &recs,
-        &nuisance,
-        &Options::default(),
-    )
-    .unwrap();
-    let fem = fit(
-        &short_period(),
-        &start(),
-        &recs,
-        &nuisance,
-        &Options {
-            method: Method::Fem,
-            ..Options::default()
-        },
-    )
-    .unwrap();
+    let (oe, fem) = output_error_and_filter_error(&recs);
     for ((a, b), t) in oe.parameters.iter().zip(&fem.parameters).zip(TRUTH) {
         eprintln!(
             "{}: truth {t} oe {:.3} ± {:.3} ({:.1}σ)  fem {:.3} ± {:.3} ({:.1}σ)",

@@ -98,25 +98,20 @@ impl UserModel {
             }
         }
         let names = |key: &str| -> Result<Vec<String>, ModelFileError> {
+            let not_a_list = || {
+                err(
+                    key_line(text, None, key),
+                    key,
+                    format!("'{key}' must be a list of column names"),
+                )
+            };
             match table.get(key) {
                 None => Ok(Vec::new()),
                 Some(toml::Value::Array(a)) => a
                     .iter()
-                    .map(|v| {
-                        v.as_str().map(String::from).ok_or_else(|| {
-                            err(
-                                key_line(text, None, key),
-                                key,
-                                format!("'{key}' must be a list of column names"),
-                            )
-                        })
-                    })
+                    .map(|v| v.as_str().map(String::from).ok_or_else(not_a_list))
                     .collect(),
-                Some(_) => Err(err(
-                    key_line(text, None, key),
-                    key,
-                    format!("'{key}' must be a list of column names"),
-                )),
+                Some(_) => Err(not_a_list()),
             }
         };
         let states = names("states")?;
@@ -237,16 +232,21 @@ impl UserModel {
                 err(line, &name, format!("in the equation of '{k}': {e}"))
             })
         };
-        let eq_section = section("equations")?;
-        for (k, _) in &eq_section {
-            if !states.contains(k) {
-                return Err(err(
-                    key_line(text, Some("equations"), k),
-                    k,
-                    format!("equation for '{k}', which is not a state"),
-                ));
+        // Every key of section `sec` names one of `known`; `unknown(k)` says what a stray key would have been.
+        let keys_known = |sec: &str,
+                          entries: &[(String, toml::Value)],
+                          known: &[String],
+                          unknown: &dyn Fn(&str) -> String|
+         -> Result<(), ModelFileError> {
+            match entries.iter().find(|(k, _)| !known.contains(k)) {
+                Some((k, _)) => Err(err(key_line(text, Some(sec), k), k, unknown(k))),
+                None => Ok(()),
             }
-        }
+        };
+        let eq_section = section("equations")?;
+        keys_known("equations", &eq_section, &states, &|k| {
+            format!("equation for '{k}', which is not a state")
+        })?;
         let mut equations = Vec::new();
         for s in &states {
             let Some((_, v)) = eq_section.iter().find(|(k, _)| k == s) else {
@@ -259,15 +259,9 @@ impl UserModel {
             equations.push(compile("equations", s, v)?.compile());
         }
         let obs_section = section("observations")?;
-        for (k, _) in &obs_section {
-            if !outputs.contains(k) {
-                return Err(err(
-                    key_line(text, Some("observations"), k),
-                    k,
-                    format!("observation of '{k}', which is not an output"),
-                ));
-            }
-        }
+        keys_known("observations", &obs_section, &outputs, &|k| {
+            format!("observation of '{k}', which is not an output")
+        })?;
         let mut observations = Vec::new();
         for o in &outputs {
             match obs_section.iter().find(|(k, _)| k == o) {

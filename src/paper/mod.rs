@@ -241,6 +241,12 @@ pub fn paper_lsm_worst_error() -> (f64, &'static str, String) {
     worst
 }
 
+/// Numerator then denominator without its leading 1, the order of [`coefficient_names`]: a transfer function's
+/// coefficients, or their standard errors.
+fn table_order(num: &[f64], den: &[f64]) -> Vec<f64> {
+    num.iter().chain(&den[1..]).copied().collect()
+}
+
 /// Names of the coefficients in the order of [`coefficient_rel_errors`]: `b2 b1 b0 a3 a2 a1 a0`.
 pub fn coefficient_names(tf: &TransferFunction) -> Vec<String> {
     let m = tf.num.len() - 1;
@@ -487,31 +493,19 @@ impl PaperRun {
             }
             header.push("err %".into());
             if let Ok(r) = &m.result {
-                let coefs: Vec<f64> = r.tf.num.iter().chain(&r.tf.den[1..]).copied().collect();
+                let coefs = table_order(&r.tf.num, &r.tf.den);
                 let stds: Vec<f64> = if r.num_std.is_empty() {
                     Vec::new()
                 } else {
-                    r.num_std.iter().chain(&r.den_std[1..]).copied().collect()
+                    table_order(&r.num_std, &r.den_std)
                 };
                 cols.push((coefs, stds, coefficient_rel_errors(&r.tf, &t.tf.original)));
             } else {
                 cols.push((Vec::new(), Vec::new(), Vec::new()));
             }
         }
-        let orig: Vec<f64> =
-            t.tf.original
-                .num
-                .iter()
-                .chain(&t.tf.original.den[1..])
-                .copied()
-                .collect();
-        let lsm: Vec<f64> =
-            t.tf.paper_lsm
-                .num
-                .iter()
-                .chain(&t.tf.paper_lsm.den[1..])
-                .copied()
-                .collect();
+        let orig = table_order(&t.tf.original.num, &t.tf.original.den);
+        let lsm = table_order(&t.tf.paper_lsm.num, &t.tf.paper_lsm.den);
         let lsm_err = coefficient_rel_errors(&t.tf.paper_lsm, &t.tf.original);
         let rows = (0..names.len())
             .map(|i| {

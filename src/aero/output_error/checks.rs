@@ -64,7 +64,6 @@ pub(super) const SPEED: [&str; 3] = ["CL_V", "CD_V", "Cm_V"];
 /// The α̇ terms, with C_Lq (nearly collinear with C_Lα̇ in a short-period response).
 pub(super) const ALPHADOT: [&str; 3] = ["CL_alphadot", "Cm_alphadot", "CL_q"];
 
-/// A structure check: the note and, when the records support it, the wider fit to adopt.
 /// The fit of one axis ([`fit_longitudinal`], [`fit_lateral`]).
 pub(super) type AxisFitter = fn(
     &[&(String, data::FlightRecord)],
@@ -72,7 +71,8 @@ pub(super) type AxisFitter = fn(
     &mut Vec<String>,
 ) -> Result<AxisFit, MeasuredError>;
 
-type Check =
+/// A structure check: the note and, when the records support it, the wider fit to adopt.
+pub(super) type Check =
     fn(&[&(String, data::FlightRecord)], FitSetup, &AxisFit) -> Option<(String, Option<AxisFit>)>;
 
 /// Runs structure checks in turn, each from the structure the one before adopted: a check's note goes into

@@ -172,13 +172,8 @@ impl ChunkSink<'_> {
         }
     }
 
-    /// Adds one row given as an iterator over its cells; `n_fields` is the row's field count.
-    fn push_row<'c>(
-        &mut self,
-        line: usize,
-        n_fields: usize,
-        cells: impl Iterator<Item = &'c [u8]>,
-    ) -> Result<(), DataError> {
+    /// [`DataError::Ragged`] unless the row at `line` has as many fields (`n_fields`) as the header.
+    fn check_width(&self, line: usize, n_fields: usize) -> Result<(), DataError> {
         let ncols = self.names.len();
         if n_fields != ncols {
             return Err(DataError::Ragged {
@@ -188,6 +183,17 @@ impl ChunkSink<'_> {
                 found: n_fields,
             });
         }
+        Ok(())
+    }
+
+    /// Adds one row given as an iterator over its cells; `n_fields` is the row's field count.
+    fn push_row<'c>(
+        &mut self,
+        line: usize,
+        n_fields: usize,
+        cells: impl Iterator<Item = &'c [u8]>,
+    ) -> Result<(), DataError> {
+        self.check_width(line, n_fields)?;
         for (k, cell) in cells.enumerate() {
             let v = parse_cell(cell).map_err(|_| self.cell_error(line, k, cell))?;
             self.columns[k].push(v);
@@ -256,14 +262,7 @@ pub(super) fn parse_chunk_plain(
             p = end + 1;
         }
         if k != usize::MAX {
-            if k != ncols {
-                return Err(DataError::Ragged {
-                    file: sink.file.to_string(),
-                    line,
-                    expected: ncols,
-                    found: k,
-                });
-            }
+            sink.check_width(line, k)?;
             sink.finish_row(line)?;
         }
         line += 1;

@@ -3,12 +3,13 @@
 //! members of its ambiguity group, with all the others modelled); Miller, *Subset Selection in Regression*,
 //! 2nd ed., §3.2–3.3.
 
-use super::{drop_and_recost, rejection, score_test, with_candidate, FullFit, RoundContext};
+use super::{
+    adopt, drop_and_recost, fit_starts, rejection, score_test, with_candidate, with_freedom,
+    RoundContext,
+};
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
-use crate::diagnose::search::{
-    effective_n, fit, par_map, residuals, Active, FitOutcome, Weighted, Worker,
-};
+use crate::diagnose::search::{effective_n, fit, residuals, Active, FitOutcome, Weighted, Worker};
 use crate::diagnose::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 
 /// The fit `o` with free parameter `i` moved last, where the selection's tests read the candidate's.
@@ -31,23 +32,42 @@ fn with_last(o: &FitOutcome, i: usize) -> FitOutcome {
     out
 }
 
+/// `active` without its `i`-th effect.
+fn without<'e>(active: &[Active<'e>], i: usize) -> Vec<Active<'e>> {
+    active
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| *k != i)
+        .map(|(_, a)| a.clone())
+        .collect()
+}
+
+/// What backward elimination and sequential replacement work with besides the selection's state: the workers,
+/// the weighted training record, the identifiable catalogue with each entry's resolution and channel mask, the
+/// options and the progress display.
+pub(super) struct Refiner<'a, 'e> {
+    pub(super) workers: &'a mut [Worker],
+    pub(super) w: &'a Weighted<'a>,
+    pub(super) catalogue: &'a [&'e dyn Extension],
+    pub(super) resolution: &'a [f64],
+    pub(super) masks: &'a [Vec<bool>],
+    pub(super) opts: &'a DiagnoseOptions,
+    pub(super) progress: &'a Progress,
+}
+
 /// Backward elimination (Miller, Subset Selection in Regression, 2nd ed., §3.2, the backward step of Efroymson's
 /// stepwise method): with every named effect in the model, each one, latest first, must still pass every test
 /// of the selection against the model without it (fitted again, the others free). An effect named early can
 /// lose its reason once a later one is modelled: a Cm_α ×0.43 in gusts first came out as an elevator
 /// effectiveness of ×1.25, which fell to ×1.02 once Cm_α was named. A dropped effect goes back to the
 /// candidates with the reason.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn eliminate_backward<'e>(
-    workers: &mut [Worker],
-    w: &Weighted,
-    catalogue: &[&'e dyn Extension],
-    resolution: &[f64],
-    masks: &[Vec<bool>],
-    opts: &DiagnoseOptions,
-    progress: &Progress,
+    refiner: &mut Refiner<'_, 'e>,
     state: Replacement<'_, 'e>,
 ) -> Result<(), DiagnoseError> {
+    let workers = &mut *refiner.workers;
+    let (w, catalogue, resolution) = (refiner.w, refiner.catalogue, refiner.resolution);
+    let (masks, opts, progress) = (refiner.masks, refiner.opts, refiner.progress);
     let Replacement {
         selected,
         named,
@@ -59,13 +79,7 @@ pub(super) fn eliminate_backward<'e>(
         return Ok(());
     }
     progress.stage("backward elimination", selected.len() + 1);
-    let mut full: Vec<Active<'e>> = selected
-        .iter()
-        .map(|s| Active {
-            free: true,
-            ..s.clone()
-        })
-        .collect();
+    let mut full = with_freedom(selected, true);
     let mut o_full = fit(&mut workers[0], w, &mut full, 10, true).map_err(sim_err("replay"))?;
     progress.fitted(o_full.evaluations);
     let mut i = full.len();
@@ -77,19 +91,9 @@ pub(super) fn eliminate_backward<'e>(
         else {
             continue;
         };
-        let starts: Vec<Vec<Active<'e>>> = vec![full
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| *k != i)
-            .map(|(_, a)| a.clone())
-            .collect()];
-        let without = par_map(workers, &starts, |wk, active| {
-            let mut a = active.clone();
-            let out = fit(wk, w, &mut a, 10, true);
-            progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
-            out.map(|o| (o, a))
-        });
-        let Some(Ok((o_without, a_without))) = without.into_iter().next() else {
+        let starts = vec![without(&full, i)];
+        let fits = fit_starts(workers, w, &starts, progress);
+        let Some(Ok((o_without, a_without))) = fits.into_iter().next() else {
             continue;
         };
         let o_last = with_last(&o_full, i);
@@ -116,10 +120,7 @@ pub(super) fn eliminate_backward<'e>(
         n.std_error = o_full.std_errors.get(k).copied().unwrap_or(f64::NAN);
     }
     *cost = o_full.cost_after;
-    *selected = full;
-    for s in selected.iter_mut() {
-        s.free = false;
-    }
+    adopt(selected, full);
     Ok(())
 }
 
@@ -139,18 +140,14 @@ pub(super) struct Replacement<'a, 'e> {
 /// effects are still unmodelled their residual decides which fits better; the choice is made only once those are
 /// modelled. Both models have the same number of parameters, so the lower cost is the better criterion value;
 /// the alternative must also pass every significance test against the model without the effect it replaces.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn replace_ambiguous<'e>(
-    workers: &mut [Worker],
-    w: &Weighted,
-    catalogue: &[&'e dyn Extension],
+    refiner: &mut Refiner<'_, 'e>,
     sens: &[Vec<f64>],
-    resolution: &[f64],
-    masks: &[Vec<bool>],
-    opts: &DiagnoseOptions,
-    progress: &Progress,
     state: Replacement<'_, 'e>,
 ) -> Result<(), DiagnoseError> {
+    let workers = &mut *refiner.workers;
+    let (w, catalogue, resolution) = (refiner.w, refiner.catalogue, refiner.resolution);
+    let (masks, opts, progress) = (refiner.masks, refiner.opts, refiner.progress);
     let Replacement {
         selected,
         named,
@@ -173,13 +170,7 @@ pub(super) fn replace_ambiguous<'e>(
         }
         progress.stage("ambiguity groups", alternatives.len());
         // The model without effect i, its residual and cost: the base the alternatives are judged against.
-        let without: Vec<Active<'e>> = selected
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| *k != i)
-            .map(|(_, a)| a.clone())
-            .collect();
-        let r = residuals(&mut workers[0], w, &without).map_err(sim_err("replay"))?;
+        let r = residuals(&mut workers[0], w, &without(selected, i)).map_err(sim_err("replay"))?;
         progress.simulated(1);
         let cost_without: f64 = r.iter().map(|v| v * v).sum();
         let n_eff = effective_n(&r, w.case.len());
@@ -188,24 +179,13 @@ pub(super) fn replace_ambiguous<'e>(
             .iter()
             .map(|&j| {
                 let start = score_test(catalogue[j], &sens[j], &r, cost_without, n_eff).values[0];
-                let mut a: Vec<Active<'e>> = selected
-                    .iter()
-                    .map(|s| Active {
-                        free: true,
-                        ..s.clone()
-                    })
-                    .collect();
+                let mut a = with_freedom(selected, true);
                 let one = with_candidate(&[], catalogue[j], start, true);
                 a[i] = one[0].clone();
                 a
             })
             .collect();
-        let fits: Vec<FullFit> = par_map(workers, &starts, |wk, active| {
-            let mut a = active.clone();
-            let out = fit(wk, w, &mut a, 10, true);
-            progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
-            out.map(|o| (o, a))
-        });
+        let fits = fit_starts(workers, w, &starts, progress);
         let ctx = RoundContext {
             round,
             base_cost: cost_without,
@@ -237,10 +217,7 @@ pub(super) fn replace_ambiguous<'e>(
         let Some((j, o, a)) = best else { continue };
         let replaced = format!("{}/{}", named[i].effect, named[i].target);
         let kept = format!("{}/{}", catalogue[j].effect(), catalogue[j].target());
-        *selected = a;
-        for s in selected.iter_mut() {
-            s.free = false;
-        }
+        adopt(selected, a);
         *cost = o.cost_after;
         let mut group: Vec<String> = std::iter::once(replaced)
             .chain(
@@ -271,4 +248,17 @@ pub(super) fn replace_ambiguous<'e>(
         round,
     };
     drop_and_recost(&mut workers[0], w, progress, state)
+}
+
+impl<'e> Replacement<'_, 'e> {
+    /// The same state, lent to one more stage.
+    pub(super) fn reborrow(&mut self) -> Replacement<'_, 'e> {
+        Replacement {
+            selected: self.selected,
+            named: self.named,
+            candidates: self.candidates,
+            cost: self.cost,
+            round: self.round,
+        }
+    }
 }
