@@ -317,13 +317,7 @@ fn turbulence(
     if columns.is_empty() {
         return Ok(None);
     }
-    let raw = search::Weighted {
-        case: &p.case,
-        sigma: p.sigma.clone(),
-        nuisance: &[],
-        filter: None,
-    };
-    let r0 = search::residuals(worker, &raw, &[]).map_err(sim_err("replay"))?;
+    let r0 = search::raw_residuals(worker, &p.case, &p.sigma, &[]).map_err(sim_err("replay"))?;
     let estimate = process_noise::estimate(&p.case, &columns, &r0);
     let (filter, report) = match estimate {
         Some((f, report)) => (f, Some(report)),

@@ -26,13 +26,8 @@ pub fn refit_in_turbulence(
     if sel.selected.is_empty() || columns.is_empty() {
         return Ok(None);
     }
-    let raw = search::Weighted {
-        case: &p.case,
-        sigma: p.sigma.clone(),
-        nuisance: &[],
-        filter: None,
-    };
-    let r = search::residuals(worker, &raw, &sel.selected).map_err(sim_err("replay"))?;
+    let r = search::raw_residuals(worker, &p.case, &p.sigma, &sel.selected)
+        .map_err(sim_err("replay"))?;
     let Some((filter, report)) = process_noise::estimate(&p.case, columns, &r) else {
         return Ok(None);
     };

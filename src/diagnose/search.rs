@@ -203,6 +203,23 @@ pub fn residuals(
     Ok(r)
 }
 
+/// [`residuals`] of `case` with the noise weights `sigma` and neither filter nor nuisance terms: what the
+/// process-noise estimate works on.
+pub fn raw_residuals(
+    worker: &mut Worker,
+    case: &ReplayCase,
+    sigma: &[f64],
+    active: &[Active],
+) -> Result<Vec<f64>, SimError> {
+    let raw = Weighted {
+        case,
+        sigma: sigma.to_vec(),
+        nuisance: &[],
+        filter: None,
+    };
+    residuals(worker, &raw, active)
+}
+
 /// r ← (1 − Q Qᵀ) r for an orthonormal basis Q: the least-squares residual once the nuisance terms, linear in
 /// their effect on the output, are estimated jointly (variable projection, Golub & Pereyra 1973).
 pub(super) fn project_off(r: &mut [f64], basis: &[Vec<f64>]) {
