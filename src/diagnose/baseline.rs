@@ -62,6 +62,7 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
         sigma: p.sigma.clone(),
         nuisance: &p.nuisance,
         filter: p.filter.as_ref(),
+        correction: None,
     };
     let cost = sum_sq(&residuals(worker, &w, &[]).map_err(sim_err("replay"))?);
     let valid_cost = match &p.valid {
@@ -71,6 +72,7 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
                 sigma: sigma.clone(),
                 nuisance: &[],
                 filter: None,
+                correction: None,
             };
             let r = residuals(worker, &vw, &[]).map_err(sim_err("validation replay"))?;
             Some(sum_sq(&r))

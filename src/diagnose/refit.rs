@@ -42,6 +42,7 @@ pub fn refit_in_turbulence(
         sigma: p.sigma.clone(),
         nuisance: &basis,
         filter: Some(&filter),
+        correction: None,
     };
     // A sensor bias stays at its output-error value: to the filter a constant offset on a rate gyro looks like
     // a steady moment disturbance, which the process noise on the body rates partly tracks.
@@ -52,8 +53,14 @@ pub fn refit_in_turbulence(
     if !active.iter().any(|a| a.free) {
         return Ok(Some(report));
     }
-    let o =
-        search::fit(worker, &w, &mut active, 10, true).map_err(sim_err("filter error refit"))?;
+    // At the coarse rate from the output-error values, then at the replay's rate from there.
+    let reference = sel.selected.clone();
+    search::coarse(std::slice::from_mut(worker), &w, &reference, |ws, cw| {
+        search::fit(&mut ws[0], cw, &mut active, 10, false)
+    })
+    .and_then(|fitted| fitted)
+    .map_err(sim_err("filter error refit"))?;
+    let o = search::polish(worker, &w, &mut active).map_err(sim_err("filter error refit"))?;
     // One parameter per named effect is reported, the first; the fit's free parameters are in the same order.
     let mut k = 0;
     for (a, named) in active.iter_mut().zip(sel.named.iter_mut()) {

@@ -160,6 +160,9 @@ pub struct Weighted<'c> {
     /// The filter error method's innovations in place of the output error (turbulence; see
     /// [`super::process_noise`]): applied before the nuisance terms are projected off.
     pub filter: Option<&'c ResidualFilter>,
+    /// Added to the noise-normalised residual before the filter: the difference between the replay's rate and
+    /// the coarse rate the workers integrate at inside [`coarse`], at its reference model.
+    pub correction: Option<&'c [f64]>,
 }
 
 impl<'c> Weighted<'c> {
@@ -180,21 +183,9 @@ pub fn residuals(
     w: &Weighted,
     active: &[Active],
 ) -> Result<Vec<f64>, SimError> {
-    let exts: Vec<(&dyn Extension, &[f64])> = active
-        .iter()
-        .map(|a| (a.ext, a.params.as_slice()))
-        .collect();
-    let (rec, _) = simulate(worker, w.case, &exts)?;
-    let mut r = Vec::with_capacity(w.n());
-    for (c, name) in w.case.outputs.iter().enumerate() {
-        let y = w.case.measured(name);
-        let yhat = rec.column(name).ok_or_else(|| {
-            SimError::Protocol(format!("the simulation does not produce column {name}"))
-        })?;
-        for k in 0..y.len() {
-            let e = (y[k] - yhat[k]) / w.sigma[c];
-            r.push(if e.is_finite() { e } else { 1e6 });
-        }
+    let mut r = raw_residuals(worker, w.case, &w.sigma, active)?;
+    if let Some(d) = w.correction {
+        r.iter_mut().zip(d).for_each(|(v, d)| *v += d);
     }
     if let Some(f) = w.filter {
         f.apply(&mut r);
@@ -203,21 +194,65 @@ pub fn residuals(
     Ok(r)
 }
 
-/// [`residuals`] of `case` with the noise weights `sigma` and neither filter nor nuisance terms: what the
-/// process-noise estimate works on.
+/// The noise-normalised residual (y − ŷ)/σ of `case` with the noise weights `sigma`, channel-major, with no
+/// correction, filter or nuisance terms: what the process-noise estimate works on.
 pub fn raw_residuals(
     worker: &mut Worker,
     case: &ReplayCase,
     sigma: &[f64],
     active: &[Active],
 ) -> Result<Vec<f64>, SimError> {
-    let raw = Weighted {
-        case,
-        sigma: sigma.to_vec(),
-        nuisance: &[],
-        filter: None,
+    let exts: Vec<(&dyn Extension, &[f64])> = active
+        .iter()
+        .map(|a| (a.ext, a.params.as_slice()))
+        .collect();
+    let (rec, _) = simulate(worker, case, &exts)?;
+    let mut r = Vec::with_capacity(case.len() * case.outputs.len());
+    for (c, name) in case.outputs.iter().enumerate() {
+        let y = case.measured(name);
+        let yhat = rec.column(name).ok_or_else(|| {
+            SimError::Protocol(format!("the simulation does not produce column {name}"))
+        })?;
+        for k in 0..y.len() {
+            let e = (y[k] - yhat[k]) / sigma[c];
+            r.push(if e.is_finite() { e } else { 1e6 });
+        }
+    }
+    Ok(r)
+}
+
+/// Runs `f` with the workers integrating at the coarse rate of [`at_sensitivity_rate`] and `w`'s residuals
+/// corrected to the replay's rate at the `reference` model: r̃(θ) = r_c(θ) + [r(θ_ref) − r_c(θ_ref)], the
+/// output correction of space mapping (Bandler et al., "Space mapping: the state of the art", IEEE Trans.
+/// Microwave Theory Tech. 52, 2004, §V; Koziel, Bandler & Madsen 2006). r̃ equals the replay's residual r at
+/// the reference and moves with the coarse integration's output sensitivities: its error is the change of
+/// JSBSim's integration error (a lag of about one step) with θ, second order in the step and in θ − θ_ref,
+/// whereas the integration error itself, about one coarse step of lag, would bias a fitted delay by the whole
+/// step and name passengers (a Cl_r ×1.5 beside an actuator lag in place of a delay, replayed at 50 Hz). Two
+/// replays of the reference (one at each rate); for a 50 Hz record a coarse replay costs a third of one at the
+/// 200 Hz default. The caller refits at the replay's rate what it reports ([`polish`]).
+pub fn coarse<R>(
+    workers: &mut [Worker],
+    w: &Weighted,
+    reference: &[Active],
+    f: impl FnOnce(&mut [Worker], &Weighted) -> R,
+) -> Result<R, SimError> {
+    let Some(first) = workers.first_mut() else {
+        return Ok(f(workers, w));
     };
-    residuals(worker, &raw, active)
+    let at_rate = raw_residuals(first, w.case, &w.sigma, reference)?;
+    at_sensitivity_rate(workers, w.case, |ws| {
+        let at_coarse = raw_residuals(&mut ws[0], w.case, &w.sigma, reference)?;
+        let d: Vec<f64> = at_rate.iter().zip(&at_coarse).map(|(a, b)| a - b).collect();
+        let corrected = Weighted {
+            case: w.case,
+            sigma: w.sigma.clone(),
+            nuisance: w.nuisance,
+            filter: w.filter,
+            correction: Some(&d),
+        };
+        Ok(f(ws, &corrected))
+    })
 }
 
 /// r ← (1 − Q Qᵀ) r for an orthonormal basis Q: the least-squares residual once the nuisance terms, linear in
@@ -540,6 +575,17 @@ pub fn fit(
         sensitivities: cols,
         evaluations,
     })
+}
+
+/// The fit at the replay's rate that follows fits at the coarse rate ([`coarse`]): at most three
+/// Levenberg–Marquardt iterations from their optimum, every effect of `active` free. Its values, cost and
+/// standard errors are the ones reported.
+pub fn polish(
+    worker: &mut Worker,
+    w: &Weighted,
+    active: &mut [Active],
+) -> Result<FitOutcome, SimError> {
+    fit(worker, w, active, 3, false)
 }
 
 /// The residual sensitivity ∂r/∂θ of `candidate`'s first parameter at its null value on top of the `base`

@@ -416,14 +416,29 @@ pub(super) fn drop_below_resolution(
     dropped
 }
 
-/// [`drop_below_resolution`] on the selection's state, and the model's cost evaluated again when an effect
-/// went (one replay).
-fn drop_and_recost(
+/// After a joint fit at the coarse rate ([`search::coarse`]) was adopted: the named effects refitted at the
+/// replay's rate from its values ([`search::polish`]; the values, standard errors and cost are the replay's, and
+/// the next round's coarse fits are corrected at them), then [`drop_below_resolution`] and, when an effect went,
+/// the model's cost evaluated again (one replay).
+fn settle(
     worker: &mut Worker,
     w: &Weighted,
     progress: &Progress,
     state: Replacement<'_, '_>,
 ) -> Result<(), DiagnoseError> {
+    if !state.selected.is_empty() {
+        let mut active = with_freedom(state.selected, true);
+        let o = search::polish(worker, w, &mut active).map_err(sim_err("replay"))?;
+        progress.fitted(o.evaluations);
+        let mut k = 0;
+        for (a, n) in active.iter().zip(state.named.iter_mut()) {
+            n.value = a.params[0];
+            n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
+            k += a.params.len();
+        }
+        adopt(state.selected, active);
+        *state.cost = o.cost_after;
+    }
     if drop_below_resolution(state.selected, state.named, state.candidates) {
         let r = residuals(worker, w, state.selected).map_err(sim_err("replay"))?;
         progress.simulated(1);
@@ -447,12 +462,14 @@ pub fn select<'e>(
         sigma: p.sigma.clone(),
         nuisance: &p.nuisance,
         filter: p.filter.as_ref(),
+        correction: None,
     };
     let vw = p.valid.as_ref().map(|(v, s)| Weighted {
         case: v,
         sigma: s.clone(),
         nuisance: &[],
         filter: None,
+        correction: None,
     });
     let Identifiable {
         entries: catalogue,
@@ -460,7 +477,10 @@ pub fn select<'e>(
         resolution,
         masks,
         skipped: unidentifiable,
-    } = identifiable(workers, &w, p, opts, progress)?;
+    } = search::coarse(workers, &w, &[], |ws, cw| {
+        identifiable(ws, cw, p, opts, progress)
+    })
+    .map_err(sim_err("replay"))??;
     let mut selected: Vec<Active> = Vec::new();
     let mut named: Vec<NamedCause> = Vec::new();
     let mut candidates = Vec::new();
@@ -487,7 +507,22 @@ pub fn select<'e>(
             .collect();
         let mut order: Vec<usize> = (0..pool.len()).collect();
         order.sort_by(|&a, &b| quick[a].cost_after.total_cmp(&quick[b].cost_after));
-        let top: Vec<usize> = order.iter().take(opts.full_fit_top).copied().collect();
+        // The best few by the score test are fitted, unless the test already says that a fit cannot name them:
+        // a one-step estimate within half the resolution of "no effect" (the fit would have to more than double
+        // the Gauss–Newton step from there) that also explains less than the share of the cost a named effect
+        // must explain.
+        let unpromising = |j: usize| {
+            let i = pool[j];
+            let step = (quick[j].values[0] - catalogue[i].params()[0].null).abs();
+            step < 0.5 * resolution[i]
+                && 1.0 - quick[j].cost_after / cost_now < opts.min_relative_reduction
+        };
+        let best_few: Vec<usize> = order.iter().take(opts.full_fit_top).copied().collect();
+        let top: Vec<usize> = best_few
+            .iter()
+            .copied()
+            .filter(|&j| !unpromising(j))
+            .collect();
         let ctx = RoundContext {
             round,
             base_cost,
@@ -495,8 +530,20 @@ pub fn select<'e>(
         };
         for (j, o) in quick.iter().enumerate() {
             if !top.contains(&j) {
-                candidates.push(ctx.candidate(catalogue[pool[j]], o, false, resolution[pool[j]]));
+                let mut c = ctx.candidate(catalogue[pool[j]], o, false, resolution[pool[j]]);
+                if best_few.contains(&j) {
+                    c.rejected_because = Some(format!(
+                        "not fitted: the score test's estimate is within half the resolution {:.3} of no effect \
+                         and explains {:.2} % of the cost",
+                        resolution[pool[j]],
+                        100.0 * (1.0 - o.cost_after / cost_now)
+                    ));
+                }
+                candidates.push(c);
             }
+        }
+        if top.is_empty() {
+            break;
         }
         let top_exts: Vec<&dyn Extension> = top.iter().map(|&j| catalogue[pool[j]]).collect();
         // Full pass: the top candidates jointly with the selected effects, from the score test's estimate.
@@ -504,7 +551,10 @@ pub fn select<'e>(
             .iter()
             .map(|&j| with_candidate(&selected, catalogue[pool[j]], quick[j].values[0], true))
             .collect();
-        let full = fit_starts(workers, &w, &starts, progress);
+        let full = search::coarse(workers, &w, &selected, |ws, cw| {
+            fit_starts(ws, cw, &starts, progress)
+        })
+        .map_err(sim_err("replay"))?;
         // Significance of each fully fitted candidate.
         let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
         for (t, r) in full.iter().enumerate() {
@@ -562,7 +612,6 @@ pub fn select<'e>(
                     .unwrap_or_else(|| ambiguous_with.clone()),
             })
             .collect();
-        base_cost = best_cost;
         let state = Replacement {
             selected: &mut selected,
             named: &mut named,
@@ -570,7 +619,7 @@ pub fn select<'e>(
             cost: &mut base_cost,
             round,
         };
-        drop_and_recost(&mut workers[0], &w, progress, state)?;
+        settle(&mut workers[0], &w, progress, state)?;
         // The validation record only reports the gain of the accepted effects.
         if let (Some(vw), Some(before)) = (&vw, valid_cost) {
             let r =

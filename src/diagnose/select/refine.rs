@@ -4,12 +4,12 @@
 //! 2nd ed., §3.2–3.3.
 
 use super::{
-    adopt, drop_and_recost, fit_starts, rejection, score_test, with_candidate, with_freedom,
+    adopt, fit_starts, settle, rejection, score_test, with_candidate, with_freedom,
     RoundContext,
 };
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
-use crate::diagnose::search::{effective_n, fit, residuals, Active, FitOutcome, Weighted, Worker};
+use crate::diagnose::search::{self, effective_n, fit, residuals, Active, FitOutcome, Weighted, Worker};
 use crate::diagnose::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 
 /// The fit `o` with free parameter `i` moved last, where the selection's tests read the candidate's.
@@ -155,6 +155,7 @@ pub(super) fn replace_ambiguous<'e>(
         cost,
         round,
     } = state;
+    let mut changed = false;
     for i in 0..named.len() {
         let alternatives: Vec<usize> = named[i]
             .ambiguous_with
@@ -185,7 +186,10 @@ pub(super) fn replace_ambiguous<'e>(
                 a
             })
             .collect();
-        let fits = fit_starts(workers, w, &starts, progress);
+        let fits = search::coarse(workers, w, selected, |ws, cw| {
+            fit_starts(ws, cw, &starts, progress)
+        })
+        .map_err(sim_err("replay"))?;
         let ctx = RoundContext {
             round,
             base_cost: cost_without,
@@ -219,6 +223,7 @@ pub(super) fn replace_ambiguous<'e>(
         let kept = format!("{}/{}", catalogue[j].effect(), catalogue[j].target());
         adopt(selected, a);
         *cost = o.cost_after;
+        changed = true;
         let mut group: Vec<String> = std::iter::once(replaced)
             .chain(
                 named[i]
@@ -239,6 +244,9 @@ pub(super) fn replace_ambiguous<'e>(
             }
         }
     }
+    if !changed {
+        return Ok(());
+    }
     // The replacement frees every named effect: one may now sit within its resolution of no effect.
     let state = Replacement {
         selected,
@@ -247,7 +255,7 @@ pub(super) fn replace_ambiguous<'e>(
         cost,
         round,
     };
-    drop_and_recost(&mut workers[0], w, progress, state)
+    settle(&mut workers[0], w, progress, state)
 }
 
 impl<'e> Replacement<'_, 'e> {
