@@ -27,6 +27,7 @@ fn constants() -> Constants {
             beta_vane_m: [2.5, 0.0, 0.0],
         },
         v_ref_m_s: 55.0,
+        alpha_ref_rad: 0.0,
         g_m_s2: G0_M_S2,
     }
 }
