@@ -24,8 +24,9 @@
 //!   C_Dα ≈ 2 C_L C_Lα/(π A e), e = 0.8.
 //! - **Free or fixed** ([`FreeChoice`]): by default the zero terms, C_Lα, C_Lδe, C_Dα, C_mα, C_mq, C_mδe,
 //!   the lateral β, p, r and control derivatives (not C_Yp, C_Yr, C_Yδa) and the vane skews are free; the
-//!   speed derivatives (C_LV, C_DV, C_mV), the α̇ terms, C_Lq and C_Dδe are held (at 0, or a zero term at
-//!   its equation-error value). A surface no record moves has its derivatives held at 0.
+//!   speed derivatives (C_LV, C_DV, C_mV), the α̇ terms, C_Lq, C_Dδe and the curvature terms C_Lα², C_mα²
+//!   are held (at 0, or a zero term at its equation-error value); the structure checks (`checks.rs`) free them
+//!   on evidence. A surface no record moves has its derivatives held at 0.
 //!
 //! Modes (short period, phugoid; Dutch roll, roll, spiral) are the eigenvalues of the model's Jacobian at the
 //! mean flight condition, with σ by first-order propagation of the estimates' covariance through
