@@ -221,12 +221,9 @@ fn output_error_on_p51d_records_matches_jsbsim_own_derivatives() {
     let notes = oe["notes"].to_string();
     assert!(notes.contains("the α̇ terms stay held"), "{notes}");
     // The curvature check: the p51d's C_m(α) steepens by 70 % over the 6° flown; held at 0, the curvature put
-    // C_mq 4–8 % low in magnitude (seeds 1–5). Adopted (the cost falls by 4000–4500), C_mq is within 1 % on
+    // C_mq 4–8 % low in magnitude (seeds 1–5). Adopted (the cost falls by 3400–4600), C_mq is within 1 % on
     // seeds 1–5 (checked at 3 %).
-    assert!(
-        notes.contains("C_Lα² and C_mα² are estimated"),
-        "{notes}"
-    );
+    assert!(notes.contains("C_Lα² and C_mα² are estimated"), "{notes}");
     let cm_q = errors(&truth, &[("oe", &oe)], &["Cm_q"]);
     assert!(cm_q[0][0].abs() < 0.03, "{cm_q:?}");
     // Without α and β vanes (the column map leaves them out) the states α and β are only seen through the
@@ -268,10 +265,7 @@ fn output_error_on_c310_records_estimates_the_alphadot_terms_the_records_support
         "{notes}"
     );
     // its C_m is linear in α: the curvature check finds nothing (|t| < 1)
-    assert!(
-        notes.contains("the curvature terms stay held"),
-        "{notes}"
-    );
+    assert!(notes.contains("the curvature terms stay held"), "{notes}");
     let fits = [("ee", &ee), ("oe", &oe)];
     for row in errors(&truth, &fits, &PITCH) {
         assert!(row[1].abs() < 0.10, "{row:?}");
