@@ -7,8 +7,17 @@
 //! V̇ = [T cos(α + ε) − q̄S C_D]/m − g sin(θ − α)
 //! α̇ = [−q̄S C_L − T sin(α + ε)]/(m V) + q + g cos(θ − α)/V
 //! θ̇ = q,  q̇ = [q̄S c̄ C_m + T l_T]/I_yy
-//! C_L = C_L0 + C_Lα α + C_Lq q̂ + C_Lδe δe + C_Lα̇ α̇̂ + C_LV V̂,  C_D = C_D0 + C_Dα α + C_Dδe δe + C_DV V̂,
-//! C_m = C_m0 + C_mα α + C_mq q̂ + C_mδe δe + C_mα̇ α̇̂ + C_mV V̂
+//! C_L = C_L0 + C_Lα α + C_Lq q̂ + C_Lδe δe + C_Lα̇ α̇̂ + C_LV V̂ + C_Lα² Δα²,  C_D = C_D0 + C_Dα α + C_Dδe δe + C_DV V̂,
+//! C_m = C_m0 + C_mα α + C_mq q̂ + C_mδe δe + C_mα̇ α̇̂ + C_mV V̂ + C_mα² Δα²,  Δα = α − α₀
+//!
+//! The curvature terms C_Lα², C_mα² are the second-order terms of the Taylor (polynomial) expansion of the
+//! static coefficients in α (Klein & Morelli ch. 3, the aerodynamic model as a Taylor series in the states;
+//! §5.4, model structure determination, which admits such terms on the evidence of the data), taken about
+//! the records' mean angle of attack α₀, so that C_Lα and C_mα stay the local slopes there. A coefficient that
+//! curves over the few degrees a maneuver flies and is fitted with a straight line leaves a residual
+//! quadratic in Δα; Δα² correlates with q̂ (q leads α by the short period's phase), and the linear model puts
+//! part of it into C_mq (the JSBSim p51d, whose C_m(α) steepens from −0.26 to −0.45 per rad between 4° and
+//! −2°: C_mq +6 % from the aero tables alone).
 //!
 //! (C_Lα̇ makes the α̇ equation implicit; it is solved for α̇, being linear in it.) Outputs at the sensors:
 //! a_x = (−q̄S C_D cos α + q̄S C_L sin α + T cos ε)/m + q̇ z − q² x,
@@ -29,7 +38,7 @@ use super::airframe::SensorPositions;
 use super::params::{Geometry, MassProperties};
 
 /// Longitudinal model parameters, in θ order.
-pub const LONGITUDINAL_PARAMETERS: [&str; 17] = [
+pub const LONGITUDINAL_PARAMETERS: [&str; 19] = [
     "CL_0",
     "CL_alpha",
     "CL_q",
@@ -47,6 +56,8 @@ pub const LONGITUDINAL_PARAMETERS: [&str; 17] = [
     "Cm_alphadot",
     "Cm_V",
     "tau_alpha_s",
+    "CL_alpha2",
+    "Cm_alpha2",
 ];
 
 /// Lateral-directional model parameters, in θ order.
@@ -92,6 +103,8 @@ pub struct Constants {
     pub sensors: SensorPositions,
     /// Reference airspeed V₀ of the speed derivatives, m/s.
     pub v_ref_m_s: f64,
+    /// Reference angle of attack α₀ of the curvature terms C_Lα², C_mα² (the records' mean), rad.
+    pub alpha_ref_rad: f64,
     /// Gravity, m/s².
     pub g_m_s2: f64,
 }
@@ -115,6 +128,8 @@ mod lon {
     pub const CMAD: usize = 14;
     pub const CMV: usize = 15;
     pub const TAU: usize = 16;
+    pub const CLA2: usize = 17;
+    pub const CMA2: usize = 18;
 }
 
 /// The inputs the longitudinal equations read at one instant.
@@ -150,9 +165,14 @@ pub fn longitudinal(c: &Constants, theta: &[f64], x: &[f64], u: &LonInputs) -> L
     let eps = c.thrust_inclination_rad;
     let g = c.g_m_s2;
     let gamma = pitch - alpha;
+    let da2 = (alpha - c.alpha_ref_rad).powi(2);
     // C_L without its α̇ term, then α̇ solved from α̇ (1 + q̄S C_Lα̇ k/(mV)) = rest.
-    let cl_static =
-        theta[CL0] + theta[CLA] * alpha + theta[CLQ] * q * k + theta[CLDE] * de + theta[CLV] * vhat;
+    let cl_static = theta[CL0]
+        + theta[CLA] * alpha
+        + theta[CLQ] * q * k
+        + theta[CLDE] * de
+        + theta[CLV] * vhat
+        + theta[CLA2] * da2;
     let rest = (-qbar_s * cl_static - t * (alpha + eps).sin()) / (m * v) + q + g * gamma.cos() / v;
     let alphadot = rest / (1.0 + qbar_s * theta[CLAD] * k / (m * v));
     let cl = cl_static + theta[CLAD] * alphadot * k;
@@ -162,7 +182,8 @@ pub fn longitudinal(c: &Constants, theta: &[f64], x: &[f64], u: &LonInputs) -> L
         + theta[CMQ] * q * k
         + theta[CMDE] * de
         + theta[CMAD] * alphadot * k
-        + theta[CMV] * vhat;
+        + theta[CMV] * vhat
+        + theta[CMA2] * da2;
     let vdot = (t * (alpha + eps).cos() - qbar_s * cd) / m - g * gamma.sin();
     let qdot = (qbar_s * cbar * cm + t * c.thrust_moment_arm_m) / c.mass.iyy_kg_m2;
     let (sa, ca) = alpha.sin_cos();

@@ -24,8 +24,9 @@
 //!   C_Dα ≈ 2 C_L C_Lα/(π A e), e = 0.8.
 //! - **Free or fixed** ([`FreeChoice`]): by default the zero terms, C_Lα, C_Lδe, C_Dα, C_mα, C_mq, C_mδe,
 //!   the lateral β, p, r and control derivatives (not C_Yp, C_Yr, C_Yδa) and the vane skews are free; the
-//!   speed derivatives (C_LV, C_DV, C_mV), the α̇ terms, C_Lq and C_Dδe are held (at 0, or a zero term at
-//!   its equation-error value). A surface no record moves has its derivatives held at 0.
+//!   speed derivatives (C_LV, C_DV, C_mV), the α̇ terms, C_Lq, C_Dδe and the curvature terms C_Lα², C_mα²
+//!   are held (at 0, or a zero term at its equation-error value); the structure checks (`checks.rs`) free them
+//!   on evidence. A surface no record moves has its derivatives held at 0.
 //!
 //! Modes (short period, phugoid; Dutch roll, roll, spiral) are the eigenvalues of the model's Jacobian at the
 //! mean flight condition, with σ by first-order propagation of the estimates' covariance through
@@ -49,8 +50,9 @@ use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signatur
 mod checks;
 mod free;
 use checks::{
-    alphadot_check, beta_skew_check, process_noise_note, run_checks, side_force_rate_check,
-    skew_check, speed_check, AxisFitter, Check, ALPHADOT, SIDE_RATES_AND_SKEW, SKEW, SPEED,
+    alphadot_check, beta_skew_check, curvature_check, process_noise_note, run_checks,
+    side_force_rate_check, skew_check, speed_check, AxisFitter, Check, ALPHADOT, CURVATURE,
+    SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
 use free::{equation_error_starts, parameters, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
@@ -324,7 +326,9 @@ fn fit_longitudinal(
     notes: &mut Vec<String>,
 ) -> Result<AxisFit, MeasuredError> {
     let cond = setup.cond;
-    let constants = model_constants(setup.airframe, true, cond.airspeed_m_s)?;
+    let mut constants = model_constants(setup.airframe, true, cond.airspeed_m_s)?;
+    // the curvature terms are expanded about the records' mean α (flight_models module doc)
+    constants.alpha_ref_rad = cond.alpha_rad;
     let thrust = records.iter().all(|(_, r)| r.column("thrust_n").is_some());
     if thrust {
         setup.airframe.thrust_line("records with thrust_n")?;
@@ -600,6 +604,7 @@ pub fn output_error_report(
         (skew_check, &SKEW),
         (alphadot_check, &ALPHADOT),
         (speed_check, &SPEED),
+        (curvature_check, &CURVATURE),
     ];
     // lateral: the skew, then the side-force rate terms (with the skew: each takes the other's shape)
     let lat_checks: &[(Check, &[&'static str])] = &[

@@ -78,7 +78,7 @@ pub struct DerivativesCmd {
     pub structure: StructureArg,
     /// Free derivatives of the TF route, comma separated (default: Cm_alpha,Cm_q,Cm_alphadot,Cm_de,
     /// Cl_beta,Cl_p,Cl_da,Cn_beta,Cn_r). With --airframe --method oe|fem: parameters or groups (speed,
-    /// alphadot, zero, skew, all) to free, `-NAME` to hold, applied in order to the default set
+    /// curvature, alphadot, zero, skew, all) to free, `-NAME` to hold, applied in order to the default set
     /// (docs/derivatives-measured.md).
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub free: Option<Vec<String>>,

@@ -110,6 +110,7 @@ pub fn model_constants(
         thrust_moment_arm_m: thrust.moment_arm_m,
         sensors: airframe.sensors,
         v_ref_m_s,
+        alpha_ref_rad: 0.0,
         g_m_s2: G0_M_S2,
     })
 }

@@ -162,6 +162,56 @@ pub(super) fn speed_check(
     Some((note, g.adopted()))
 }
 
+/// The curvature terms of C_L and C_m in α.
+pub(super) const CURVATURE: [&str; 2] = ["CL_alpha2", "Cm_alpha2"];
+
+/// When the curvature terms were held by default (after the speed check, from the structure it adopted): the
+/// same fit with C_Lα² and C_mα² free (C = … + C_α² (α − α₀)², α₀ the records' mean α; the flight_models
+/// module doc; Klein & Morelli §5.4: a term enters the model on the evidence of the data). A static
+/// coefficient that curves over the range a maneuver flies leaves, in a linear model, a residual quadratic in
+/// α − α₀, which correlates with q̂ and goes partly into C_mq: the JSBSim p51d's tables give C_mq 6 % low
+/// (in magnitude) from the aero moment alone, with C_m(α) steepening from −0.26 to −0.45 per rad over the
+/// 6° flown. Adopted by the speed check's rule: 2 ΔJ > χ²₂(1 %) = 9.21, |t| > 3 for one of them, a
+/// converged wider fit, C_mα, C_mq, C_mδe in range. With them free, C_Lα and C_mα are the slopes at α₀.
+/// When the user named them in `--free`, the check only reports.
+///
+/// Output error only, like the α̇ check that runs before it: by filter error the α̇ terms stay held, and on
+/// the c310 records (linear C_m, α̇ terms in its model) the curvature then took their place (C_mα² −9 ± 1.7,
+/// |t| 5–6, adopted on four seeds of five); on the p51d's the wider filter-error fit ended above the held
+/// fit's cost on three seeds of five (ΔJ −3000: it did not reach the optimum). `--free curvature` frees them
+/// for filter error.
+pub(super) fn curvature_check(
+    records: &[&(String, data::FlightRecord)],
+    setup: FitSetup,
+    held: &AxisFit,
+) -> Option<(String, Option<AxisFit>)> {
+    if setup.options.method != Method::Oe {
+        return None;
+    }
+    let g = group_check(records, setup, held, &CURVATURE, &CURVATURE)?;
+    let value = |n: &str| {
+        g.wider
+            .fit
+            .estimate
+            .parameter(n)
+            .map_or((f64::NAN, f64::NAN), |p| (p.value, p.std_error))
+    };
+    let ((cl2, cl2_sd), (cm2, cm2_sd)) = (value("CL_alpha2"), value("Cm_alpha2"));
+    let verdict = g.verdict(
+        "the coefficients curve over the α flown: C_Lα² and C_mα² are estimated, C_Lα and C_mα are the slopes \
+         at the records' mean α (hold them with --free=-curvature)",
+        "the wider fit is not trusted (it did not converge, or moved C_mα, C_mq or C_mδe off their range): the \
+         curvature terms stay held",
+        "not significant: the curvature terms stay held",
+    );
+    let note = format!(
+        "longitudinal: with C_Lα², C_mα² free the cost falls by {:.1} (C_Lα² = {cl2:.2} ± {cl2_sd:.2}, C_mα² = \
+         {cm2:.3} ± {cm2_sd:.3}, largest |t| {:.1}): {verdict}",
+        g.wider.drop, g.t_max
+    );
+    Some((note, g.adopted()))
+}
+
 /// The side-force rate derivatives.
 const SIDE_RATES: [&str; 2] = ["CY_p", "CY_r"];
 

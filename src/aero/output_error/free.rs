@@ -21,8 +21,9 @@ pub struct FreeChoice {
 }
 
 /// Groups `--free` accepts besides parameter names.
-pub const FREE_GROUPS: [(&str, &[&str]); 5] = [
+pub const FREE_GROUPS: [(&str, &[&str]); 6] = [
     ("speed", &["CL_V", "CD_V", "Cm_V"]),
+    ("curvature", &["CL_alpha2", "Cm_alpha2"]),
     ("alphadot", &["CL_alphadot", "Cm_alphadot"]),
     ("zero", &["CL_0", "CD_0", "Cm_0", "CY_0", "Cl_0", "Cn_0"]),
     ("skew", &["tau_alpha_s", "tau_beta_s"]),
@@ -30,7 +31,7 @@ pub const FREE_GROUPS: [(&str, &[&str]); 5] = [
 ];
 
 /// Parses `--free` entries: a parameter of either model (`Cm_alphadot`), a group of [`FREE_GROUPS`]
-/// (`speed`, `alphadot`, `zero`, `skew`, `all`), each optionally prefixed with `-` to hold it instead.
+/// (`speed`, `curvature`, `alphadot`, `zero`, `skew`, `all`), each optionally prefixed with `-` to hold it instead.
 pub fn parse_free(entries: &[String]) -> Result<Vec<FreeChoice>, String> {
     let known = || {
         LONGITUDINAL_PARAMETERS
@@ -54,7 +55,7 @@ pub fn parse_free(entries: &[String]) -> Result<Vec<FreeChoice>, String> {
                 vec![n]
             } else {
                 return Err(format!(
-                    "unknown parameter or group '{name}' (groups: speed, alphadot, zero, skew, all; \
+                    "unknown parameter or group '{name}' (groups: speed, curvature, alphadot, zero, skew, all; \
                      parameters: {})",
                     known().collect::<Vec<_>>().join(", ")
                 ));
@@ -65,7 +66,7 @@ pub fn parse_free(entries: &[String]) -> Result<Vec<FreeChoice>, String> {
 }
 
 /// Parameters held by default (module doc); every other parameter of the axis starts free.
-pub(super) const LON_HELD: [&str; 8] = [
+pub(super) const LON_HELD: [&str; 10] = [
     "tau_alpha_s",
     "CL_q",
     "CL_alphadot",
@@ -74,6 +75,8 @@ pub(super) const LON_HELD: [&str; 8] = [
     "CD_V",
     "Cm_alphadot",
     "Cm_V",
+    "CL_alpha2",
+    "Cm_alpha2",
 ];
 pub(super) const LAT_HELD: [&str; 4] = ["tau_beta_s", "CY_p", "CY_r", "CY_da"];
 
