@@ -312,8 +312,11 @@ fn state_perturbations() -> Vec<StateReset> {
 /// The nuisance terms of every fit: the state at the start of each of the case's segments (roll and pitch
 /// angles, body rates and velocities, altitude; `ReplayCase::segments`). Their effect on the noise-normalised
 /// residual is linearised once at the unextended model (one simulation per segment and state, in parallel on
-/// the workers) and returned column by column (nine per segment, in segment order); [`residuals`] projects
-/// their [`orthonormal_basis`] off. Estimating the initial
+/// the workers, flown to the segment's end) and returned column by column (nine per segment, in segment order);
+/// [`residuals`] projects their [`orthonormal_basis`] off. A column ends with its segment, as in multiple
+/// shooting: what a state error at one segment's start does after the next one starts is the response to a
+/// state error there, which the next segment's columns span (to first order; engine and actuator states are
+/// not among the nine). Estimating the initial
 /// state per segment keeps the slow modes' drift, grown from small state errors over a long record, from being
 /// taken for a cause (Jategaonkar, Flight Vehicle System Identification, 2nd ed., initial conditions as
 /// unknowns per maneuver; multiple shooting). Empty when the simulation cannot set its state mid-flight.
@@ -341,18 +344,26 @@ fn state_columns(
         return Ok(Vec::new());
     };
     let (base, _) = simulate(first, case, &[])?;
-    let items: Vec<StateReset> = case
+    // (reset, end of its segment): the next segment's start, or the record's end.
+    let items: Vec<(StateReset, usize)> = case
         .segments
         .iter()
-        .flat_map(|&b| {
+        .enumerate()
+        .flat_map(|(s, &b)| {
+            let end = case.segments.get(s + 1).copied().unwrap_or(case.len());
             state_perturbations()
                 .into_iter()
-                .map(move |r| StateReset { step: b, ..r })
+                .map(move |r| (StateReset { step: b, ..r }, end))
         })
         .collect();
-    let columns = par_map(workers, &items, |wk, reset| {
+    let columns = par_map(workers, &items, |wk, (reset, end)| {
         let t0 = std::time::Instant::now();
-        let out = replay_with_resets(wk.sim.as_mut(), case, &[], std::slice::from_ref(reset));
+        let out = replay_with_resets(
+            wk.sim.as_mut(),
+            &case.head(*end),
+            &[],
+            std::slice::from_ref(reset),
+        );
         wk.sim_s += t0.elapsed().as_secs_f64();
         wk.simulations += 1;
         let (rec, _) = out?;
@@ -364,6 +375,7 @@ fn state_columns(
                 )));
             };
             col.extend(y.iter().zip(y0).map(|(a, b)| (a - b) / sigma[c]));
+            col.resize((c + 1) * case.len(), 0.0);
         }
         Ok(col)
     });
