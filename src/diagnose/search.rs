@@ -6,8 +6,14 @@
 //! 2nd ed., §6.2–6.3, eqs. 6.19–6.27). Modelling error leaves coloured residuals, for which the Cramér–Rao
 //! bound is far too optimistic; the reported standard errors are therefore the estimation core's
 //! coloured-residual bound (SᵀS)⁻¹ [Σ_c Σ_i Σ_j s_i R_c(i−j) s_jᵀ] (SᵀS)⁻¹ (Morelli & Klein §6.6, eq. 6.86)
-//! with a Bartlett window of one second per output channel c. Selection: BIC = n ln(J/n) + k ln n
-//! (Schwarz 1978) with the effective number of independent residuals n_eff, forward selection.
+//! with the estimation core's lag window fitted to each output channel c (`covariance::lag_weights`).
+//! Selection: BIC = n ln(J/n) + k ln n (Schwarz 1978) with the effective number of independent residuals n_eff,
+//! forward selection.
+//!
+//! Speed: the search's sensitivities and fits integrate at a coarse rate (50 Hz for a 50 Hz record, a third of
+//! the JSBSim cost of the 200 Hz replay) on residuals corrected to the replay's rate at the current model
+//! ([`coarse`], output space mapping); every model the search accepts is refitted at the replay's rate
+//! ([`polish`]).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -60,13 +66,11 @@ pub fn share_replays(workers: &mut [Worker]) {
 pub const SENSITIVITY_RATE_HZ: f64 = 50.0;
 
 /// Runs `f` with the workers integrating at the smallest whole multiple of the record's rate that is at least
-/// [`SENSITIVITY_RATE_HZ`], when that is below their own rate, and puts their rate back afterwards. For the
-/// output sensitivities of the nuisance terms (the initial state of each segment), differences of two
-/// simulations at the same rate that span the directions projected off every residual: JSBSim's integration lag
-/// of about one step (20 ms at 50 Hz) shifts such a sensitivity a little, whereas it biases a fitted delay by the
-/// full step, so every fit and cost stays at the replay's rate ([`super::replay::MIN_SIM_RATE_HZ`]). A quarter
-/// of the JSBSim steps for a 50 Hz record (`--cases 8 --seed 4` of the evaluation bench: the same named
-/// effects and values to 0.2 % as with the basis at the replay's rate).
+/// [`SENSITIVITY_RATE_HZ`], when that is below their own rate, and puts their rate back afterwards. For
+/// differences of two simulations at the same rate (the output sensitivities of the nuisance terms, the
+/// initial state of each segment): JSBSim's integration lag of about one step (20 ms at 50 Hz) shifts such a
+/// sensitivity a little, whereas it would bias a fitted delay by the whole step. Fits at this rate therefore
+/// run on residuals corrected to the replay's rate ([`coarse`]) and are refitted there ([`polish`]).
 pub fn at_sensitivity_rate<R>(
     workers: &mut [Worker],
     case: &ReplayCase,
@@ -445,6 +449,8 @@ struct Replayed<'a, 'c, 'e> {
     evaluations: usize,
     /// ∂r/∂θ of the last linearisation.
     last_cols: Vec<Vec<f64>>,
+    /// ∂r/∂θ for the first linearisation in place of forward differences (see [`polish`]).
+    seed: Option<Vec<Vec<f64>>>,
 }
 
 impl Replayed<'_, '_, '_> {
@@ -475,8 +481,14 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
         r: &Vec<f64>,
     ) -> Result<Option<optimise::Linearised>, SimError> {
         self.set(x);
-        let cols = residual_jacobian(self.worker, self.w, self.active, &self.free, r)?;
-        self.evaluations += cols.len();
+        let cols = match self.seed.take() {
+            Some(cols) => cols,
+            None => {
+                let cols = residual_jacobian(self.worker, self.w, self.active, &self.free, r)?;
+                self.evaluations += cols.len();
+                cols
+            }
+        };
         // ŷ moves against r = (y − ŷ)/σ: S = −∂r/∂θ
         let sensitivities = Mat::from_fn(r.len(), cols.len(), |k, j| -cols[j][k]);
         self.last_cols = cols;
@@ -499,6 +511,18 @@ pub fn fit(
     max_iter: usize,
     final_jacobian: bool,
 ) -> Result<FitOutcome, SimError> {
+    fit_from(worker, w, active, max_iter, final_jacobian, None)
+}
+
+/// [`fit`], its first linearisation `seed` (∂r/∂θ of the free parameters, in their order) when given.
+fn fit_from(
+    worker: &mut Worker,
+    w: &Weighted,
+    active: &mut [Active],
+    max_iter: usize,
+    final_jacobian: bool,
+    seed: Option<Vec<Vec<f64>>>,
+) -> Result<FitOutcome, SimError> {
     // Index of every free scalar parameter: (active index, parameter index).
     let free: Vec<(usize, usize)> = active
         .iter()
@@ -513,7 +537,9 @@ pub fn fit(
         .iter()
         .map(|&(i, j)| active[i].ext.params()[j])
         .collect();
+    let seed = seed.filter(|cols| cols.len() == free.len());
     let mut problem = Replayed {
+        seed,
         worker,
         w,
         active,
@@ -589,15 +615,18 @@ pub fn fit(
     })
 }
 
-/// The fit at the replay's rate that follows fits at the coarse rate ([`coarse`]): at most three
-/// Levenberg–Marquardt iterations from their optimum, every effect of `active` free. Its values, cost and
-/// standard errors are the ones reported.
+/// The fit at the replay's rate that follows a fit at the coarse rate ([`coarse`]): at most three
+/// Levenberg–Marquardt iterations from its optimum, every effect of `active` free, the first with the coarse
+/// fit's sensitivities `coarse_sensitivities` (∂r/∂θ in the order of the free parameters; the corrected
+/// residual has the coarse model's sensitivities, equal to the replay's to first order). Its values and cost
+/// are the ones reported, its standard errors those of the last sensitivities.
 pub fn polish(
     worker: &mut Worker,
     w: &Weighted,
     active: &mut [Active],
+    coarse_sensitivities: &[Vec<f64>],
 ) -> Result<FitOutcome, SimError> {
-    fit(worker, w, active, 3, false)
+    fit_from(worker, w, active, 3, false, Some(coarse_sensitivities.to_vec()))
 }
 
 /// The residual sensitivity ∂r/∂θ of `candidate`'s first parameter at its null value on top of the `base`
