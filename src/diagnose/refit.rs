@@ -55,12 +55,13 @@ pub fn refit_in_turbulence(
     }
     // At the coarse rate from the output-error values, then at the replay's rate from there.
     let reference = sel.selected.clone();
-    search::coarse(std::slice::from_mut(worker), &w, &reference, |ws, cw| {
+    let coarse = search::coarse(std::slice::from_mut(worker), &w, &reference, |ws, cw| {
         search::fit(&mut ws[0], cw, &mut active, 10, false)
     })
     .and_then(|fitted| fitted)
     .map_err(sim_err("filter error refit"))?;
-    let o = search::polish(worker, &w, &mut active).map_err(sim_err("filter error refit"))?;
+    let o = search::polish(worker, &w, &mut active, &coarse.sensitivities)
+        .map_err(sim_err("filter error refit"))?;
     // One parameter per named effect is reported, the first; the fit's free parameters are in the same order.
     let mut k = 0;
     for (a, named) in active.iter_mut().zip(sel.named.iter_mut()) {

@@ -266,6 +266,25 @@ impl ReplayCase {
         self.record.len()
     }
 
+    /// The case cut to its first `len` samples (a replay of it equals the first `len` samples of the whole
+    /// case's replay).
+    pub fn head(&self, len: usize) -> ReplayCase {
+        let len = len.min(self.len());
+        ReplayCase {
+            record: self.record.slice(0, len),
+            rate_hz: self.rate_hz,
+            point: self.point.clone(),
+            initial: self.initial.clone(),
+            inputs: self
+                .inputs
+                .iter()
+                .map(|(s, d)| (s.clone(), d[..len.min(d.len())].to_vec()))
+                .collect(),
+            outputs: self.outputs.clone(),
+            segments: self.segments.iter().copied().filter(|&b| b < len).collect(),
+        }
+    }
+
     /// True when the record has no samples.
     pub fn is_empty(&self) -> bool {
         self.record.is_empty()

@@ -6,8 +6,14 @@
 //! 2nd ed., §6.2–6.3, eqs. 6.19–6.27). Modelling error leaves coloured residuals, for which the Cramér–Rao
 //! bound is far too optimistic; the reported standard errors are therefore the estimation core's
 //! coloured-residual bound (SᵀS)⁻¹ [Σ_c Σ_i Σ_j s_i R_c(i−j) s_jᵀ] (SᵀS)⁻¹ (Morelli & Klein §6.6, eq. 6.86)
-//! with a Bartlett window of one second per output channel c. Selection: BIC = n ln(J/n) + k ln n
-//! (Schwarz 1978) with the effective number of independent residuals n_eff, forward selection.
+//! with the estimation core's lag window fitted to each output channel c (`covariance::lag_weights`).
+//! Selection: BIC = n ln(J/n) + k ln n (Schwarz 1978) with the effective number of independent residuals n_eff,
+//! forward selection.
+//!
+//! Speed: the search's sensitivities and fits integrate at a coarse rate (50 Hz for a 50 Hz record, a third of
+//! the JSBSim cost of the 200 Hz replay) on residuals corrected to the replay's rate at the current model
+//! ([`coarse`], output space mapping); every model the search accepts is refitted at the replay's rate
+//! ([`polish`]).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -60,13 +66,11 @@ pub fn share_replays(workers: &mut [Worker]) {
 pub const SENSITIVITY_RATE_HZ: f64 = 50.0;
 
 /// Runs `f` with the workers integrating at the smallest whole multiple of the record's rate that is at least
-/// [`SENSITIVITY_RATE_HZ`], when that is below their own rate, and puts their rate back afterwards. For the
-/// output sensitivities of the nuisance terms (the initial state of each segment), differences of two
-/// simulations at the same rate that span the directions projected off every residual: JSBSim's integration lag
-/// of about one step (20 ms at 50 Hz) shifts such a sensitivity a little, whereas it biases a fitted delay by the
-/// full step, so every fit and cost stays at the replay's rate ([`super::replay::MIN_SIM_RATE_HZ`]). A quarter
-/// of the JSBSim steps for a 50 Hz record (`--cases 8 --seed 4` of the evaluation bench: the same named
-/// effects and values to 0.2 % as with the basis at the replay's rate).
+/// [`SENSITIVITY_RATE_HZ`], when that is below their own rate, and puts their rate back afterwards. For
+/// differences of two simulations at the same rate (the output sensitivities of the nuisance terms, the
+/// initial state of each segment): JSBSim's integration lag of about one step (20 ms at 50 Hz) shifts such a
+/// sensitivity a little, whereas it would bias a fitted delay by the whole step. Fits at this rate therefore
+/// run on residuals corrected to the replay's rate ([`coarse`]) and are refitted there ([`polish`]).
 pub fn at_sensitivity_rate<R>(
     workers: &mut [Worker],
     case: &ReplayCase,
@@ -312,8 +316,11 @@ fn state_perturbations() -> Vec<StateReset> {
 /// The nuisance terms of every fit: the state at the start of each of the case's segments (roll and pitch
 /// angles, body rates and velocities, altitude; `ReplayCase::segments`). Their effect on the noise-normalised
 /// residual is linearised once at the unextended model (one simulation per segment and state, in parallel on
-/// the workers) and returned column by column (nine per segment, in segment order); [`residuals`] projects
-/// their [`orthonormal_basis`] off. Estimating the initial
+/// the workers, flown to the segment's end) and returned column by column (nine per segment, in segment order);
+/// [`residuals`] projects their [`orthonormal_basis`] off. A column ends with its segment, as in multiple
+/// shooting: what a state error at one segment's start does after the next one starts is the response to a
+/// state error there, which the next segment's columns span (to first order; engine and actuator states are
+/// not among the nine). Estimating the initial
 /// state per segment keeps the slow modes' drift, grown from small state errors over a long record, from being
 /// taken for a cause (Jategaonkar, Flight Vehicle System Identification, 2nd ed., initial conditions as
 /// unknowns per maneuver; multiple shooting). Empty when the simulation cannot set its state mid-flight.
@@ -341,18 +348,26 @@ fn state_columns(
         return Ok(Vec::new());
     };
     let (base, _) = simulate(first, case, &[])?;
-    let items: Vec<StateReset> = case
+    // (reset, end of its segment): the next segment's start, or the record's end.
+    let items: Vec<(StateReset, usize)> = case
         .segments
         .iter()
-        .flat_map(|&b| {
+        .enumerate()
+        .flat_map(|(s, &b)| {
+            let end = case.segments.get(s + 1).copied().unwrap_or(case.len());
             state_perturbations()
                 .into_iter()
-                .map(move |r| StateReset { step: b, ..r })
+                .map(move |r| (StateReset { step: b, ..r }, end))
         })
         .collect();
-    let columns = par_map(workers, &items, |wk, reset| {
+    let columns = par_map(workers, &items, |wk, (reset, end)| {
         let t0 = std::time::Instant::now();
-        let out = replay_with_resets(wk.sim.as_mut(), case, &[], std::slice::from_ref(reset));
+        let out = replay_with_resets(
+            wk.sim.as_mut(),
+            &case.head(*end),
+            &[],
+            std::slice::from_ref(reset),
+        );
         wk.sim_s += t0.elapsed().as_secs_f64();
         wk.simulations += 1;
         let (rec, _) = out?;
@@ -364,6 +379,7 @@ fn state_columns(
                 )));
             };
             col.extend(y.iter().zip(y0).map(|(a, b)| (a - b) / sigma[c]));
+            col.resize((c + 1) * case.len(), 0.0);
         }
         Ok(col)
     });
@@ -433,6 +449,8 @@ struct Replayed<'a, 'c, 'e> {
     evaluations: usize,
     /// ∂r/∂θ of the last linearisation.
     last_cols: Vec<Vec<f64>>,
+    /// ∂r/∂θ for the first linearisation in place of forward differences (see [`polish`]).
+    seed: Option<Vec<Vec<f64>>>,
 }
 
 impl Replayed<'_, '_, '_> {
@@ -463,8 +481,14 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
         r: &Vec<f64>,
     ) -> Result<Option<optimise::Linearised>, SimError> {
         self.set(x);
-        let cols = residual_jacobian(self.worker, self.w, self.active, &self.free, r)?;
-        self.evaluations += cols.len();
+        let cols = match self.seed.take() {
+            Some(cols) => cols,
+            None => {
+                let cols = residual_jacobian(self.worker, self.w, self.active, &self.free, r)?;
+                self.evaluations += cols.len();
+                cols
+            }
+        };
         // ŷ moves against r = (y − ŷ)/σ: S = −∂r/∂θ
         let sensitivities = Mat::from_fn(r.len(), cols.len(), |k, j| -cols[j][k]);
         self.last_cols = cols;
@@ -487,6 +511,18 @@ pub fn fit(
     max_iter: usize,
     final_jacobian: bool,
 ) -> Result<FitOutcome, SimError> {
+    fit_from(worker, w, active, max_iter, final_jacobian, None)
+}
+
+/// [`fit`], its first linearisation `seed` (∂r/∂θ of the free parameters, in their order) when given.
+fn fit_from(
+    worker: &mut Worker,
+    w: &Weighted,
+    active: &mut [Active],
+    max_iter: usize,
+    final_jacobian: bool,
+    seed: Option<Vec<Vec<f64>>>,
+) -> Result<FitOutcome, SimError> {
     // Index of every free scalar parameter: (active index, parameter index).
     let free: Vec<(usize, usize)> = active
         .iter()
@@ -501,7 +537,9 @@ pub fn fit(
         .iter()
         .map(|&(i, j)| active[i].ext.params()[j])
         .collect();
+    let seed = seed.filter(|cols| cols.len() == free.len());
     let mut problem = Replayed {
+        seed,
         worker,
         w,
         active,
@@ -577,15 +615,18 @@ pub fn fit(
     })
 }
 
-/// The fit at the replay's rate that follows fits at the coarse rate ([`coarse`]): at most three
-/// Levenberg–Marquardt iterations from their optimum, every effect of `active` free. Its values, cost and
-/// standard errors are the ones reported.
+/// The fit at the replay's rate that follows a fit at the coarse rate ([`coarse`]): at most three
+/// Levenberg–Marquardt iterations from its optimum, every effect of `active` free, the first with the coarse
+/// fit's sensitivities `coarse_sensitivities` (∂r/∂θ in the order of the free parameters; the corrected
+/// residual has the coarse model's sensitivities, equal to the replay's to first order). Its values and cost
+/// are the ones reported, its standard errors those of the last sensitivities.
 pub fn polish(
     worker: &mut Worker,
     w: &Weighted,
     active: &mut [Active],
+    coarse_sensitivities: &[Vec<f64>],
 ) -> Result<FitOutcome, SimError> {
-    fit(worker, w, active, 3, false)
+    fit_from(worker, w, active, 3, false, Some(coarse_sensitivities.to_vec()))
 }
 
 /// The residual sensitivity ∂r/∂θ of `candidate`'s first parameter at its null value on top of the `base`

@@ -18,7 +18,10 @@
 //! - Screening, each round: the score (Lagrange-multiplier) test of every remaining entry, the cost reduction
 //!   of one Gauss–Newton step from "no effect", ΔJ = (sᵀr)² / (sᵀs) (Rao 1948; the stepwise idea of Klein &
 //!   Morelli, Aircraft System Identification, §5.4), with the sensitivities of the unextended model.
-//! - The best few are fitted by output error jointly with the effects already selected and judged: an interior
+//! - The best few are fitted by output error jointly with the effects already selected (at the coarse rate,
+//!   `search::coarse`; an accepted model is refitted at the replay's rate, `settle`), unless the score test
+//!   already rules the fit out (a one-step estimate within half the resolution of "no effect" that explains
+//!   less than the share of the cost a named effect must), and judged: an interior
 //!   optimum, at least the resolution away from "no effect" and determined to a third of it, BIC with the
 //!   effective sample count, distance from "no effect" in standard errors, a share of the cost explained.
 //! - The validation record never picks: the gain of the accepted effects on it is only reported.
@@ -417,7 +420,7 @@ pub(super) fn drop_below_resolution(
 }
 
 /// After a joint fit at the coarse rate ([`search::coarse`]) was adopted: the named effects refitted at the
-/// replay's rate from its values ([`search::polish`]; the values, standard errors and cost are the replay's, and
+/// replay's rate from its values and sensitivities ([`search::polish`]; the values and cost are the replay's, and
 /// the next round's coarse fits are corrected at them), then [`drop_below_resolution`] and, when an effect went,
 /// the model's cost evaluated again (one replay).
 fn settle(
@@ -425,10 +428,12 @@ fn settle(
     w: &Weighted,
     progress: &Progress,
     state: Replacement<'_, '_>,
+    coarse_sensitivities: &[Vec<f64>],
 ) -> Result<(), DiagnoseError> {
     if !state.selected.is_empty() {
         let mut active = with_freedom(state.selected, true);
-        let o = search::polish(worker, w, &mut active).map_err(sim_err("replay"))?;
+        let o = search::polish(worker, w, &mut active, coarse_sensitivities)
+            .map_err(sim_err("replay"))?;
         progress.fitted(o.evaluations);
         let mut k = 0;
         for (a, n) in active.iter().zip(state.named.iter_mut()) {
@@ -619,7 +624,13 @@ pub fn select<'e>(
             cost: &mut base_cost,
             round,
         };
-        settle(&mut workers[0], &w, progress, state)?;
+        settle(
+            &mut workers[0],
+            &w,
+            progress,
+            state,
+            &best_fit.sensitivities,
+        )?;
         // The validation record only reports the gain of the accepted effects.
         if let (Some(vw), Some(before)) = (&vw, valid_cost) {
             let r =

@@ -155,7 +155,8 @@ pub(super) fn replace_ambiguous<'e>(
         cost,
         round,
     } = state;
-    let mut changed = false;
+    // The sensitivities of the last adopted fit, whose free parameters are those of the final selection.
+    let mut adopted_sensitivities = Vec::new();
     for i in 0..named.len() {
         let alternatives: Vec<usize> = named[i]
             .ambiguous_with
@@ -223,7 +224,7 @@ pub(super) fn replace_ambiguous<'e>(
         let kept = format!("{}/{}", catalogue[j].effect(), catalogue[j].target());
         adopt(selected, a);
         *cost = o.cost_after;
-        changed = true;
+        adopted_sensitivities = o.sensitivities.clone();
         let mut group: Vec<String> = std::iter::once(replaced)
             .chain(
                 named[i]
@@ -244,7 +245,7 @@ pub(super) fn replace_ambiguous<'e>(
             }
         }
     }
-    if !changed {
+    if adopted_sensitivities.is_empty() {
         return Ok(());
     }
     // The replacement frees every named effect: one may now sit within its resolution of no effect.
@@ -255,7 +256,7 @@ pub(super) fn replace_ambiguous<'e>(
         cost,
         round,
     };
-    settle(&mut workers[0], w, progress, state)
+    settle(&mut workers[0], w, progress, state, &adopted_sensitivities)
 }
 
 impl<'e> Replacement<'_, 'e> {
