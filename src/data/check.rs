@@ -32,6 +32,7 @@ use serde::Serialize;
 use super::channel::Channel;
 use super::error::DataError;
 use super::record::FlightRecord;
+use crate::signal::{std_dev, sum_sq};
 use fit::{coloured_residual_covariance, fit, invert, jacobian};
 use kinematics::{Data, Param, OUT_NAMES};
 
@@ -114,13 +115,6 @@ fn excitation_floor(output: usize) -> f64 {
     }
 }
 
-/// Root-mean-square deviation from the mean.
-fn rms_about_mean(x: &[f64]) -> f64 {
-    let n = x.len().max(1) as f64;
-    let m = x.iter().sum::<f64>() / n;
-    (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n).sqrt()
-}
-
 /// Whether an air-data signal (`output` 0 = V, 1 = α, 2 = β) moves clearly enough for a scale factor or a
 /// time skew on it to be estimated, given the residual of a fit without them (`with_it` false: tests 1 and
 /// 2) or with them (true: all three; the residual of a fit without the skew still holds the skew's own
@@ -147,14 +141,14 @@ fn excitation(
     } else {
         (1f64.to_degrees(), "°")
     };
-    let moved = rms_about_mean(signal);
+    let moved = std_dev(signal);
     let noise = crate::signal::noise_std(signal);
     let n = signal.len().max(1) as f64;
     let z = (moved * moved - noise * noise) / (noise * noise * (2.0 / n).sqrt()).max(1e-300);
     let explained: Vec<f64> = signal.iter().zip(residual).map(|(m, r)| m - r).collect();
-    let explained = rms_about_mean(&explained);
+    let explained = std_dev(&explained);
     // what they leave beyond the white sensor noise: gusts, unmodelled motion
-    let unexplained = (rms_about_mean(residual).powi(2) - noise * noise)
+    let unexplained = (std_dev(residual).powi(2) - noise * noise)
         .max(0.0)
         .sqrt();
     if z <= EXCITATION_Z || moved < floor {
@@ -437,7 +431,7 @@ pub fn check_compatibility(
         .map(|(&j, rj)| {
             (
                 OUT_NAMES[j].to_string(),
-                (rj.iter().map(|x| x * x).sum::<f64>() / n as f64).sqrt(),
+                (sum_sq(rj) / n as f64).sqrt(),
             )
         })
         .collect();
