@@ -632,9 +632,7 @@ mod tests {
             .collect();
         let nn = sum_sq(&n).sqrt();
         let along: f64 = err.iter().zip(&n).map(|(e, x)| e * x).sum::<f64>() / nn;
-        let off = (sum_sq(&err) - along * along)
-            .max(0.0)
-            .sqrt();
+        let off = (sum_sq(&err) - along * along).max(0.0).sqrt();
         let total = sum_sq(&err).sqrt();
         assert!(off < 0.05 * total, "off-direction error {off} of {total}");
     }

@@ -148,9 +148,7 @@ fn excitation(
     let explained: Vec<f64> = signal.iter().zip(residual).map(|(m, r)| m - r).collect();
     let explained = std_dev(&explained);
     // what they leave beyond the white sensor noise: gusts, unmodelled motion
-    let unexplained = (std_dev(residual).powi(2) - noise * noise)
-        .max(0.0)
-        .sqrt();
+    let unexplained = (std_dev(residual).powi(2) - noise * noise).max(0.0).sqrt();
     if z <= EXCITATION_Z || moved < floor {
         return Err(format!(
             "moves {:.3} {unit} rms against a noise of {:.3} {unit}, not clearly beyond it (variance excess \
@@ -428,12 +426,7 @@ pub fn check_compatibility(
     let residual_rms = outputs
         .iter()
         .zip(&r)
-        .map(|(&j, rj)| {
-            (
-                OUT_NAMES[j].to_string(),
-                (sum_sq(rj) / n as f64).sqrt(),
-            )
-        })
+        .map(|(&j, rj)| (OUT_NAMES[j].to_string(), (sum_sq(rj) / n as f64).sqrt()))
         .collect();
     Ok(CheckReport {
         instrument,

@@ -154,4 +154,3 @@ pub struct Discrete {
     /// Γ₂ (linear interpolation's ramp term; zeros for a zero-order hold).
     pub gamma2: Vec<f64>,
 }
-

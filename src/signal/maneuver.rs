@@ -7,8 +7,8 @@ use std::f64::consts::{PI, SQRT_2, TAU};
 
 use serde::{Deserialize, Serialize};
 
-use super::SignalError;
 use super::ops::sum_sq;
+use super::SignalError;
 
 /// A designed input shape, produced at unit peak amplitude.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

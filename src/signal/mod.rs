@@ -9,8 +9,8 @@ mod ops;
 
 pub use maneuver::{generate, multisine_design, peak_factor, time_grid, Maneuver, MultisineDesign};
 pub use ops::{
-    add_white_noise, heading_from_zero_rad, noise_std, on_uniform_step, resample_linear, std_dev, sum_sq,
-    unwrap_rad,
+    add_white_noise, heading_from_zero_rad, noise_std, on_uniform_step, resample_linear, std_dev,
+    sum_sq, unwrap_rad,
 };
 
 /// What can be wrong with a maneuver definition.
