@@ -94,6 +94,26 @@ pub struct CheckReport {
     pub not_excited: Vec<String>,
 }
 
+impl CheckReport {
+    /// The time skews (`skew_*`) the reconstruction found significant.
+    pub fn significant_skews(&self) -> impl Iterator<Item = &Estimate> {
+        self.instrument
+            .iter()
+            .filter(|e| e.name.starts_with("skew_") && e.significant)
+    }
+
+    /// The significant time skews longer than a data system can put between the channels of `rec`
+    /// ([`skew_bound_s`]): a vane reading gusts the kinematics do not see, or sitting behind a filter.
+    pub fn implausible_skews<'a>(
+        &'a self,
+        rec: &FlightRecord,
+    ) -> impl Iterator<Item = &'a Estimate> {
+        let bound_s = skew_bound_s(rec);
+        self.significant_skews()
+            .filter(move |e| e.value.abs() > bound_s)
+    }
+}
+
 /// How clearly an air-data signal must move beyond its own noise before a scale factor or a time skew on it
 /// is estimated: its variance about the mean must exceed the noise variance (from
 /// [`crate::signal::noise_std`]) by this many standard errors of a variance estimate over n samples
@@ -438,4 +458,47 @@ pub fn check_compatibility(
         not_identifiable,
         not_excited,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn estimate(name: &str, value: f64, significant: bool) -> Estimate {
+        Estimate {
+            name: name.into(),
+            column: name
+                .trim_start_matches("skew_")
+                .trim_end_matches("_s")
+                .into(),
+            value,
+            std_error: 0.01,
+            significant,
+        }
+    }
+
+    #[test]
+    fn a_significant_skew_beyond_one_sample_interval_is_implausible() {
+        // 10 Hz record: the bound is one sample, 0.1 s (above the 50 ms floor)
+        let rec = FlightRecord::new((0..50).map(|k| k as f64 * 0.1).collect());
+        let report = CheckReport {
+            instrument: vec![
+                estimate("bias_q_rad_s", 0.5, true),
+                estimate("skew_alpha_s", 0.05, true),
+                estimate("skew_beta_s", -0.22, true),
+                estimate("skew_alpha_s", 0.3, false),
+            ],
+            initial_state: Vec::new(),
+            residual_rms: Vec::new(),
+            iterations: 1,
+            converged: true,
+            translational: true,
+            not_identifiable: Vec::new(),
+            not_excited: Vec::new(),
+        };
+        let values =
+            |it: &mut dyn Iterator<Item = &Estimate>| it.map(|e| e.value).collect::<Vec<_>>();
+        assert_eq!(values(&mut report.significant_skews()), vec![0.05, -0.22]);
+        assert_eq!(values(&mut report.implausible_skews(&rec)), vec![-0.22]);
+    }
 }
