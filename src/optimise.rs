@@ -457,7 +457,7 @@ mod tests {
             Ok(r.iter().all(|v| v.is_finite()).then_some(r))
         }
         fn cost(&self, r: &Vec<f64>) -> f64 {
-            r.iter().map(|v| v * v).sum()
+            crate::signal::sum_sq(r)
         }
         fn linearise(&mut self, x: &[f64], r: &Vec<f64>) -> Result<Option<Linearised>, ()> {
             let s = Mat::from_fn(self.t.len(), 2, |k, j| {

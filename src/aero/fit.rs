@@ -21,6 +21,7 @@ use super::model::{AeroModel, Axis, TfOutput};
 use super::params::Derivative;
 use super::AeroError;
 use crate::optimise;
+use crate::signal::sum_sq;
 
 /// One identified continuous-time transfer function, descending powers of s.
 #[derive(Debug, Clone)]
@@ -296,7 +297,7 @@ impl optimise::Problem for Coefficients<'_> {
     }
 
     fn cost(&self, r: &Vec<f64>) -> f64 {
-        r.iter().map(|x| x * x).sum()
+        sum_sq(r)
     }
 
     /// The residual's own Jacobian as the sensitivities, the negated residual as `e`.
@@ -364,7 +365,7 @@ pub fn estimate_derivatives(
     let min = optimise::levenberg_marquardt(&mut problem, vec![0.0; free.len()], r, &lm)?;
     let values = problem.values(&min.x);
     let (r, iterations) = (min.point, min.iterations);
-    let cost: f64 = r.iter().map(|x| x * x).sum();
+    let cost = sum_sq(&r);
 
     let model = with_values(prior, free, &values);
     let identifiability = analyse_with_weights(
@@ -629,12 +630,10 @@ mod tests {
             .zip(&scale)
             .map(|(x, s)| x / s)
             .collect();
-        let nn = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let nn = sum_sq(&n).sqrt();
         let along: f64 = err.iter().zip(&n).map(|(e, x)| e * x).sum::<f64>() / nn;
-        let off = (err.iter().map(|e| e * e).sum::<f64>() - along * along)
-            .max(0.0)
-            .sqrt();
-        let total = err.iter().map(|e| e * e).sum::<f64>().sqrt();
+        let off = (sum_sq(&err) - along * along).max(0.0).sqrt();
+        let total = sum_sq(&err).sqrt();
         assert!(off < 0.05 * total, "off-direction error {off} of {total}");
     }
 

@@ -26,6 +26,7 @@ use faer::prelude::Solve;
 use faer::Mat;
 
 use crate::estimate::covariance;
+use crate::signal::sum_sq;
 
 use super::params::{Derivative, Geometry, MassProperties};
 use super::AeroError;
@@ -417,7 +418,7 @@ pub(crate) fn lesq(
     let resid: Vec<f64> = (0..n)
         .map(|i| z[i] - (0..p).map(|j| columns[j][i] * theta[j]).sum::<f64>())
         .collect();
-    let sse: f64 = resid.iter().map(|r| r * r).sum();
+    let sse = sum_sq(&resid);
     let s2 = sse / (n - p) as f64;
     let mean = z.iter().sum::<f64>() / n as f64;
     let sst: f64 = z.iter().map(|v| (v - mean).powi(2)).sum();

@@ -140,8 +140,11 @@ pub fn load_spec(file: &Path) -> anyhow::Result<CampaignSpec> {
     Ok(CampaignSpec::load(file)?)
 }
 
-/// Exit 1 naming the failed cases.
-fn failed_cases(failed_ids: &[String], total: usize) -> anyhow::Error {
+/// Exit 1 naming the failed cases, when there are any.
+fn fail_on_failed(failed_ids: &[String], total: usize) -> anyhow::Result<()> {
+    if failed_ids.is_empty() {
+        return Ok(());
+    }
     let mut names = failed_ids
         .iter()
         .take(10)
@@ -151,11 +154,11 @@ fn failed_cases(failed_ids: &[String], total: usize) -> anyhow::Error {
     if failed_ids.len() > 10 {
         names += &format!(" and {} more", failed_ids.len() - 10);
     }
-    anyhow::anyhow!(
+    Err(anyhow::anyhow!(
         "{} of {total} cases failed: {names} (their errors are in the case files and `campaign report`; \
          --retry-failed runs them again)",
         failed_ids.len()
-    )
+    ))
 }
 
 /// `, N what` for a positive count `n`, else nothing: a count the summaries mention only when it is not zero.
@@ -224,10 +227,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
                 Some(t) => emit_json(t, &summary)?,
                 None => print_run_summary(&format!("campaign '{}'", spec.name), &summary, out),
             }
-            if summary.failed > 0 {
-                return Err(failed_cases(&summary.failed_ids, summary.total));
-            }
-            Ok(())
+            fail_on_failed(&summary.failed_ids, summary.total)
         }
         CampaignAction::Worker {
             dir,
@@ -250,10 +250,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
                 },
             )?;
             print_run_summary(&format!("shard {k}/{n}"), &summary, dir);
-            if summary.failed > 0 {
-                return Err(failed_cases(&summary.failed_ids, summary.total));
-            }
-            Ok(())
+            fail_on_failed(&summary.failed_ids, summary.total)
         }
         CampaignAction::Submit {
             file,
@@ -421,9 +418,7 @@ fn finish_status(out: &Path, job_id: Option<&str>) -> anyhow::Result<()> {
             println!("slurm job {id}: {}", slurm::summarize_states(&tasks));
         }
     }
-    if s.counts.failed > 0 {
-        return Err(failed_cases(&s.failed_ids, s.total));
-    }
+    fail_on_failed(&s.failed_ids, s.total)?;
     if s.counts.pending + s.counts.changed > 0 {
         return Err(anyhow::anyhow!(
             "{} of {} cases have no result (a task was cancelled, hit its time limit or died); submit again to \

@@ -126,17 +126,15 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         );
     }
     let bound_s = data::skew_bound_s(&rec);
-    for e in &report.instrument {
-        if e.name.starts_with("skew_") && e.significant && e.value.abs() > bound_s {
-            println!(
-                "note: {} = {:.0} ms is longer than a data system's skew can be (one sample interval, {:.0} ms): \
-                 the vane reads motion the kinematics do not see (gusts) or sits behind a filter; `derivatives` \
-                 does not shift it out",
-                e.name,
-                1000.0 * e.value,
-                1000.0 * bound_s
-            );
-        }
+    for e in report.implausible_skews(&rec) {
+        println!(
+            "note: {} = {:.0} ms is longer than a data system's skew can be (one sample interval, {:.0} ms): \
+             the vane reads motion the kinematics do not see (gusts) or sits behind a filter; `derivatives` \
+             does not shift it out",
+            e.name,
+            1000.0 * e.value,
+            1000.0 * bound_s
+        );
     }
     for why in &report.not_excited {
         println!("not estimated, not excited: {why}");

@@ -32,6 +32,7 @@ use serde::Serialize;
 use super::channel::Channel;
 use super::error::DataError;
 use super::record::FlightRecord;
+use crate::signal::{std_dev, sum_sq};
 use fit::{coloured_residual_covariance, fit, invert, jacobian};
 use kinematics::{Data, Param, OUT_NAMES};
 
@@ -93,6 +94,26 @@ pub struct CheckReport {
     pub not_excited: Vec<String>,
 }
 
+impl CheckReport {
+    /// The time skews (`skew_*`) the reconstruction found significant.
+    pub fn significant_skews(&self) -> impl Iterator<Item = &Estimate> {
+        self.instrument
+            .iter()
+            .filter(|e| e.name.starts_with("skew_") && e.significant)
+    }
+
+    /// The significant time skews longer than a data system can put between the channels of `rec`
+    /// ([`skew_bound_s`]): a vane reading gusts the kinematics do not see, or sitting behind a filter.
+    pub fn implausible_skews<'a>(
+        &'a self,
+        rec: &FlightRecord,
+    ) -> impl Iterator<Item = &'a Estimate> {
+        let bound_s = skew_bound_s(rec);
+        self.significant_skews()
+            .filter(move |e| e.value.abs() > bound_s)
+    }
+}
+
 /// How clearly an air-data signal must move beyond its own noise before a scale factor or a time skew on it
 /// is estimated: its variance about the mean must exceed the noise variance (from
 /// [`crate::signal::noise_std`]) by this many standard errors of a variance estimate over n samples
@@ -112,13 +133,6 @@ fn excitation_floor(output: usize) -> f64 {
     } else {
         0.05_f64.to_radians()
     }
-}
-
-/// Root-mean-square deviation from the mean.
-fn rms_about_mean(x: &[f64]) -> f64 {
-    let n = x.len().max(1) as f64;
-    let m = x.iter().sum::<f64>() / n;
-    (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n).sqrt()
 }
 
 /// Whether an air-data signal (`output` 0 = V, 1 = α, 2 = β) moves clearly enough for a scale factor or a
@@ -147,16 +161,14 @@ fn excitation(
     } else {
         (1f64.to_degrees(), "°")
     };
-    let moved = rms_about_mean(signal);
+    let moved = std_dev(signal);
     let noise = crate::signal::noise_std(signal);
     let n = signal.len().max(1) as f64;
     let z = (moved * moved - noise * noise) / (noise * noise * (2.0 / n).sqrt()).max(1e-300);
     let explained: Vec<f64> = signal.iter().zip(residual).map(|(m, r)| m - r).collect();
-    let explained = rms_about_mean(&explained);
+    let explained = std_dev(&explained);
     // what they leave beyond the white sensor noise: gusts, unmodelled motion
-    let unexplained = (rms_about_mean(residual).powi(2) - noise * noise)
-        .max(0.0)
-        .sqrt();
+    let unexplained = (std_dev(residual).powi(2) - noise * noise).max(0.0).sqrt();
     if z <= EXCITATION_Z || moved < floor {
         return Err(format!(
             "moves {:.3} {unit} rms against a noise of {:.3} {unit}, not clearly beyond it (variance excess \
@@ -434,12 +446,7 @@ pub fn check_compatibility(
     let residual_rms = outputs
         .iter()
         .zip(&r)
-        .map(|(&j, rj)| {
-            (
-                OUT_NAMES[j].to_string(),
-                (rj.iter().map(|x| x * x).sum::<f64>() / n as f64).sqrt(),
-            )
-        })
+        .map(|(&j, rj)| (OUT_NAMES[j].to_string(), (sum_sq(rj) / n as f64).sqrt()))
         .collect();
     Ok(CheckReport {
         instrument,
@@ -451,4 +458,47 @@ pub fn check_compatibility(
         not_identifiable,
         not_excited,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn estimate(name: &str, value: f64, significant: bool) -> Estimate {
+        Estimate {
+            name: name.into(),
+            column: name
+                .trim_start_matches("skew_")
+                .trim_end_matches("_s")
+                .into(),
+            value,
+            std_error: 0.01,
+            significant,
+        }
+    }
+
+    #[test]
+    fn a_significant_skew_beyond_one_sample_interval_is_implausible() {
+        // 10 Hz record: the bound is one sample, 0.1 s (above the 50 ms floor)
+        let rec = FlightRecord::new((0..50).map(|k| k as f64 * 0.1).collect());
+        let report = CheckReport {
+            instrument: vec![
+                estimate("bias_q_rad_s", 0.5, true),
+                estimate("skew_alpha_s", 0.05, true),
+                estimate("skew_beta_s", -0.22, true),
+                estimate("skew_alpha_s", 0.3, false),
+            ],
+            initial_state: Vec::new(),
+            residual_rms: Vec::new(),
+            iterations: 1,
+            converged: true,
+            translational: true,
+            not_identifiable: Vec::new(),
+            not_excited: Vec::new(),
+        };
+        let values =
+            |it: &mut dyn Iterator<Item = &Estimate>| it.map(|e| e.value).collect::<Vec<_>>();
+        assert_eq!(values(&mut report.significant_skews()), vec![0.05, -0.22]);
+        assert_eq!(values(&mut report.implausible_skews(&rec)), vec![-0.22]);
+    }
 }

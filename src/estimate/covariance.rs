@@ -16,6 +16,8 @@
 use num_complex::Complex64;
 use realfft::RealFftPlanner;
 
+use crate::signal::sum_sq;
+
 /// Bartlett-weighted residual autocorrelation `w(l) R(l)`, l = 0 … L, for the coloured-residual
 /// correction: L = twice the first lag at which the sample autocorrelation falls inside the 99 %
 /// white-noise band (at most N/10). Summing the sample autocorrelation over all lags instead would
@@ -24,7 +26,7 @@ use realfft::RealFftPlanner;
 pub fn lag_weights(r: &[f64]) -> Vec<f64> {
     let len = r.len();
     if len < 2 {
-        return vec![r.iter().map(|v| v * v).sum::<f64>() / len.max(1) as f64];
+        return vec![sum_sq(r) / len.max(1) as f64];
     }
     let cap = (len / 10).max(1).min(len - 1);
     let acf = autocorrelation(r, cap);

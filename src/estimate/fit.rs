@@ -38,6 +38,7 @@ use super::record::{InputHold, InputSignal, Record, Run};
 use super::EstimateError;
 use crate::ident::nrmse_fit as fit_percent;
 use crate::optimise;
+use crate::signal::{std_dev, sum_sq};
 
 mod result;
 mod sensitivity;
@@ -289,19 +290,12 @@ fn process_noise_scale(
         .map(|i| {
             (0..c.nrows())
                 .filter(|&o| c[(o, i)].abs() > 1e-12)
-                .map(|o| (1e-2 * spread(&rec.outputs[o]) / c[(o, i)].abs()).powi(2) / dt)
+                .map(|o| (1e-2 * std_dev(&rec.outputs[o]) / c[(o, i)].abs()).powi(2) / dt)
                 .filter(|v| v.is_finite() && *v > 0.0)
                 .fold(f64::INFINITY, f64::min)
         })
         .map(|v| if v.is_finite() { v } else { 1e-6 })
         .collect()
-}
-
-/// Standard deviation of a column.
-fn spread(v: &[f64]) -> f64 {
-    let n = v.len().max(1) as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt()
 }
 
 /// Outputs of every record, `[record][output][k]`.
@@ -523,8 +517,8 @@ impl Problem<'_> {
             .map(|o| {
                 let (mut s, mut z2, mut n) = (0.0, 0.0, 0usize);
                 for (rec, rr) in self.records.iter().zip(res) {
-                    s += rr[o].iter().map(|v| v * v).sum::<f64>();
-                    z2 += rec.outputs[o].iter().map(|v| v * v).sum::<f64>();
+                    s += sum_sq(&rr[o]);
+                    z2 += sum_sq(&rec.outputs[o]);
                     n += rr[o].len();
                 }
                 let n = n.max(1) as f64;
@@ -539,7 +533,7 @@ impl Problem<'_> {
             .map(|rr| {
                 rr.iter()
                     .zip(noise)
-                    .map(|(v, r)| v.iter().map(|x| x * x).sum::<f64>() / r)
+                    .map(|(v, r)| sum_sq(v) / r)
                     .sum::<f64>()
             })
             .sum()

@@ -10,6 +10,31 @@
 use super::model::{SimError, StateModel};
 use super::record::Run;
 
+/// Implements [`Model`](crate::estimate::Model) for types that implement [`StateModel`]: the signature is the
+/// state model's, `simulate` integrates `f` with the core's [`simulate_states`](crate::estimate::simulate_states),
+/// and `state_model` hands the state-space form to the filter error method.
+#[macro_export]
+macro_rules! model_from_state_model {
+    ($($t:ty),+ $(,)?) => {$(
+        impl $crate::estimate::Model for $t {
+            fn signature(&self) -> &$crate::estimate::Signature {
+                $crate::estimate::StateModel::signature(self)
+            }
+            fn simulate(
+                &self,
+                theta: &[f64],
+                x0: &[f64],
+                run: &$crate::estimate::Run<'_>,
+            ) -> Result<Vec<Vec<f64>>, $crate::estimate::SimError> {
+                $crate::estimate::simulate_states(self, theta, x0, run)
+            }
+            fn state_model(&self) -> Option<&dyn $crate::estimate::StateModel> {
+                Some(self)
+            }
+        }
+    )+};
+}
+
 /// Largest magnitude a state or output may reach before the simulation counts as diverged.
 pub(crate) const DIVERGED: f64 = 1e12;
 

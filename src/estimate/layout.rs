@@ -7,6 +7,7 @@
 use super::model::{Parameter, Signature};
 use super::record::Record;
 use super::EstimateError;
+use crate::signal::std_dev;
 
 /// Which nuisance terms are estimated besides the model parameters (indices into the signature's
 /// states, outputs and inputs).
@@ -225,7 +226,7 @@ impl Layout {
                         index: i,
                         target: names[i].clone(),
                     };
-                    let sc = spread(&signals[i]).max(1e-6);
+                    let sc = std_dev(&signals[i]).max(1e-6);
                     push(slot, 0.0, f64::NEG_INFINITY, f64::INFINITY, sc);
                 }
             }
@@ -355,11 +356,4 @@ impl Layout {
             *v = v.clamp(self.lower[j], self.upper[j]);
         }
     }
-}
-
-/// Standard deviation of a column (a scale for its bias).
-fn spread(v: &[f64]) -> f64 {
-    let n = v.len().max(1) as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt()
 }

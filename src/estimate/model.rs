@@ -154,28 +154,3 @@ pub struct Discrete {
     /// Γ₂ (linear interpolation's ramp term; zeros for a zero-order hold).
     pub gamma2: Vec<f64>,
 }
-
-/// Implements [`Model`] for types that implement [`StateModel`]: the signature is the state model's,
-/// `simulate` integrates `f` with the core's [`simulate_states`](crate::estimate::simulate_states), and
-/// `state_model` hands the state-space form to the filter error method.
-#[macro_export]
-macro_rules! model_from_state_model {
-    ($($t:ty),+ $(,)?) => {$(
-        impl $crate::estimate::Model for $t {
-            fn signature(&self) -> &$crate::estimate::Signature {
-                $crate::estimate::StateModel::signature(self)
-            }
-            fn simulate(
-                &self,
-                theta: &[f64],
-                x0: &[f64],
-                run: &$crate::estimate::Run<'_>,
-            ) -> Result<Vec<Vec<f64>>, $crate::estimate::SimError> {
-                $crate::estimate::simulate_states(self, theta, x0, run)
-            }
-            fn state_model(&self) -> Option<&dyn $crate::estimate::StateModel> {
-                Some(self)
-            }
-        }
-    )+};
-}

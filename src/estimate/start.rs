@@ -178,8 +178,7 @@ pub fn start_values(
     let mut next_intercept = na;
     for &(e, intercept) in &used {
         let all: Vec<f64> = blocks[e].iter().flatten().map(|(t, _)| *t).collect();
-        let mu = all.iter().sum::<f64>() / all.len() as f64;
-        let spread = (all.iter().map(|t| (t - mu).powi(2)).sum::<f64>() / all.len() as f64).sqrt();
+        let spread = crate::signal::std_dev(&all);
         let w = if spread > 0.0 { 1.0 / spread } else { 1.0 };
         for block in &blocks[e] {
             for (t, g) in block {

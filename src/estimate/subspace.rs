@@ -35,6 +35,7 @@ use super::EstimateError;
 use crate::ident::lstsq_qr;
 use crate::ident::nrmse_fit;
 use crate::lti::{expm, logm, modes, Mode, StateSpace};
+use crate::signal::sum_sq;
 
 /// Settings of [`subspace`].
 #[derive(Clone, Debug)]
@@ -371,7 +372,7 @@ impl Prepared {
             (0..channels)
                 .map(|j| {
                     let (sum, count) = data.iter().fold((0.0, 0usize), |(s, c), r| {
-                        (s + r[j].iter().map(|v| v * v).sum::<f64>(), c + r[j].len())
+                        (s + sum_sq(&r[j]), c + r[j].len())
                     });
                     let sd = (sum / count as f64).sqrt();
                     if sd <= 1e-12 {

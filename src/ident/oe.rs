@@ -24,6 +24,7 @@ use super::linalg::{inverse, poly_mul};
 use super::{ContinuousModel, IdentError};
 use crate::estimate::covariance::coloured_covariance;
 use crate::optimise;
+use crate::signal::sum_sq;
 use faer::Mat;
 
 const MAX_ITER: usize = 100;
@@ -210,7 +211,7 @@ impl optimise::Problem for OutputError<'_> {
     }
 
     fn cost(&self, r: &Vec<f64>) -> f64 {
-        r.iter().map(|v| v * v).sum()
+        sum_sq(r)
     }
 
     fn linearise(

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::poly::{poly_add, strip_leading};
 use super::tf::TransferFunction;
 use super::LtiError;
+use crate::signal::sum_sq;
 
 /// `ẋ = A x + B u, y = C x + D u` (continuous) or `x[k+1] = A x[k] + B u[k]` (discrete).
 ///
@@ -288,7 +289,7 @@ fn hessenberg(a: &Mat<f64>) -> Mat<f64> {
         // v = x − alpha e1, reflect with P = I − 2 v vᵀ / (vᵀ v)
         let mut v: Vec<f64> = (k + 1..n).map(|i| h[(i, k)]).collect();
         v[0] -= alpha;
-        let vtv: f64 = v.iter().map(|x| x * x).sum();
+        let vtv = sum_sq(&v);
         if vtv == 0.0 {
             continue;
         }

@@ -316,8 +316,7 @@ pub fn run(opts: &PaperOptions) -> Result<PaperRun, PaperError> {
     for (i, tf) in paper_tfs().into_iter().enumerate() {
         let y_true = lti::lsim(&tf.original, &input, dt_s);
         let y_measured = if opts.noise_rel > 0.0 {
-            let mean = y_true.iter().sum::<f64>() / n as f64;
-            let sd = (y_true.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+            let sd = signal::std_dev(&y_true);
             signal::add_white_noise(&y_true, opts.noise_rel * sd, opts.seed + i as u64)
         } else {
             y_true.clone()

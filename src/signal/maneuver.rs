@@ -7,6 +7,7 @@ use std::f64::consts::{PI, SQRT_2, TAU};
 
 use serde::{Deserialize, Serialize};
 
+use super::ops::sum_sq;
 use super::SignalError;
 
 /// A designed input shape, produced at unit peak amplitude.
@@ -246,7 +247,7 @@ pub fn peak_factor(x: &[f64]) -> f64 {
         return 0.0;
     }
     let peak = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    let rms = (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
+    let rms = (sum_sq(x) / x.len() as f64).sqrt();
     if rms == 0.0 {
         0.0
     } else {

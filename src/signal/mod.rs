@@ -1,4 +1,4 @@
-//! Input design (doublet, 3-2-1-1, multisine, chirp), resampling, filtering, differentiation.
+//! Input design (doublet, 3-2-1-1, multisine, chirp), measurement noise, resampling, sums of squares and spread.
 //!
 //! Every maneuver is produced at unit peak amplitude on the sample grid `t_k = k·dt_s`; the caller
 //! scales it to a surface deflection. Shapes follow Morelli & Klein, *Aircraft System Identification:
@@ -9,7 +9,8 @@ mod ops;
 
 pub use maneuver::{generate, multisine_design, peak_factor, time_grid, Maneuver, MultisineDesign};
 pub use ops::{
-    add_white_noise, heading_from_zero_rad, noise_std, on_uniform_step, resample_linear, unwrap_rad,
+    add_white_noise, heading_from_zero_rad, noise_std, on_uniform_step, resample_linear, std_dev,
+    sum_sq, unwrap_rad,
 };
 
 /// What can be wrong with a maneuver definition.

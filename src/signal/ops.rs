@@ -1,7 +1,19 @@
-//! Operations on sampled signals: measurement noise, resampling.
+//! Operations on sampled signals: measurement noise, resampling, sums of squares and spread.
 
 use rand::{rngs::StdRng, SeedableRng};
 use rand_distr::{Distribution, Normal};
+
+/// Σ xᵢ², summed in order (the cost `eᵀe` of a residual, the energy of a signal).
+pub fn sum_sq(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum()
+}
+
+/// Population standard deviation √(Σ (xᵢ − x̄)² / n); 0 for an empty series.
+pub fn std_dev(x: &[f64]) -> f64 {
+    let n = x.len().max(1) as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    (x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt()
+}
 
 /// `x` plus zero-mean Gaussian white noise of standard deviation `std`, reproducible from `seed`.
 ///
@@ -102,6 +114,15 @@ mod tests {
         assert!((std - 0.5).abs() < 0.01, "std {std}");
         assert!(mean.abs() < 0.02, "mean {mean}");
         assert_ne!(a, add_white_noise(&x, 0.5, 43));
+    }
+
+    #[test]
+    fn sum_of_squares_and_population_std_of_a_short_series() {
+        // exact in binary floating point: 1 + 4 + 4 = 9; mean 2, deviations ±1 → σ = 1
+        assert_eq!(sum_sq(&[1.0, -2.0, 2.0]), 9.0);
+        assert_eq!(std_dev(&[1.0, 3.0]), 1.0);
+        // an empty series has no spread (not NaN), so a scale built from it falls back to its floor
+        assert_eq!(std_dev(&[]), 0.0);
     }
 
     #[test]

@@ -138,11 +138,7 @@ pub fn deskewed(
     let mut skews = Vec::new();
     let mut refused = Vec::new();
     let bound_s = data::skew_bound_s(rec);
-    for e in report
-        .instrument
-        .iter()
-        .filter(|e| e.name.starts_with("skew_") && e.significant)
-    {
+    for e in report.significant_skews() {
         if e.value.abs() > bound_s {
             refused.push((e.column.clone(), e.value));
             continue;

@@ -8,6 +8,7 @@ use faer::{Mat, Side};
 use super::kinematics::{residuals, Data, Param};
 use crate::estimate::covariance;
 use crate::optimise;
+use crate::signal::sum_sq;
 
 /// Cramér–Rao bounds corrected for coloured residuals by the estimation core's rule
 /// ([`covariance`], Morelli & Klein §6.6, eq. 6.86): `M⁻¹ W M⁻¹`, `W = Σ_o W_o / σ_o⁴`, with `W_o` the
@@ -87,7 +88,7 @@ pub(super) fn fit(data: &Data, params: &[Param], start: Vec<f64>, max_iterations
 /// Per-output residual variance (the diagonal R of the relaxation algorithm).
 fn variances(r: &[Vec<f64>]) -> Vec<f64> {
     r.iter()
-        .map(|rj| (rj.iter().map(|x| x * x).sum::<f64>() / rj.len().max(1) as f64).max(1e-24))
+        .map(|rj| (sum_sq(rj) / rj.len().max(1) as f64).max(1e-24))
         .collect()
 }
 
@@ -113,7 +114,7 @@ impl optimise::Problem for Reconstruction<'_> {
     fn cost(&self, r: &Self::Point) -> f64 {
         r.iter()
             .zip(&self.variances)
-            .map(|(rj, v)| rj.iter().map(|x| x * x).sum::<f64>() / v)
+            .map(|(rj, v)| sum_sq(rj) / v)
             .sum()
     }
 

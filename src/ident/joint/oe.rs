@@ -6,6 +6,7 @@ use crate::estimate::covariance;
 use crate::ident::linalg::{inverse, lstsq_qr};
 use crate::ident::{ContinuousModel, IdentError};
 use crate::optimise;
+use crate::signal::sum_sq;
 use faer::Mat;
 
 /// Variable-projection output error (Golub & Pereyra): Levenberg–Marquardt on `a₁…a_n` of the
@@ -73,7 +74,7 @@ where
     }
 
     fn cost(&self, (r, _): &Self::Point) -> f64 {
-        r.iter().map(|v| v * v).sum()
+        sum_sq(r)
     }
 
     fn linearise(
