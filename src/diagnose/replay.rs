@@ -273,7 +273,7 @@ impl ReplayCase {
         ReplayCase {
             record: self.record.slice(0, len),
             rate_hz: self.rate_hz,
-            point: self.point.clone(),
+            point: self.point,
             initial: self.initial.clone(),
             inputs: self
                 .inputs

@@ -626,7 +626,14 @@ pub fn polish(
     active: &mut [Active],
     coarse_sensitivities: &[Vec<f64>],
 ) -> Result<FitOutcome, SimError> {
-    fit_from(worker, w, active, 3, false, Some(coarse_sensitivities.to_vec()))
+    fit_from(
+        worker,
+        w,
+        active,
+        3,
+        false,
+        Some(coarse_sensitivities.to_vec()),
+    )
 }
 
 /// The residual sensitivity ∂r/∂θ of `candidate`'s first parameter at its null value on top of the `base`

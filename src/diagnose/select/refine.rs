@@ -4,12 +4,13 @@
 //! 2nd ed., §3.2–3.3.
 
 use super::{
-    adopt, fit_starts, settle, rejection, score_test, with_candidate, with_freedom,
-    RoundContext,
+    adopt, fit_starts, rejection, score_test, settle, with_candidate, with_freedom, RoundContext,
 };
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
-use crate::diagnose::search::{self, effective_n, fit, residuals, Active, FitOutcome, Weighted, Worker};
+use crate::diagnose::search::{
+    self, effective_n, fit, residuals, Active, FitOutcome, Weighted, Worker,
+};
 use crate::diagnose::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 
 /// The fit `o` with free parameter `i` moved last, where the selection's tests read the candidate's.
