@@ -143,3 +143,17 @@ fn architecture_module_table_matches_the_source_tree() {
         "docs/architecture.md's module table (left) against src/ (right)"
     );
 }
+
+#[test]
+fn no_two_source_files_import_each_other() {
+    let out = Command::new("python3")
+        .arg(root().join("scripts/import_cycles.py"))
+        .current_dir(root())
+        .output()
+        .expect("python3 runs scripts/import_cycles.py");
+    assert!(
+        out.status.success(),
+        "files that import each other:\n{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+}

@@ -18,6 +18,7 @@ pub mod refit;
 pub mod replay;
 pub mod report;
 pub mod residual;
+pub mod residual_filter;
 pub mod search;
 pub mod select;
 pub mod simulator;

@@ -27,6 +27,7 @@
 use faer::Mat;
 
 use super::replay::ReplayCase;
+pub use super::residual_filter::ResidualFilter;
 use crate::estimate::fem;
 
 /// How much of every segment the error dynamics are fitted on, s: long enough for the short-period and
@@ -44,44 +45,6 @@ fn variance_grid() -> Vec<f64> {
 /// Perturbation indices of the body rates and the body velocities in `initial_state_columns`' order.
 const RATES: [usize; 3] = [2, 3, 4];
 const VELOCITIES: [usize; 3] = [5, 6, 7];
-
-/// The linearised error dynamics of a case and the steady-state filter on its residuals.
-#[derive(Debug, Clone)]
-pub struct ResidualFilter {
-    /// `A`, n×n (sample interval of the record).
-    a: Vec<Vec<f64>>,
-    /// `C`, channels×n.
-    c: Vec<Vec<f64>>,
-    /// `K`, n×channels.
-    k: Vec<Vec<f64>>,
-    /// Samples per channel.
-    len: usize,
-}
-
-impl ResidualFilter {
-    /// Replaces the channel-major residual `r` by its innovations.
-    pub fn apply(&self, r: &mut [f64]) {
-        let (n, m, len) = (self.a.len(), self.c.len(), self.len);
-        if r.len() != m * len {
-            return;
-        }
-        let mut x = vec![0.0; n];
-        let mut nu = vec![0.0; m];
-        for k in 0..len {
-            for (o, v) in nu.iter_mut().enumerate() {
-                let pred: f64 = self.c[o].iter().zip(&x).map(|(a, b)| a * b).sum();
-                *v = r[o * len + k] - pred;
-                r[o * len + k] = *v;
-            }
-            let corrected: Vec<f64> = (0..n)
-                .map(|i| x[i] + self.k[i].iter().zip(&nu).map(|(a, b)| a * b).sum::<f64>())
-                .collect();
-            for (i, xi) in x.iter_mut().enumerate() {
-                *xi = self.a[i].iter().zip(&corrected).map(|(a, b)| a * b).sum();
-            }
-        }
-    }
-}
 
 /// What the process-noise estimate found (reported with the diagnosis).
 #[derive(Debug, Clone, serde::Serialize)]

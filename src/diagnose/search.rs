@@ -20,8 +20,8 @@ use std::sync::Mutex;
 
 use super::cache::{fingerprint, ReplayCache, ReplayKey};
 use super::extension::{Extension, Stage};
-use super::process_noise::ResidualFilter;
 use super::replay::{replay, replay_with_resets, ReplayCase};
+use super::residual_filter::ResidualFilter;
 use super::simulator::ReplaySim;
 use crate::data::FlightRecord;
 use crate::estimate::covariance;
@@ -162,7 +162,7 @@ pub struct Weighted<'c> {
     /// the residual is projected off it, which estimates the nuisance terms jointly with every fit.
     pub nuisance: &'c [Vec<f64>],
     /// The filter error method's innovations in place of the output error (turbulence; see
-    /// [`super::process_noise`]): applied before the nuisance terms are projected off.
+    /// `process_noise`): applied before the nuisance terms are projected off.
     pub filter: Option<&'c ResidualFilter>,
     /// Added to the noise-normalised residual before the filter: the difference between the replay's rate and
     /// the coarse rate the workers integrate at inside [`coarse`], at its reference model.
