@@ -64,7 +64,7 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
         filter: p.filter.as_ref(),
         correction: None,
     };
-    let cost = sum_sq(&residuals(worker, &w, &[]).map_err(sim_err("replay"))?);
+    let cost = crate::signal::sum_sq(&residuals(worker, &w, &[]).map_err(sim_err("replay"))?);
     let valid_cost = match &p.valid {
         Some((v, sigma)) => {
             let vw = Weighted {
@@ -75,7 +75,7 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
                 correction: None,
             };
             let r = residuals(worker, &vw, &[]).map_err(sim_err("validation replay"))?;
-            Some(sum_sq(&r))
+            Some(crate::signal::sum_sq(&r))
         }
         None => None,
     };
@@ -86,9 +86,4 @@ pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseE
         valid_cost,
         trace,
     })
-}
-
-/// Σ r².
-pub fn sum_sq(r: &[f64]) -> f64 {
-    r.iter().map(|v| v * v).sum()
 }

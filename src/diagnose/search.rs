@@ -387,7 +387,7 @@ fn state_columns(
 }
 
 fn cost(r: &[f64]) -> f64 {
-    r.iter().map(|v| v * v).sum()
+    crate::signal::sum_sq(r)
 }
 
 /// Result of an output-error fit.

@@ -295,7 +295,7 @@ fn settle(
     if drop_below_resolution(state.selected, state.named, state.candidates) {
         let r = residuals(worker, w, state.selected).map_err(sim_err("replay"))?;
         progress.simulated(1);
-        *state.cost = r.iter().map(|v| v * v).sum();
+        *state.cost = crate::signal::sum_sq(&r);
     }
     Ok(())
 }
@@ -353,7 +353,7 @@ pub fn select<'e>(
         let r = residuals(&mut workers[0], &w, &selected).map_err(sim_err("replay"))?;
         progress.simulated(1);
         let n_eff_now = effective_n(&r, p.case.len());
-        let cost_now: f64 = r.iter().map(|v| v * v).sum();
+        let cost_now = crate::signal::sum_sq(&r);
         let quick: Vec<FitOutcome> = pool
             .iter()
             .map(|&i| score_test(catalogue[i], &sens[i], &r, cost_now, n_eff_now))
@@ -484,7 +484,7 @@ pub fn select<'e>(
             let r =
                 residuals(&mut workers[0], vw, &selected).map_err(sim_err("validation replay"))?;
             progress.simulated(1);
-            let after: f64 = r.iter().map(|v| v * v).sum();
+            let after = crate::signal::sum_sq(&r);
             candidates[best_ci].validation_gain = Some(1.0 - after / before);
             valid_cost = Some(after);
         }

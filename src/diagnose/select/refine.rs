@@ -175,7 +175,7 @@ pub(super) fn replace_ambiguous<'e>(
         // The model without effect i, its residual and cost: the base the alternatives are judged against.
         let r = residuals(&mut workers[0], w, &without(selected, i)).map_err(sim_err("replay"))?;
         progress.simulated(1);
-        let cost_without: f64 = r.iter().map(|v| v * v).sum();
+        let cost_without = crate::signal::sum_sq(&r);
         let n_eff = effective_n(&r, w.case.len());
         // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate.
         let starts: Vec<Vec<Active<'e>>> = alternatives
