@@ -224,6 +224,9 @@ pub struct Diagnosis {
     pub wall_s: f64,
     /// Time spent inside the simulations (summed over the workers), s.
     pub simulation_s: f64,
+    /// Wall time and simulations per stage, in order (a stage that runs again, such as a candidate round,
+    /// once per run).
+    pub stages: Vec<progress::StageTime>,
     /// Simulated traces of the model without and with the named effects (for the report; not in the JSON).
     #[serde(skip)]
     pub traces: Traces,
@@ -258,8 +261,15 @@ pub fn diagnose(
     };
     // The progress line is cleared when `progress` is dropped, also on an early error return.
     let progress = progress::Progress::new(opts.progress);
-    progress.stage("trim, baseline replay", 0);
+    // The stages below run their simulations without reporting them: the counter catches up with the
+    // workers' before the next stage starts.
+    let sync = |workers: &[Worker]| {
+        let n = workers.iter().map(|w| w.simulations).sum::<usize>() - sims0;
+        progress.simulated(n.saturating_sub(progress.simulations()));
+    };
+    progress.stage("trim", 0);
     let mut p = prepare::prepare(first, train, valid)?;
+    sync(workers);
     progress.stage("segment initial states", 0);
     let columns =
         search::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
@@ -269,10 +279,14 @@ pub fn diagnose(
         p.nuisance = search::orthonormal_basis(&columns);
         None
     };
+    sync(workers);
+    progress.stage("baseline replay", 0);
     let base = baseline::baseline(&mut workers[0], &p)?;
+    sync(workers);
     let mut sel = select::select(workers, &p, &base, opts, &progress)?;
     let (process_noise, refit_note) = match process_noise {
         None if opts.filter_values => {
+            sync(workers);
             progress.stage("values in turbulence", 0);
             let found = refit::refit_in_turbulence(&mut workers[0], &p, &columns, &mut sel)?;
             let note = found.as_ref().filter(|n| n.used).map(refit::warning);
@@ -280,9 +294,12 @@ pub fn diagnose(
         }
         found => (found, None),
     };
+    sync(workers);
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
+    sync(workers);
     progress.finish();
+    let stages = progress.stage_times();
     Ok(Diagnosis {
         named_cause: sel.named,
         candidates: sel.candidates,
@@ -303,6 +320,7 @@ pub fn diagnose(
         simulations: workers.iter().map(|w| w.simulations).sum::<usize>() - sims0,
         wall_s: t0.elapsed().as_secs_f64(),
         simulation_s: workers.iter().map(|w| w.sim_s).sum::<f64>() - sim_s0,
+        stages,
         traces: v.traces,
     })
 }

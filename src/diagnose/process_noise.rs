@@ -216,13 +216,19 @@ pub fn estimate(
     let (mut qv, mut qr) = (0.0, 0.0);
     let mut best: Option<(f64, ResidualFilter)> = None;
     // coordinate search: velocities, rates, velocities again
+    // (the points of a round do not depend on each other: they are evaluated in parallel, then compared in
+    // grid order)
+    let mut threads = vec![(); std::thread::available_parallelism().map_or(1, |n| n.get())];
     for round in 0..3 {
-        for &g in std::iter::once(&0.0).chain(&grid) {
-            let (tv, tr) = if round == 1 { (qv, g) } else { (g, qr) };
-            if tv == 0.0 && tr == 0.0 {
-                continue;
-            }
-            if let Some((cost, f)) = evaluate(tv, tr) {
+        let points: Vec<(f64, f64)> = std::iter::once(&0.0)
+            .chain(&grid)
+            .map(|&g| if round == 1 { (qv, g) } else { (g, qr) })
+            .filter(|&(tv, tr)| tv != 0.0 || tr != 0.0)
+            .collect();
+        let evaluated =
+            super::search::par_map(&mut threads, &points, |_, &(tv, tr)| evaluate(tv, tr));
+        for (&(tv, tr), e) in points.iter().zip(evaluated) {
+            if let Some((cost, f)) = e {
                 if best.as_ref().is_none_or(|(b, _)| cost < *b) {
                     best = Some((cost, f));
                     (qv, qr) = (tv, tr);

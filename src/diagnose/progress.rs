@@ -1,14 +1,32 @@
 //! Progress of the search on the terminal (candidate round, fits and simulations done); quiet when stderr is
-//! not a terminal. It also counts the simulations for the diagnosis.
+//! not a terminal. It also counts the simulations and times the stages for the diagnosis.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
 
-/// Simulation counter and (on a terminal) a progress line.
+/// Wall time and simulations of one stage of the diagnosis.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct StageTime {
+    /// The stage, as the progress line names it.
+    pub stage: String,
+    /// Wall time, s.
+    pub wall_s: f64,
+    /// Simulations counted in it.
+    pub simulations: usize,
+}
+
+/// Simulation counter, stage clock and (on a terminal) a progress line.
 pub struct Progress {
     bar: indicatif::ProgressBar,
     simulations: AtomicUsize,
     round: AtomicUsize,
+    /// The stages ended so far, and the current one.
+    stages: Mutex<(Vec<StageTime>, Option<Current>)>,
 }
+
+/// The current stage: its name, start and the simulation count then.
+type Current = (String, Instant, usize);
 
 impl Progress {
     /// A progress line on stderr when `show` and stderr is a terminal; otherwise only the counter.
@@ -30,11 +48,25 @@ impl Progress {
             bar,
             simulations: AtomicUsize::new(0),
             round: AtomicUsize::new(0),
+            stages: Mutex::new((Vec::new(), None)),
         }
     }
 
-    /// A new stage (trim and baseline, identifiability screening, validation) with `fits` steps planned.
+    /// A new stage (trim and baseline, identifiability screening, validation) with `fits` steps planned; the
+    /// current one ends.
     pub fn stage(&self, label: &str, fits: usize) {
+        let sims = self.simulations();
+        if let Ok(mut st) = self.stages.lock() {
+            let (done, current) = &mut *st;
+            if let Some((name, t0, s0)) = current.replace((label.to_string(), Instant::now(), sims))
+            {
+                done.push(StageTime {
+                    stage: name,
+                    wall_s: t0.elapsed().as_secs_f64(),
+                    simulations: sims - s0,
+                });
+            }
+        }
         self.bar.set_position(0);
         self.bar.set_length(fits as u64);
         self.bar.set_prefix(label.to_string());
@@ -62,6 +94,24 @@ impl Progress {
     /// Simulations counted so far.
     pub fn simulations(&self) -> usize {
         self.simulations.load(Ordering::Relaxed)
+    }
+
+    /// The stages so far, the current one up to now.
+    pub fn stage_times(&self) -> Vec<StageTime> {
+        let sims = self.simulations();
+        let Ok(st) = self.stages.lock() else {
+            return Vec::new();
+        };
+        let (done, current) = &*st;
+        let mut out = done.clone();
+        if let Some((name, t0, s0)) = current {
+            out.push(StageTime {
+                stage: name.clone(),
+                wall_s: t0.elapsed().as_secs_f64(),
+                simulations: sims - s0,
+            });
+        }
+        out
     }
 
     /// Removes the progress line.

@@ -451,6 +451,8 @@ struct Replayed<'a, 'c, 'e> {
     last_cols: Vec<Vec<f64>>,
     /// ∂r/∂θ for the first linearisation in place of forward differences (see [`polish`]).
     seed: Option<Vec<Vec<f64>>>,
+    /// `seed` for every linearisation (the chord method), not only the first.
+    keep_seed: bool,
 }
 
 impl Replayed<'_, '_, '_> {
@@ -481,7 +483,12 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
         r: &Vec<f64>,
     ) -> Result<Option<optimise::Linearised>, SimError> {
         self.set(x);
-        let cols = match self.seed.take() {
+        let seed = if self.keep_seed {
+            self.seed.clone()
+        } else {
+            self.seed.take()
+        };
+        let cols = match seed {
             Some(cols) => cols,
             None => {
                 let cols = residual_jacobian(self.worker, self.w, self.active, &self.free, r)?;
@@ -511,7 +518,7 @@ pub fn fit(
     max_iter: usize,
     final_jacobian: bool,
 ) -> Result<FitOutcome, SimError> {
-    fit_from(worker, w, active, max_iter, final_jacobian, None)
+    fit_from(worker, w, active, max_iter, final_jacobian, None, false)
 }
 
 /// [`fit`], its first linearisation `seed` (∂r/∂θ of the free parameters, in their order) when given.
@@ -522,6 +529,7 @@ fn fit_from(
     max_iter: usize,
     final_jacobian: bool,
     seed: Option<Vec<Vec<f64>>>,
+    keep_seed: bool,
 ) -> Result<FitOutcome, SimError> {
     // Index of every free scalar parameter: (active index, parameter index).
     let free: Vec<(usize, usize)> = active
@@ -540,6 +548,7 @@ fn fit_from(
     let seed = seed.filter(|cols| cols.len() == free.len());
     let mut problem = Replayed {
         seed,
+        keep_seed,
         worker,
         w,
         active,
@@ -616,10 +625,12 @@ fn fit_from(
 }
 
 /// The fit at the replay's rate that follows a fit at the coarse rate ([`coarse`]): at most three
-/// Levenberg–Marquardt iterations from its optimum, every effect of `active` free, the first with the coarse
-/// fit's sensitivities `coarse_sensitivities` (∂r/∂θ in the order of the free parameters; the corrected
-/// residual has the coarse model's sensitivities, equal to the replay's to first order). Its values and cost
-/// are the ones reported, its standard errors those of the last sensitivities.
+/// Levenberg–Marquardt iterations from its optimum, every effect of `active` free, all with the coarse fit's
+/// sensitivities `coarse_sensitivities` (∂r/∂θ in the order of the free parameters; the corrected residual has
+/// the coarse model's sensitivities, equal to the replay's to first order). A fixed Jacobian is the chord
+/// method (Kelley, *Iterative Methods for Linear and Nonlinear Equations*, SIAM 1995, §5.4): linear
+/// convergence at the rate ‖I − J_c⁺J‖, small here, and one replay per iteration instead of 1 + p. Its values
+/// and cost are the ones reported, its standard errors those of the coarse sensitivities.
 pub fn polish(
     worker: &mut Worker,
     w: &Weighted,
@@ -633,6 +644,7 @@ pub fn polish(
         3,
         false,
         Some(coarse_sensitivities.to_vec()),
+        true,
     )
 }
 
@@ -664,11 +676,12 @@ pub fn null_sensitivity(
     Ok(rh.iter().zip(r0).map(|(a, b)| (a - b) / h).collect())
 }
 
-/// Runs `f` over `items` on the workers in parallel (one thread per worker), results in item order.
-pub fn par_map<T: Sync, R: Send>(
-    workers: &mut [Worker],
+/// Runs `f` over `items` in parallel, one thread per slot of `workers` (simulation workers, or `()` for
+/// computation only), each item on the first free slot; results in item order.
+pub fn par_map<S: Send, T: Sync, R: Send>(
+    workers: &mut [S],
     items: &[T],
-    f: impl Fn(&mut Worker, &T) -> R + Sync,
+    f: impl Fn(&mut S, &T) -> R + Sync,
 ) -> Vec<R> {
     let next = AtomicUsize::new(0);
     let out: Mutex<Vec<Option<R>>> = Mutex::new((0..items.len()).map(|_| None).collect());

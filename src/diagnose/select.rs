@@ -279,6 +279,7 @@ fn settle(
     coarse_sensitivities: &[Vec<f64>],
 ) -> Result<(), DiagnoseError> {
     if !state.selected.is_empty() {
+        progress.stage("refit at the replay's rate", 1);
         let mut active = with_freedom(state.selected, true);
         let o = search::polish(worker, w, &mut active, coarse_sensitivities)
             .map_err(sim_err("replay"))?;
