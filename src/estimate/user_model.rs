@@ -390,18 +390,14 @@ impl UserModel {
                 .map(<[f64]>::to_vec)
                 .ok_or_else(|| missing(col, what))
         };
-        let inputs = self
-            .signature
-            .inputs
-            .iter()
-            .map(|c| column(c, "input"))
-            .collect::<Result<Vec<_>, _>>()?;
-        let outputs = self
-            .signature
-            .outputs
-            .iter()
-            .map(|c| column(c, "output"))
-            .collect::<Result<Vec<_>, _>>()?;
+        let columns = |names: &[String], what: &str| {
+            names
+                .iter()
+                .map(|c| column(c, what))
+                .collect::<Result<Vec<_>, _>>()
+        };
+        let inputs = columns(&self.signature.inputs, "input")?;
+        let outputs = columns(&self.signature.outputs, "output")?;
         let mut initial_state = Vec::new();
         for (i, s) in self.signature.states.iter().enumerate() {
             match rec.column(s) {
