@@ -156,6 +156,19 @@ pub enum Mode {
     },
 }
 
+impl Mode {
+    /// (ωn, ζ) of a complex pair; `None` for a real pole.
+    pub fn oscillation(self) -> Option<(f64, f64)> {
+        match self {
+            Mode::Oscillatory {
+                omega_n_rad_s,
+                zeta,
+            } => Some((omega_n_rad_s, zeta)),
+            Mode::Real { .. } => None,
+        }
+    }
+}
+
 /// A decoupled linear submodel in descriptor and in explicit form.
 #[derive(Debug, Clone)]
 pub struct LinearModel {
@@ -455,13 +468,7 @@ impl LinearModel {
         Ok(self
             .modes()?
             .into_iter()
-            .filter_map(|m| match m {
-                Mode::Oscillatory {
-                    omega_n_rad_s,
-                    zeta,
-                } => Some((omega_n_rad_s, zeta)),
-                Mode::Real { .. } => None,
-            })
+            .filter_map(Mode::oscillation)
             .max_by(|a, b| a.0.total_cmp(&b.0)))
     }
 }

@@ -262,13 +262,7 @@ fn modal_errors(m: &AeroModel) -> [f64; 6] {
         .unwrap()
         .into_iter()
         .rev()
-        .filter_map(|x| match x {
-            Mode::Oscillatory {
-                omega_n_rad_s,
-                zeta,
-            } => Some((omega_n_rad_s, zeta)),
-            Mode::Real { .. } => None,
-        })
+        .filter_map(Mode::oscillation)
         .next()
         .unwrap();
     let dr = m.lateral().unwrap().fastest_oscillation().unwrap().unwrap();

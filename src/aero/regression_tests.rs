@@ -148,6 +148,26 @@ fn lateral_record(model: &AeroModel) -> (Vec<f64>, Vec<[f64; 4]>, Vec<f64>, Vec<
     (t, x, da, dr)
 }
 
+/// The channels the lateral equations need, as a flight record: time, (β, p, r), airspeed and
+/// (aileron, rudder); the rest absent.
+fn lateral_flight<'a>(
+    t: &'a [f64],
+    [beta, p, r]: [&'a [f64]; 3],
+    airspeed_m_s: &'a [f64],
+    [da, dr]: [&'a [f64]; 2],
+) -> FlightRecord<'a> {
+    FlightRecord {
+        time_s: t,
+        beta_rad: Some(beta),
+        p_rad_s: Some(p),
+        r_rad_s: Some(r),
+        airspeed_m_s: Some(airspeed_m_s),
+        aileron_rad: Some(da),
+        rudder_rad: Some(dr),
+        ..Default::default()
+    }
+}
+
 #[test]
 fn equation_error_on_a_noise_free_lateral_flight_recovers_roll_and_yaw_derivatives() {
     // Noise-free simulated doublets: the regression must return the model's derivatives; the error budget
@@ -159,17 +179,10 @@ fn equation_error_on_a_noise_free_lateral_flight_recovers_roll_and_yaw_derivativ
     let v = vec![V_M_S; t.len()];
     let zeros = vec![0.0; t.len()];
     let record = FlightRecord {
-        time_s: &t,
         alpha_rad: Some(&zeros),
-        beta_rad: Some(&beta),
-        p_rad_s: Some(&p),
-        r_rad_s: Some(&r),
         phi_rad: Some(&phi),
         theta_rad: Some(&zeros),
-        airspeed_m_s: Some(&v),
-        aileron_rad: Some(&da),
-        rudder_rad: Some(&dr),
-        ..Default::default()
+        ..lateral_flight(&t, [&beta, &p, &r], &v, [&da, &dr])
     };
     let opts = EquationErrorOptions {
         air_density_kg_m3: RHO_KG_M3,
@@ -234,16 +247,7 @@ fn equation_error_with_sensor_noise_keeps_key_lateral_derivatives_within_15_perc
         .map(|s| s[2] + rate_noise.sample(&mut rng))
         .collect();
     let v = vec![V_M_S; t.len()];
-    let record = FlightRecord {
-        time_s: &t,
-        beta_rad: Some(&beta),
-        p_rad_s: Some(&p),
-        r_rad_s: Some(&r),
-        airspeed_m_s: Some(&v),
-        aileron_rad: Some(&da),
-        rudder_rad: Some(&dr),
-        ..Default::default()
-    };
+    let record = lateral_flight(&t, [&beta, &p, &r], &v, [&da, &dr]);
     let opts = EquationErrorOptions {
         air_density_kg_m3: RHO_KG_M3,
         half_window: 10,
@@ -322,22 +326,20 @@ fn equation_error_pitch_needs_alpha_dot_to_separate_cm_q_from_cm_alphadot() {
         eprintln!("qdot {i}: {} vs {}", qd[i], exact);
     }
     let est = |k: D| with.term(k).unwrap().value;
-    for k in [D::Cmalpha, D::Cmde] {
-        assert!(
-            rel(est(k), d.get(k)) < 0.02,
-            "{k}: {} vs {}",
-            est(k),
-            d.get(k)
-        );
-    }
-    // q and α̇ are nearly collinear regressors (α̇ ≈ q + Z_α α): each alone to 10 %, the sum to 2 %.
-    for k in [D::Cmq, D::Cmalphadot] {
-        assert!(
-            rel(est(k), d.get(k)) < 0.10,
-            "{k}: {} vs {}",
-            est(k),
-            d.get(k)
-        );
+    // C_mα and C_mδe to 2 %; q and α̇ are nearly collinear regressors (α̇ ≈ q + Z_α α): each alone to 10 %,
+    // the sum to 2 %.
+    for (derivatives, tolerance) in [
+        ([D::Cmalpha, D::Cmde], 0.02),
+        ([D::Cmq, D::Cmalphadot], 0.10),
+    ] {
+        for k in derivatives {
+            assert!(
+                rel(est(k), d.get(k)) < tolerance,
+                "{k}: {} vs {}",
+                est(k),
+                d.get(k)
+            );
+        }
     }
     let sum = est(D::Cmq) + est(D::Cmalphadot);
     assert!(

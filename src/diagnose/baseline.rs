@@ -7,7 +7,7 @@ use super::extension::Extension;
 use super::prepare::Prepared;
 use super::replay::{ReplayCase, TrimMismatch};
 use super::residual::{self, ChannelResidual};
-use super::search::{residuals, simulate, Weighted, Worker};
+use super::search::{residuals, simulate, Worker};
 use super::{sim_err, DiagnoseError};
 use crate::data::FlightRecord;
 
@@ -57,23 +57,10 @@ pub struct Baseline {
 /// Replays the unextended model on the training (and validation) record.
 pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseError> {
     let (trace, residuals_before, trim_mismatch) = analyse_replay(worker, &p.case, &[])?;
-    let w = Weighted {
-        case: &p.case,
-        sigma: p.sigma.clone(),
-        nuisance: &p.nuisance,
-        filter: p.filter.as_ref(),
-        correction: None,
-    };
+    let w = p.training();
     let cost = crate::signal::sum_sq(&residuals(worker, &w, &[]).map_err(sim_err("replay"))?);
-    let valid_cost = match &p.valid {
-        Some((v, sigma)) => {
-            let vw = Weighted {
-                case: v,
-                sigma: sigma.clone(),
-                nuisance: &[],
-                filter: None,
-                correction: None,
-            };
+    let valid_cost = match p.validation() {
+        Some(vw) => {
             let r = residuals(worker, &vw, &[]).map_err(sim_err("validation replay"))?;
             Some(crate::signal::sum_sq(&r))
         }

@@ -33,6 +33,28 @@ impl Prepared {
     pub fn entries(&self) -> Vec<&dyn Extension> {
         self.catalogue.iter().map(|b| b.as_ref()).collect()
     }
+
+    /// The training record's weighted residual: its noise weights, nuisance terms and (in turbulence) filter.
+    pub fn training(&self) -> search::Weighted<'_> {
+        search::Weighted {
+            case: &self.case,
+            sigma: self.sigma.clone(),
+            nuisance: &self.nuisance,
+            filter: self.filter.as_ref(),
+            correction: None,
+        }
+    }
+
+    /// The validation record's weighted residual: its noise weights only (no nuisance terms, no filter).
+    pub fn validation(&self) -> Option<search::Weighted<'_>> {
+        self.valid.as_ref().map(|(case, sigma)| search::Weighted {
+            case,
+            sigma: sigma.clone(),
+            nuisance: &[],
+            filter: None,
+            correction: None,
+        })
+    }
 }
 
 /// Noise standard deviation per output channel, floored at 10⁻³ of the channel's spread (noise-free data).

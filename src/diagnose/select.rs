@@ -311,20 +311,8 @@ pub fn select<'e>(
     opts: &DiagnoseOptions,
     progress: &Progress,
 ) -> Result<Selection<'e>, DiagnoseError> {
-    let w = Weighted {
-        case: &p.case,
-        sigma: p.sigma.clone(),
-        nuisance: &p.nuisance,
-        filter: p.filter.as_ref(),
-        correction: None,
-    };
-    let vw = p.valid.as_ref().map(|(v, s)| Weighted {
-        case: v,
-        sigma: s.clone(),
-        nuisance: &[],
-        filter: None,
-        correction: None,
-    });
+    let w = p.training();
+    let vw = p.validation();
     let Identifiable {
         entries: catalogue,
         sensitivities: sens,

@@ -38,7 +38,7 @@
 
 use faer::Mat;
 
-use super::integrate::{check_output, check_states, Stages};
+use super::integrate::{check_output, Propagation};
 use super::model::{SimError, StateModel};
 use super::record::Run;
 use super::riccati::care_filter;
@@ -159,11 +159,8 @@ pub(crate) fn filter(
     let time = run.time_s;
     let n = time.len();
     let mut out = vec![vec![0.0; n]; ny];
-    let mut x = x0.to_vec();
-    let mut u = vec![0.0; nu];
-    let mut y = vec![0.0; ny];
+    let mut p = Propagation::new(model, theta, x0, run);
     let mut v = vec![0.0; ny];
-    let mut stage = Stages::new(nx, nu);
     // a linear model on a uniform, unskewed record steps exactly (as its simulation does)
     let exact = uniform_step(time).and_then(|h| {
         let samples = run.input.aligned_samples()?;
@@ -176,7 +173,7 @@ pub(crate) fn filter(
                 Some((d, us)) => {
                     for (i, ni) in next.iter_mut().enumerate() {
                         let mut acc = 0.0;
-                        for (l, xl) in x.iter().enumerate() {
+                        for (l, xl) in p.x.iter().enumerate() {
                             acc += d.phi[i * nx + l] * xl;
                         }
                         for (j, uj) in us.iter().enumerate() {
@@ -185,21 +182,20 @@ pub(crate) fn filter(
                         }
                         *ni = acc;
                     }
-                    x.copy_from_slice(&next);
+                    p.x.copy_from_slice(&next);
                 }
-                None => stage.advance(model, theta, &mut x, run, time[k - 1], time[k], &mut u),
+                None => p.integrate_to(k),
             }
-            check_states(&x, &sig.states, time[k] - time[0])?;
+            p.check_state(k)?;
         }
-        run.input.at(time[k], &mut u);
-        model.outputs(theta, &x, &u, &mut y);
+        p.outputs(k);
         for o in 0..ny {
-            let yo = y[o] + output_bias[o];
+            let yo = p.y[o] + output_bias[o];
             check_output(yo, &sig.outputs[o], time[k] - time[0])?;
             out[o][k] = yo;
             v[o] = z[o][k] - yo;
         }
-        for (xi, ki) in x.iter_mut().zip(&gain.k) {
+        for (xi, ki) in p.x.iter_mut().zip(&gain.k) {
             *xi += ki.iter().zip(&v).map(|(a, b)| a * b).sum::<f64>();
         }
     }

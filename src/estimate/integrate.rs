@@ -70,28 +70,79 @@ pub fn simulate_states(
     run: &Run<'_>,
 ) -> Result<Vec<Vec<f64>>, SimError> {
     let sig = model.signature();
-    let (nx, nu, ny) = (sig.states.len(), sig.inputs.len(), sig.outputs.len());
     let time = run.time_s;
-    let n = time.len();
-    let mut y_out = vec![vec![0.0; n]; ny];
-    let mut x = x0.to_vec();
-    let mut u = vec![0.0; nu];
-    let mut y = vec![0.0; ny];
-    let mut stage = Stages::new(nx, nu);
-    for k in 0..n {
+    let mut p = Propagation::new(model, theta, x0, run);
+    let mut y_out = vec![vec![0.0; time.len()]; sig.outputs.len()];
+    for k in 0..time.len() {
         if k > 0 {
-            let (start, end) = (time[k - 1], time[k]);
-            stage.advance(model, theta, &mut x, run, start, end, &mut u);
-            check_states(&x, &sig.states, end - time[0])?;
+            p.integrate_to(k);
+            p.check_state(k)?;
         }
-        run.input.at(time[k], &mut u);
-        model.outputs(theta, &x, &u, &mut y);
-        for (o, v) in y.iter().enumerate() {
+        p.outputs(k);
+        for (o, v) in p.y.iter().enumerate() {
             check_output(*v, &sig.outputs[o], time[k] - time[0])?;
             y_out[o][k] = *v;
         }
     }
     Ok(y_out)
+}
+
+/// A state model stepped through a run's sample times: its state, its outputs at the current sample and the
+/// integrator's work space. [`simulate_states`] and the filter error method's filter both step with it.
+pub(crate) struct Propagation<'a, 'r> {
+    model: &'a dyn StateModel,
+    theta: &'a [f64],
+    run: &'a Run<'r>,
+    /// The state at the current sample.
+    pub(crate) x: Vec<f64>,
+    /// The outputs at the current sample (set by [`Propagation::outputs`]).
+    pub(crate) y: Vec<f64>,
+    u: Vec<f64>,
+    stage: Stages,
+}
+
+impl<'a, 'r> Propagation<'a, 'r> {
+    /// At the run's first sample, in state `x0`.
+    pub(crate) fn new(
+        model: &'a dyn StateModel,
+        theta: &'a [f64],
+        x0: &[f64],
+        run: &'a Run<'r>,
+    ) -> Self {
+        let sig = model.signature();
+        let (nx, nu, ny) = (sig.states.len(), sig.inputs.len(), sig.outputs.len());
+        Propagation {
+            model,
+            theta,
+            run,
+            x: x0.to_vec(),
+            y: vec![0.0; ny],
+            u: vec![0.0; nu],
+            stage: Stages::new(nx, nu),
+        }
+    }
+
+    /// Integrates the state from sample `k − 1` to sample `k` (module doc).
+    pub(crate) fn integrate_to(&mut self, k: usize) {
+        let time = self.run.time_s;
+        let (model, theta, run) = (self.model, self.theta, self.run);
+        let (start, end) = (time[k - 1], time[k]);
+        self.stage
+            .advance(model, theta, &mut self.x, run, start, end, &mut self.u);
+    }
+
+    /// [`check_states`] on the state at sample `k`.
+    pub(crate) fn check_state(&self, k: usize) -> Result<(), SimError> {
+        let time = self.run.time_s;
+        check_states(&self.x, &self.model.signature().states, time[k] - time[0])
+    }
+
+    /// Evaluates the outputs at sample `k` into `y`.
+    pub(crate) fn outputs(&mut self, k: usize) {
+        self.run.input.at(self.run.time_s[k], &mut self.u);
+        self.model
+            .outputs(self.theta, &self.x, &self.u, &mut self.y);
+    }
 }
 
 /// Work space of the integrator.

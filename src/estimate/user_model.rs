@@ -232,19 +232,19 @@ impl UserModel {
                 err(line, &name, format!("in the equation of '{k}': {e}"))
             })
         };
-        // Every key of section `sec` names one of `known`; `unknown(k)` says what a stray key would have been.
-        let keys_known = |sec: &str,
-                          entries: &[(String, toml::Value)],
-                          known: &[String],
-                          unknown: &dyn Fn(&str) -> String|
-         -> Result<(), ModelFileError> {
+        // Section `sec`, every key of which names one of `known`; `unknown(k)` says what a stray key would have
+        // been.
+        let keyed_section = |sec: &str,
+                             known: &[String],
+                             unknown: &dyn Fn(&str) -> String|
+         -> Result<Vec<(String, toml::Value)>, ModelFileError> {
+            let entries = section(sec)?;
             match entries.iter().find(|(k, _)| !known.contains(k)) {
                 Some((k, _)) => Err(err(key_line(text, Some(sec), k), k, unknown(k))),
-                None => Ok(()),
+                None => Ok(entries),
             }
         };
-        let eq_section = section("equations")?;
-        keys_known("equations", &eq_section, &states, &|k| {
+        let eq_section = keyed_section("equations", &states, &|k| {
             format!("equation for '{k}', which is not a state")
         })?;
         let mut equations = Vec::new();
@@ -258,8 +258,7 @@ impl UserModel {
             };
             equations.push(compile("equations", s, v)?.compile());
         }
-        let obs_section = section("observations")?;
-        keys_known("observations", &obs_section, &outputs, &|k| {
+        let obs_section = keyed_section("observations", &outputs, &|k| {
             format!("observation of '{k}', which is not an output")
         })?;
         let mut observations = Vec::new();
@@ -391,18 +390,14 @@ impl UserModel {
                 .map(<[f64]>::to_vec)
                 .ok_or_else(|| missing(col, what))
         };
-        let inputs = self
-            .signature
-            .inputs
-            .iter()
-            .map(|c| column(c, "input"))
-            .collect::<Result<Vec<_>, _>>()?;
-        let outputs = self
-            .signature
-            .outputs
-            .iter()
-            .map(|c| column(c, "output"))
-            .collect::<Result<Vec<_>, _>>()?;
+        let columns = |names: &[String], what: &str| {
+            names
+                .iter()
+                .map(|c| column(c, what))
+                .collect::<Result<Vec<_>, _>>()
+        };
+        let inputs = columns(&self.signature.inputs, "input")?;
+        let outputs = columns(&self.signature.outputs, "output")?;
         let mut initial_state = Vec::new();
         for (i, s) in self.signature.states.iter().enumerate() {
             match rec.column(s) {

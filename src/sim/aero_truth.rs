@@ -274,37 +274,39 @@ impl JsbsimSim {
         };
         let mut d = BTreeMap::new();
         let mut d_arp = BTreeMap::new();
-        for (name, var, axis, scale) in [
-            ("CL_alpha", "alpha", "LIFT", 1.0),
-            ("CL_q", "q", "LIFT", pitch_rate),
-            ("CL_alphadot", "alphadot", "LIFT", pitch_rate),
-            ("CL_de", "surface:elevator", "LIFT", 1.0),
-            ("Cm_alpha", "alpha", "PITCH", 1.0),
-            ("Cm_q", "q", "PITCH", pitch_rate),
-            ("Cm_alphadot", "alphadot", "PITCH", pitch_rate),
-            ("Cm_de", "surface:elevator", "PITCH", 1.0),
-            ("CY_beta", "beta", "SIDE", 1.0),
-            ("CY_p", "p", "SIDE", lat_rate),
-            ("CY_r", "r", "SIDE", lat_rate),
-            ("CY_da", "surface:aileron", "SIDE", 1.0),
-            ("CY_dr", "surface:rudder", "SIDE", 1.0),
-            ("Cl_beta", "beta", "ROLL", 1.0),
-            ("Cl_p", "p", "ROLL", lat_rate),
-            ("Cl_r", "r", "ROLL", lat_rate),
-            ("Cl_da", "surface:aileron", "ROLL", 1.0),
-            ("Cl_dr", "surface:rudder", "ROLL", 1.0),
-            ("Cn_beta", "beta", "YAW", 1.0),
-            ("Cn_p", "p", "YAW", lat_rate),
-            ("Cn_r", "r", "YAW", lat_rate),
-            ("Cn_da", "surface:aileron", "YAW", 1.0),
-            ("Cn_dr", "surface:rudder", "YAW", 1.0),
-        ] {
-            d_arp.insert(name.to_string(), slope(var, axis) * scale);
-            let about_cg = match cg_axis(axis) {
-                Some(prop) => slope_of(var, prop, norm(axis)) + force_turn(var, axis),
-                None => slope(var, axis),
-            };
-            d.insert(name.to_string(), about_cg * scale);
+        // Each axis' coefficient against each variable of its plane: (suffix, probed variable, scale).
+        let longitudinal = [
+            ("alpha", "alpha", 1.0),
+            ("q", "q", pitch_rate),
+            ("alphadot", "alphadot", pitch_rate),
+            ("de", "surface:elevator", 1.0),
+        ];
+        let lateral = [
+            ("beta", "beta", 1.0),
+            ("p", "p", lat_rate),
+            ("r", "r", lat_rate),
+            ("da", "surface:aileron", 1.0),
+            ("dr", "surface:rudder", 1.0),
+        ];
+        let planes = [
+            (&[("CL", "LIFT"), ("Cm", "PITCH")][..], &longitudinal[..]),
+            (
+                &[("CY", "SIDE"), ("Cl", "ROLL"), ("Cn", "YAW")][..],
+                &lateral[..],
+            ),
+        ];
+        for (coefficients, variables) in planes {
+            for &(coefficient, axis) in coefficients {
+                for &(suffix, var, scale) in variables {
+                    let name = format!("{coefficient}_{suffix}");
+                    d_arp.insert(name.clone(), slope(var, axis) * scale);
+                    let about_cg = match cg_axis(axis) {
+                        Some(prop) => slope_of(var, prop, norm(axis)) + force_turn(var, axis),
+                        None => slope(var, axis),
+                    };
+                    d.insert(name, about_cg * scale);
+                }
+            }
         }
         let nonsmooth =
             nonsmooth_terms(&probe, &self.coefficient_axes, &norm, pitch_rate, lat_rate);
