@@ -157,9 +157,16 @@ fn main() {
         );
         let (cpu0, bridges_cpu0) = cpu_s();
         let t0 = Instant::now();
-        let mut workers: Vec<Worker> = (0..2)
-            .map(|_| Worker::new(Box::new(JsbsimSim::start(&cfg, rate).unwrap())))
-            .collect();
+        // started in parallel, as `flightid diagnose` starts them
+        let mut workers: Vec<Worker> = std::thread::scope(|s| {
+            let started: Vec<_> = (0..2)
+                .map(|_| s.spawn(|| JsbsimSim::start(&cfg, rate).unwrap()))
+                .collect();
+            started
+                .into_iter()
+                .map(|h| Worker::new(Box::new(h.join().unwrap())))
+                .collect()
+        });
         let d = diagnose(
             &mut workers,
             &train,

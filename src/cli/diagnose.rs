@@ -81,28 +81,42 @@ pub enum SimSource<'a> {
     Linear(&'a Path),
 }
 
-/// Starts `n` simulation workers at the record's rate.
+/// Starts `n` simulation workers at the record's rate, in parallel (each is its own process: the Python start,
+/// `import jsbsim` and the aircraft load take a few tenths of a second).
 pub fn start_workers(source: &SimSource, rate_hz: f64, n: usize) -> anyhow::Result<Vec<Worker>> {
-    (0..n.max(1))
-        .map(|_| -> anyhow::Result<Worker> {
-            Ok(match source {
-                SimSource::Aircraft(name) => {
-                    let cfg = aircraft::load(name)?;
-                    let sim = JsbsimSim::start(&cfg, rate_hz)
-                        .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
-                    Worker::new(Box::new(sim))
-                }
-                SimSource::Model(m) => {
-                    let cfg = aircraft::load(&m.extension.aircraft)?;
-                    let sim = m.start(&cfg, rate_hz).with_context(|| {
-                        format!("starting JSBSim on the model in {}", m.dir.display())
-                    })?;
-                    Worker::new(Box::new(sim))
-                }
-                SimSource::Linear(p) => Worker::new(Box::new(LinearReplay::from_json(p)?)),
+    std::thread::scope(|s| {
+        let started: Vec<_> = (0..n.max(1))
+            .map(|_| s.spawn(|| start_worker(source, rate_hz)))
+            .collect();
+        started
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err(anyhow::anyhow!("starting a simulation worker panicked"))
+                })
             })
-        })
-        .collect()
+            .collect()
+    })
+}
+
+/// Starts one simulation worker at `rate_hz`.
+fn start_worker(source: &SimSource, rate_hz: f64) -> anyhow::Result<Worker> {
+    Ok(match source {
+        SimSource::Aircraft(name) => {
+            let cfg = aircraft::load(name)?;
+            let sim = JsbsimSim::start(&cfg, rate_hz)
+                .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
+            Worker::new(Box::new(sim))
+        }
+        SimSource::Model(m) => {
+            let cfg = aircraft::load(&m.extension.aircraft)?;
+            let sim = m
+                .start(&cfg, rate_hz)
+                .with_context(|| format!("starting JSBSim on the model in {}", m.dir.display()))?;
+            Worker::new(Box::new(sim))
+        }
+        SimSource::Linear(p) => Worker::new(Box::new(LinearReplay::from_json(p)?)),
+    })
 }
 
 /// The rate the simulation integrates a replay of `rec` at (a whole multiple of the record's rate).
