@@ -11,7 +11,7 @@
 //! Run: `cargo bench --bench diagnose [-- --flown-at HZ]`.
 
 use flightid::aircraft;
-use flightid::diagnose::search::Worker;
+use flightid::cli::diagnose::{start_workers, SimSource};
 use flightid::diagnose::{diagnose, replay::ReplayCase, DiagnoseOptions};
 use flightid::signal::{add_white_noise, generate, Maneuver};
 use flightid::sim::{FlightPlan, JsbsimSim, Simulator, SurfaceInput, TrimPoint};
@@ -157,16 +157,8 @@ fn main() {
         );
         let (cpu0, bridges_cpu0) = cpu_s();
         let t0 = Instant::now();
-        // started in parallel, as `flightid diagnose` starts them
-        let mut workers: Vec<Worker> = std::thread::scope(|s| {
-            let started: Vec<_> = (0..2)
-                .map(|_| s.spawn(|| JsbsimSim::start(&cfg, rate).unwrap()))
-                .collect();
-            started
-                .into_iter()
-                .map(|h| Worker::new(Box::new(h.join().unwrap())))
-                .collect()
-        });
+        // started as `flightid diagnose` starts them (in parallel)
+        let mut workers = start_workers(&SimSource::Aircraft(&cfg.name), rate, 2).unwrap();
         let d = diagnose(
             &mut workers,
             &train,

@@ -449,10 +449,8 @@ struct Replayed<'a, 'c, 'e> {
     evaluations: usize,
     /// ∂r/∂θ of the last linearisation.
     last_cols: Vec<Vec<f64>>,
-    /// ∂r/∂θ for the first linearisation in place of forward differences (see [`polish`]).
-    seed: Option<Vec<Vec<f64>>>,
-    /// `seed` for every linearisation (the chord method), not only the first.
-    keep_seed: bool,
+    /// ∂r/∂θ for every linearisation in place of forward differences (the chord method, see [`polish`]).
+    fixed: Option<Vec<Vec<f64>>>,
 }
 
 impl Replayed<'_, '_, '_> {
@@ -483,12 +481,7 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
         r: &Vec<f64>,
     ) -> Result<Option<optimise::Linearised>, SimError> {
         self.set(x);
-        let seed = if self.keep_seed {
-            self.seed.clone()
-        } else {
-            self.seed.take()
-        };
-        let cols = match seed {
+        let cols = match self.fixed.clone() {
             Some(cols) => cols,
             None => {
                 let cols = residual_jacobian(self.worker, self.w, self.active, &self.free, r)?;
@@ -518,18 +511,18 @@ pub fn fit(
     max_iter: usize,
     final_jacobian: bool,
 ) -> Result<FitOutcome, SimError> {
-    fit_from(worker, w, active, max_iter, final_jacobian, None, false)
+    fit_from(worker, w, active, max_iter, final_jacobian, None)
 }
 
-/// [`fit`], its first linearisation `seed` (∂r/∂θ of the free parameters, in their order) when given.
+/// [`fit`], with the sensitivities `fixed` (∂r/∂θ of the free parameters, in their order) for every
+/// linearisation when given.
 fn fit_from(
     worker: &mut Worker,
     w: &Weighted,
     active: &mut [Active],
     max_iter: usize,
     final_jacobian: bool,
-    seed: Option<Vec<Vec<f64>>>,
-    keep_seed: bool,
+    fixed: Option<Vec<Vec<f64>>>,
 ) -> Result<FitOutcome, SimError> {
     // Index of every free scalar parameter: (active index, parameter index).
     let free: Vec<(usize, usize)> = active
@@ -545,10 +538,9 @@ fn fit_from(
         .iter()
         .map(|&(i, j)| active[i].ext.params()[j])
         .collect();
-    let seed = seed.filter(|cols| cols.len() == free.len());
+    let fixed = fixed.filter(|cols| cols.len() == free.len());
     let mut problem = Replayed {
-        seed,
-        keep_seed,
+        fixed,
         worker,
         w,
         active,
@@ -644,7 +636,6 @@ pub fn polish(
         3,
         false,
         Some(coarse_sensitivities.to_vec()),
-        true,
     )
 }
 
