@@ -41,6 +41,13 @@ fn check(seed: u64, effects: &str) {
         ..Default::default()
     };
     let d = diagnose(&mut workers, &train, Some(&valid), &opts).unwrap();
+    // Every simulation is counted in the stage that ran it, and the stages run in the diagnosis' order.
+    let per_stage: usize = d.stages.iter().map(|s| s.simulations).sum();
+    assert_eq!(per_stage, d.simulations, "stages: {:?}", d.stages);
+    let names: Vec<&str> = d.stages.iter().map(|s| s.stage.as_str()).collect();
+    assert_eq!(names.first(), Some(&"trim"), "stages: {names:?}");
+    assert_eq!(names.last(), Some(&"validation"), "stages: {names:?}");
+    assert!(d.stages.iter().all(|s| s.wall_s >= 0.0));
     let hidden: Vec<serde_json::Value> = serde_json::from_str(effects).unwrap();
     let mut want: Vec<String> = hidden
         .iter()

@@ -254,22 +254,14 @@ pub fn diagnose(
 ) -> Result<Diagnosis, DiagnoseError> {
     let t0 = std::time::Instant::now();
     let sim_s0: f64 = workers.iter().map(|w| w.sim_s).sum();
-    let sims0: usize = workers.iter().map(|w| w.simulations).sum();
     search::share_replays(workers);
     let Some(first) = workers.first_mut() else {
         return Err(DiagnoseError::BadData("no simulation worker".into()));
     };
     // The progress line is cleared when `progress` is dropped, also on an early error return.
-    let progress = progress::Progress::new(opts.progress);
-    // The stages below run their simulations without reporting them: the counter catches up with the
-    // workers' before the next stage starts.
-    let sync = |workers: &[Worker]| {
-        let n = workers.iter().map(|w| w.simulations).sum::<usize>() - sims0;
-        progress.simulated(n.saturating_sub(progress.simulations()));
-    };
+    let progress = progress::Progress::new(opts.progress, first.shared_simulations());
     progress.stage("trim", 0);
     let mut p = prepare::prepare(first, train, valid)?;
-    sync(workers);
     progress.stage("segment initial states", 0);
     let columns =
         search::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
@@ -279,14 +271,11 @@ pub fn diagnose(
         p.nuisance = search::orthonormal_basis(&columns);
         None
     };
-    sync(workers);
     progress.stage("baseline replay", 0);
     let base = baseline::baseline(&mut workers[0], &p)?;
-    sync(workers);
     let mut sel = select::select(workers, &p, &base, opts, &progress)?;
     let (process_noise, refit_note) = match process_noise {
         None if opts.filter_values => {
-            sync(workers);
             progress.stage("values in turbulence", 0);
             let found = refit::refit_in_turbulence(&mut workers[0], &p, &columns, &mut sel)?;
             let note = found.as_ref().filter(|n| n.used).map(refit::warning);
@@ -294,10 +283,8 @@ pub fn diagnose(
         }
         found => (found, None),
     };
-    sync(workers);
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
-    sync(workers);
     progress.finish();
     let stages = progress.stage_times();
     Ok(Diagnosis {
@@ -317,7 +304,7 @@ pub fn diagnose(
         process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.sigma).collect(),
         n_residuals: p.case.len() * p.case.outputs.len(),
-        simulations: workers.iter().map(|w| w.simulations).sum::<usize>() - sims0,
+        simulations: progress.simulations(),
         wall_s: t0.elapsed().as_secs_f64(),
         simulation_s: workers.iter().map(|w| w.sim_s).sum::<f64>() - sim_s0,
         stages,

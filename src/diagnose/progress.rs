@@ -2,7 +2,7 @@
 //! not a terminal. It also counts the simulations and times the stages for the diagnosis.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// Wall time and simulations of one stage of the diagnosis.
@@ -19,7 +19,8 @@ pub struct StageTime {
 /// Simulation counter, stage clock and (on a terminal) a progress line.
 pub struct Progress {
     bar: indicatif::ProgressBar,
-    simulations: AtomicUsize,
+    /// The workers' count of the simulations they ran (`search::Worker::shared_simulations`).
+    simulations: Arc<AtomicUsize>,
     round: AtomicUsize,
     /// The stages ended so far, and the current one.
     stages: Mutex<(Vec<StageTime>, Option<Current>)>,
@@ -29,8 +30,9 @@ pub struct Progress {
 type Current = (String, Instant, usize);
 
 impl Progress {
-    /// A progress line on stderr when `show` and stderr is a terminal; otherwise only the counter.
-    pub fn new(show: bool) -> Self {
+    /// A progress line on stderr when `show` and stderr is a terminal; otherwise only the stage clock.
+    /// `simulations` is the workers' shared count of the simulations they run.
+    pub fn new(show: bool, simulations: Arc<AtomicUsize>) -> Self {
         let bar = if show && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
             let b = indicatif::ProgressBar::new(0);
             b.set_style(
@@ -46,7 +48,7 @@ impl Progress {
         };
         Progress {
             bar,
-            simulations: AtomicUsize::new(0),
+            simulations,
             round: AtomicUsize::new(0),
             stages: Mutex::new((Vec::new(), None)),
         }
@@ -78,20 +80,14 @@ impl Progress {
         self.stage(&format!("candidate round {}", round + 1), fits);
     }
 
-    /// One fit done with `simulations` simulations (0: only simulations, no fit, when `simulations` is counted
-    /// by [`Progress::simulated`]).
-    pub fn fitted(&self, simulations: usize) {
-        self.simulated(simulations);
+    /// One fit (or sensitivity) done.
+    pub fn fitted(&self) {
         self.bar.inc(1);
+        self.bar
+            .set_message(format!("{} simulations", self.simulations()));
     }
 
-    /// Simulations run outside a fit.
-    pub fn simulated(&self, simulations: usize) {
-        let n = self.simulations.fetch_add(simulations, Ordering::Relaxed) + simulations;
-        self.bar.set_message(format!("{n} simulations"));
-    }
-
-    /// Simulations counted so far.
+    /// Simulations run so far.
     pub fn simulations(&self) -> usize {
         self.simulations.load(Ordering::Relaxed)
     }

@@ -16,7 +16,7 @@
 //! ([`polish`]).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use super::cache::{fingerprint, ReplayCache, ReplayKey};
 use super::extension::{Extension, Stage};
@@ -39,6 +39,8 @@ pub struct Worker {
     pub sim_s: f64,
     /// Simulations this worker ran (replays found in the store not counted).
     pub simulations: usize,
+    /// Simulations run by all the workers that share this one's store (see [`share_replays`]).
+    shared_simulations: Arc<AtomicUsize>,
 }
 
 impl Worker {
@@ -49,16 +51,31 @@ impl Worker {
             cache: ReplayCache::new(),
             sim_s: 0.0,
             simulations: 0,
+            shared_simulations: Arc::new(AtomicUsize::new(0)),
         }
+    }
+
+    /// The count of simulations run by all the workers that share this one's store.
+    pub fn shared_simulations(&self) -> Arc<AtomicUsize> {
+        Arc::clone(&self.shared_simulations)
+    }
+
+    /// Counts a simulation that took `seconds`.
+    fn ran(&mut self, seconds: f64) {
+        self.sim_s += seconds;
+        self.simulations += 1;
+        self.shared_simulations.fetch_add(1, Ordering::Relaxed);
     }
 }
 
 /// Gives the workers one new, empty store of replays (one per diagnosis: the workers must simulate the same
-/// model at the same rate).
+/// model at the same rate) and one new count of the simulations they run.
 pub fn share_replays(workers: &mut [Worker]) {
     let cache = ReplayCache::new();
+    let count = Arc::new(AtomicUsize::new(0));
     for w in workers {
         w.cache = cache.clone();
+        w.shared_simulations = Arc::clone(&count);
     }
 }
 
@@ -124,10 +141,9 @@ pub fn simulate(
                 .collect();
             let t0 = std::time::Instant::now();
             let out = replay(worker.sim.as_mut(), case, &before_outputs);
-            worker.sim_s += t0.elapsed().as_secs_f64();
-            worker.simulations += 1;
-            let r = std::sync::Arc::new(out?);
-            worker.cache.insert(key, std::sync::Arc::clone(&r));
+            worker.ran(t0.elapsed().as_secs_f64());
+            let r = Arc::new(out?);
+            worker.cache.insert(key, Arc::clone(&r));
             r
         }
     };
@@ -368,8 +384,7 @@ fn state_columns(
             &[],
             std::slice::from_ref(reset),
         );
-        wk.sim_s += t0.elapsed().as_secs_f64();
-        wk.simulations += 1;
+        wk.ran(t0.elapsed().as_secs_f64());
         let (rec, _) = out?;
         let mut col = Vec::with_capacity(case.len() * case.outputs.len());
         for (c, name) in case.outputs.iter().enumerate() {

@@ -104,7 +104,7 @@ fn fit_starts<'e>(
     par_map(workers, starts, |wk, active| {
         let mut a = active.clone();
         let out = fit(wk, w, &mut a, 10, true);
-        progress.fitted(out.as_ref().map(|o| o.evaluations).unwrap_or(0));
+        progress.fitted();
         out.map(|o| (o, a))
     })
 }
@@ -283,7 +283,7 @@ fn settle(
         let mut active = with_freedom(state.selected, true);
         let o = search::polish(worker, w, &mut active, coarse_sensitivities)
             .map_err(sim_err("replay"))?;
-        progress.fitted(o.evaluations);
+        progress.fitted();
         let mut k = 0;
         for (a, n) in active.iter().zip(state.named.iter_mut()) {
             n.value = a.params[0];
@@ -295,7 +295,6 @@ fn settle(
     }
     if drop_below_resolution(state.selected, state.named, state.candidates) {
         let r = residuals(worker, w, state.selected).map_err(sim_err("replay"))?;
-        progress.simulated(1);
         *state.cost = crate::signal::sum_sq(&r);
     }
     Ok(())
@@ -340,7 +339,6 @@ pub fn select<'e>(
         progress.round(round, opts.full_fit_top);
         // Screening: the score test of every remaining entry at the current model's residual.
         let r = residuals(&mut workers[0], &w, &selected).map_err(sim_err("replay"))?;
-        progress.simulated(1);
         let n_eff_now = effective_n(&r, p.case.len());
         let cost_now = crate::signal::sum_sq(&r);
         let quick: Vec<FitOutcome> = pool
@@ -472,7 +470,6 @@ pub fn select<'e>(
         if let (Some(vw), Some(before)) = (&vw, valid_cost) {
             let r =
                 residuals(&mut workers[0], vw, &selected).map_err(sim_err("validation replay"))?;
-            progress.simulated(1);
             let after = crate::signal::sum_sq(&r);
             candidates[best_ci].validation_gain = Some(1.0 - after / before);
             valid_cost = Some(after);

@@ -92,9 +92,8 @@ pub(super) fn identifiable<'e>(
     let r0 = residuals(&mut workers[0], w, &[]).map_err(sim_err("replay"))?;
     progress.stage("identifiability", entries.len());
     let sens = par_map(workers, &entries, |wk, e| {
-        let n0 = wk.simulations;
         let out = null_sensitivity(wk, w, &[], *e, &r0);
-        progress.fitted(wk.simulations - n0);
+        progress.fitted();
         out
     });
     let sens: Vec<Vec<f64>> = sens

@@ -82,7 +82,7 @@ pub(super) fn eliminate_backward<'e>(
     progress.stage("backward elimination", selected.len() + 1);
     let mut full = with_freedom(selected, true);
     let mut o_full = fit(&mut workers[0], w, &mut full, 10, true).map_err(sim_err("replay"))?;
-    progress.fitted(o_full.evaluations);
+    progress.fitted();
     let mut i = full.len();
     while i > 0 && full.len() >= 2 {
         i -= 1;
@@ -174,7 +174,6 @@ pub(super) fn replace_ambiguous<'e>(
         progress.stage("ambiguity groups", alternatives.len());
         // The model without effect i, its residual and cost: the base the alternatives are judged against.
         let r = residuals(&mut workers[0], w, &without(selected, i)).map_err(sim_err("replay"))?;
-        progress.simulated(1);
         let cost_without = crate::signal::sum_sq(&r);
         let n_eff = effective_n(&r, w.case.len());
         // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate.
