@@ -77,6 +77,7 @@ impl ExitCode for crate::diagnose::DiagnoseError {
         match self {
             Self::Sim { source, .. } => source.exit_code(),
             Self::Report(e) => e.exit_code(),
+            Self::Aircraft(e) => e.exit_code(),
             Self::TooShort(_)
             | Self::BadData(_)
             | Self::UnknownExtension(_)

@@ -1,19 +1,15 @@
 //! `flightid diagnose`: what the simulation gets wrong on measured data, the named cause, the validation gain.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
-
-use anyhow::Context;
+use std::path::PathBuf;
 
 use super::common::{emit_json, write_atomic, ColumnsArg};
 use super::UsageError;
-use crate::aircraft;
 use crate::data::FlightRecord;
-use crate::diagnose::model::{write_model, ExtendedModel};
-use crate::diagnose::replay::{LinearReplay, ReplayCase};
-use crate::diagnose::search::Worker;
+use crate::diagnose::model::write_model;
+use crate::diagnose::replay::ReplayCase;
+use crate::diagnose::simulator::{start_workers, SimSource};
 use crate::diagnose::{diagnose, report, DiagnoseOptions, Diagnosis};
-use crate::sim::JsbsimSim;
 
 /// Replay measured data on the aircraft's simulation, fit the catalogue of model extensions (signal path,
 /// sensors, aerodynamic derivative scales, added nonlinear terms), name the significant cause(s) and measure the
@@ -69,54 +65,6 @@ pub struct DiagnoseCmd {
     pub backward_elimination: bool,
     #[command(flatten)]
     pub columns: ColumnsArg,
-}
-
-/// Where the simulation comes from: the aircraft's JSBSim model, an exported extended model, or a linear model.
-pub enum SimSource<'a> {
-    /// JSBSim's stock aircraft of the configuration.
-    Aircraft(&'a str),
-    /// An exported model directory (aircraft configuration named in its extension.json).
-    Model(&'a ExtendedModel),
-    /// `flightid linearize --json` output.
-    Linear(&'a Path),
-}
-
-/// Starts `n` simulation workers at the record's rate, in parallel (each is its own process: the Python start,
-/// `import jsbsim` and the aircraft load take a few tenths of a second).
-pub fn start_workers(source: &SimSource, rate_hz: f64, n: usize) -> anyhow::Result<Vec<Worker>> {
-    std::thread::scope(|s| {
-        let started: Vec<_> = (0..n.max(1))
-            .map(|_| s.spawn(|| start_worker(source, rate_hz)))
-            .collect();
-        started
-            .into_iter()
-            .map(|h| {
-                h.join().unwrap_or_else(|_| {
-                    Err(anyhow::anyhow!("starting a simulation worker panicked"))
-                })
-            })
-            .collect()
-    })
-}
-
-/// Starts one simulation worker at `rate_hz`.
-fn start_worker(source: &SimSource, rate_hz: f64) -> anyhow::Result<Worker> {
-    Ok(match source {
-        SimSource::Aircraft(name) => {
-            let cfg = aircraft::load(name)?;
-            let sim = JsbsimSim::start(&cfg, rate_hz)
-                .with_context(|| format!("starting JSBSim for {}", cfg.name))?;
-            Worker::new(Box::new(sim))
-        }
-        SimSource::Model(m) => {
-            let cfg = aircraft::load(&m.extension.aircraft)?;
-            let sim = m
-                .start(&cfg, rate_hz)
-                .with_context(|| format!("starting JSBSim on the model in {}", m.dir.display()))?;
-            Worker::new(Box::new(sim))
-        }
-        SimSource::Linear(p) => Worker::new(Box::new(LinearReplay::from_json(p)?)),
-    })
 }
 
 /// The rate the simulation integrates a replay of `rec` at (a whole multiple of the record's rate).

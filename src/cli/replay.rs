@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use super::common::emit_json;
 use super::common::ColumnsArg;
-use super::diagnose::{start_workers, SimSource};
+use crate::diagnose::simulator::{start_workers, SimSource};
 use super::UsageError;
 use crate::diagnose::analyse_replay;
 use crate::diagnose::extension::ExtensionFile;

@@ -50,6 +50,9 @@ pub enum DiagnoseError {
     /// An extension file that cannot be read.
     #[error("extension file {path}: {message}")]
     ExtensionFile { path: String, message: String },
+    /// The aircraft configuration cannot be loaded.
+    #[error(transparent)]
+    Aircraft(#[from] crate::aircraft::AircraftError),
     /// The report could not be written.
     #[error(transparent)]
     Report(#[from] crate::report::ReportError),
