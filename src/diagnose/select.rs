@@ -186,7 +186,7 @@ fn rejection(
         ))
     } else if (c.value - spec.null).abs() < resolution {
         Some(format!(
-            "smaller than the resolution {resolution:.3} of the effect on this record"
+            "{WITHIN_RESOLUTION} {resolution:.3} of the effect on this record"
         ))
     } else if 3.0 * crb > resolution {
         Some(format!(
@@ -206,6 +206,36 @@ fn rejection(
         None
     }
 }
+
+/// Why a significant candidate `c` is not named although it passes its own tests (None: nothing beats it): a
+/// fully fitted candidate of the same round whose fitted change is within its own resolution of "no effect"
+/// explains the record better (a lower ΔBIC with as many parameters). The record is then explained at least as
+/// well by a model that is right within its resolution, and `c` took the place of a mismatch no entry names
+/// (a record's input timing, a small error spread over several terms): a derivative whose moment is small
+/// reaches a large factor from a small moment error. Among non-nested models with equal parameter counts BIC
+/// prefers the lower cost (Schwarz 1978; Burnham & Anderson, Model Selection and Multimodel Inference, §6.4).
+fn beaten_within_resolution(round: &[Candidate], c: &Candidate) -> Option<String> {
+    let within = |x: &&Candidate| {
+        x.full_fit
+            && x.rejected_because
+                .as_deref()
+                .is_some_and(|r| r.starts_with(WITHIN_RESOLUTION))
+    };
+    let best = round
+        .iter()
+        .filter(within)
+        .min_by(|a, b| a.criterion_delta.total_cmp(&b.criterion_delta))?;
+    (best.criterion_delta < c.criterion_delta).then(|| {
+        format!(
+            "{} on {} at {:.4}, within its resolution {:.3} of no effect, explains the record better \
+             (ΔBIC {:.1} against {:.1}): the record is explained by a model that is right within its resolution",
+            best.effect, best.target, best.value, best.resolution, best.criterion_delta, c.criterion_delta
+        )
+    })
+}
+
+/// The start of the rejection reason of a fitted change within the resolution of "no effect".
+const WITHIN_RESOLUTION: &str = "smaller than the resolution";
 
 /// The score test of one entry: the one-step Gauss–Newton estimate from "no effect" and its cost
 /// reduction (sᵀr)²/(sᵀs), with the Cramér–Rao bound √(J/n)/√(sᵀs).
@@ -397,6 +427,7 @@ pub fn select<'e>(
         .map_err(sim_err("replay"))?;
         // Significance of each fully fitted candidate.
         let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
+        let first = candidates.len();
         for (t, r) in full.iter().enumerate() {
             let Ok((o, _)) = r else { continue };
             let i = pool[top[t]];
@@ -407,6 +438,12 @@ pub fn select<'e>(
             }
             candidates.push(c);
         }
+        sig.retain(|&(_, _, ci)| {
+            let reason = beaten_within_resolution(&candidates[first..], &candidates[ci]);
+            let keep = reason.is_none();
+            candidates[ci].rejected_because = reason;
+            keep
+        });
         sig.sort_by(|a, b| a.1.total_cmp(&b.1));
         let Some(&(best, best_cost, best_ci)) = sig.first() else {
             break;
