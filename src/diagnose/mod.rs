@@ -280,7 +280,14 @@ pub fn diagnose(
     let (process_noise, refit_note) = match process_noise {
         None if opts.filter_values => {
             progress.stage("values in turbulence", 0);
-            let found = refit::refit_in_turbulence(&mut workers[0], &p, &columns, &mut sel)?;
+            let found = refit::refit_in_turbulence(
+                &mut workers[0],
+                &p,
+                &columns,
+                &mut sel,
+                opts,
+                &progress,
+            )?;
             let note = found.as_ref().filter(|n| n.used).map(refit::warning);
             (found, note)
         }

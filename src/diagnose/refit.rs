@@ -9,9 +9,10 @@
 //! effects are refitted jointly on the filter's innovations.
 
 use super::process_noise::{self, ProcessNoise};
-use super::search::{self, Worker};
-use super::select::{drop_below_resolution, Selection};
-use super::{prepare::Prepared, sim_err, DiagnoseError};
+use super::progress::Progress;
+use super::search::{self, Active, Worker};
+use super::select::{drop_below_resolution, eliminate_backward, Replacement, Selection};
+use super::{prepare::Prepared, sim_err, DiagnoseError, DiagnoseOptions};
 
 /// Refits the named effects of `sel` on the filter error method's innovations when the extended model's
 /// residual carries process noise; `columns` are the segment initial-state responses. Returns the process
@@ -22,6 +23,8 @@ pub fn refit_in_turbulence(
     p: &Prepared,
     columns: &[Vec<f64>],
     sel: &mut Selection,
+    opts: &DiagnoseOptions,
+    progress: &Progress,
 ) -> Result<Option<ProcessNoise>, DiagnoseError> {
     if sel.selected.is_empty() || columns.is_empty() {
         return Ok(None);
@@ -46,35 +49,62 @@ pub fn refit_in_turbulence(
     };
     // A sensor bias stays at its output-error value: to the filter a constant offset on a rate gyro looks like
     // a steady moment disturbance, which the process noise on the body rates partly tracks.
-    let mut active = sel.selected.clone();
-    active
-        .iter_mut()
-        .for_each(|a| a.free = a.ext.effect() != "sensor_bias");
-    if !active.iter().any(|a| a.free) {
+    let held = |a: &Active| a.ext.effect() == "sensor_bias";
+    if sel.selected.iter().all(held) {
         return Ok(Some(report));
     }
-    // At the coarse rate from the output-error values, then at the replay's rate from there.
+    // At the coarse rate from the output-error values: the joint fit, and every named effect tested again
+    // against the model without it on the filter's innovations (backward elimination). Output error in gusts
+    // names effects that bend the replay towards the gusts' response; once the filter follows the gusts they
+    // no longer pay (in gusts a `CL_alpha2` −65, replaced by `Cm_alpha2` −11, came beside a hidden `Cn_r` ×0.57
+    // and raised the validation record's cost elevenfold).
     let reference = sel.selected.clone();
+    let round = sel
+        .candidates
+        .iter()
+        .map(|c| c.round + 1)
+        .max()
+        .unwrap_or(0);
+    let Selection {
+        selected,
+        named,
+        candidates,
+        entries,
+        ..
+    } = sel;
+    let mut cost = 0.0;
     let coarse = search::coarse(std::slice::from_mut(worker), &w, &reference, |ws, cw| {
-        search::fit(&mut ws[0], cw, &mut active, 10, false)
+        let mut refiner = entries.refiner(ws, cw, opts, progress);
+        let state = Replacement {
+            selected,
+            named,
+            candidates,
+            cost: &mut cost,
+            round,
+        };
+        eliminate_backward(&mut refiner, state, "the filter error refit", held)
     })
-    .and_then(|fitted| fitted)
-    .map_err(sim_err("filter error refit"))?;
-    let o = search::polish(worker, &w, &mut active, &coarse.sensitivities)
-        .map_err(sim_err("filter error refit"))?;
-    // One parameter per named effect is reported, the first; the fit's free parameters are in the same order.
-    let mut k = 0;
-    for (a, named) in active.iter_mut().zip(sel.named.iter_mut()) {
-        if a.free {
-            named.value = a.params[0];
-            named.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
-            k += a.params.len();
+    .map_err(sim_err("filter error refit"))??;
+    // At the replay's rate from there.
+    let mut active = selected.clone();
+    active.iter_mut().for_each(|a| a.free = !held(a));
+    if active.iter().any(|a| a.free) {
+        let o = search::polish(worker, &w, &mut active, &coarse.sensitivities)
+            .map_err(sim_err("filter error refit"))?;
+        // One parameter per named effect is reported, the first; the fit's free parameters are in the same order.
+        let mut k = 0;
+        for (a, n) in active.iter_mut().zip(named.iter_mut()) {
+            if a.free {
+                n.value = a.params[0];
+                n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
+                k += a.params.len();
+            }
+            a.free = false;
         }
-        a.free = false;
+        *selected = active;
     }
-    sel.selected = active;
     // The refit may move an effect named by output error back to "no effect": it goes, as after any joint fit.
-    drop_below_resolution(&mut sel.selected, &mut sel.named, &mut sel.candidates);
+    drop_below_resolution(selected, named, candidates);
     Ok(Some(report))
 }
 

@@ -32,7 +32,8 @@ mod identifiability;
 mod refine;
 pub use identifiability::profiled_information;
 use identifiability::{identifiable, Identifiable};
-use refine::{eliminate_backward, replace_ambiguous, Refiner, Replacement};
+pub(super) use refine::{eliminate_backward, Replacement};
+use refine::{replace_ambiguous, Refiner};
 
 use super::baseline::Baseline;
 use super::extension::Extension;
@@ -53,6 +54,40 @@ pub struct Selection<'e> {
     pub candidates: Vec<Candidate>,
     /// Catalogue entries the record cannot identify.
     pub unidentifiable: Vec<Skipped>,
+    /// The identifiable catalogue entries, each with its resolution on the record and its sensor-offset mask
+    /// (what a later stage needs to test a named effect as the selection did).
+    pub entries: Entries<'e>,
+}
+
+/// The identifiable catalogue entries with their resolution on the record and their channel masks.
+pub struct Entries<'e> {
+    /// The entries.
+    pub catalogue: Vec<&'e dyn Extension>,
+    /// Each entry's smallest effect worth naming on the record.
+    pub resolution: Vec<f64>,
+    /// Each entry's channels on which a sensor offset is a nuisance term.
+    pub masks: Vec<Vec<bool>>,
+}
+
+impl<'e> Entries<'e> {
+    /// A backward-elimination context on `workers` and the weighting `w`.
+    pub(super) fn refiner<'a>(
+        &'a self,
+        workers: &'a mut [Worker],
+        w: &'a Weighted<'a>,
+        opts: &'a DiagnoseOptions,
+        progress: &'a Progress,
+    ) -> Refiner<'a, 'e> {
+        Refiner {
+            workers,
+            w,
+            catalogue: &self.catalogue,
+            resolution: &self.resolution,
+            masks: &self.masks,
+            opts,
+            progress,
+        }
+    }
 }
 
 /// The selected effects (free or held) plus one candidate, free, starting at `start` (its first parameter,
@@ -532,13 +567,18 @@ pub fn select<'e>(
     replace_ambiguous(&mut refiner, &sens, state.reborrow())?;
     if opts.backward_elimination {
         state.round += 1;
-        eliminate_backward(&mut refiner, state)?;
+        eliminate_backward(&mut refiner, state, "backward elimination", |_| false)?;
     }
     Ok(Selection {
         selected,
         named,
         candidates,
         unidentifiable,
+        entries: Entries {
+            catalogue,
+            resolution,
+            masks,
+        },
     })
 }
 
@@ -578,7 +618,9 @@ fn ambiguity(
 
 #[cfg(test)]
 mod tests {
-    use super::{drop_below_resolution, profiled_information};
+    use super::{
+        beaten_within_resolution, drop_below_resolution, profiled_information, WITHIN_RESOLUTION,
+    };
     use crate::diagnose::extension::make;
     use crate::diagnose::search::Active;
     use crate::diagnose::{Candidate, NamedCause};
@@ -655,6 +697,29 @@ mod tests {
             &mut named,
             &mut candidates
         ));
+    }
+
+    #[test]
+    fn a_candidate_beaten_by_a_change_within_resolution_is_not_named() {
+        // The seed-12 false alarm: Cn_p ×1.058 (within its resolution 0.15) fits better than Cn_da ×0.69.
+        let mut within = accepted("aero_derivative", "Cn_p", 1.058, 0.15);
+        within.criterion_delta = -325.3;
+        within.rejected_because = Some(format!(
+            "{WITHIN_RESOLUTION} 0.150 of the effect on this record"
+        ));
+        let mut cn_da = accepted("aero_derivative", "Cn_da", 0.691, 0.15);
+        cn_da.criterion_delta = -268.4;
+        let round = vec![within.clone(), cn_da.clone()];
+        let why = beaten_within_resolution(&round, &cn_da).unwrap_or_default();
+        assert!(why.contains("Cn_p") && why.contains("-325.3"), "{why}");
+        // A cause that explains more than every change within resolution is named.
+        cn_da.criterion_delta = -400.0;
+        assert!(beaten_within_resolution(&round, &cn_da).is_none());
+        // Only full fits within resolution count; one rejected for another reason does not.
+        let mut other = within;
+        other.rejected_because = Some("|z| 3.0 ≤ 5".into());
+        cn_da.criterion_delta = -268.4;
+        assert!(beaten_within_resolution(&[other, cn_da.clone()], &cn_da).is_none());
     }
 
     /// Two channels of four samples each.

@@ -152,9 +152,11 @@ pub fn start_workers(
 
 /// Starts one simulation worker at `rate_hz`.
 fn start_worker(source: &SimSource, rate_hz: f64) -> Result<Worker, DiagnoseError> {
-    let starting = |what: String| move |source| DiagnoseError::Sim {
-        during: what,
-        source,
+    let starting = |what: String| {
+        move |source| DiagnoseError::Sim {
+            during: what,
+            source,
+        }
     };
     Ok(match source {
         SimSource::Aircraft(name) => {

@@ -46,7 +46,7 @@ fn without<'e>(active: &[Active<'e>], i: usize) -> Vec<Active<'e>> {
 /// What backward elimination and sequential replacement work with besides the selection's state: the workers,
 /// the weighted training record, the identifiable catalogue with each entry's resolution and channel mask, the
 /// options and the progress display.
-pub(super) struct Refiner<'a, 'e> {
+pub(in crate::diagnose) struct Refiner<'a, 'e> {
     pub(super) workers: &'a mut [Worker],
     pub(super) w: &'a Weighted<'a>,
     pub(super) catalogue: &'a [&'e dyn Extension],
@@ -61,11 +61,14 @@ pub(super) struct Refiner<'a, 'e> {
 /// of the selection against the model without it (fitted again, the others free). An effect named early can
 /// lose its reason once a later one is modelled: a Cm_α ×0.43 in gusts first came out as an elevator
 /// effectiveness of ×1.25, which fell to ×1.02 once Cm_α was named. A dropped effect goes back to the
-/// candidates with the reason.
-pub(super) fn eliminate_backward<'e>(
+/// candidates with the reason, which starts with `what`. The effects `held` says are kept at their values and
+/// not tested. The values left are those of the last joint fit on `refiner.w`.
+pub(in crate::diagnose) fn eliminate_backward<'e>(
     refiner: &mut Refiner<'_, 'e>,
     state: Replacement<'_, 'e>,
-) -> Result<(), DiagnoseError> {
+    what: &str,
+    held: impl Fn(&Active) -> bool,
+) -> Result<FitOutcome, DiagnoseError> {
     let workers = &mut *refiner.workers;
     let (w, catalogue, resolution) = (refiner.w, refiner.catalogue, refiner.resolution);
     let (masks, opts, progress) = (refiner.masks, refiner.opts, refiner.progress);
@@ -76,28 +79,57 @@ pub(super) fn eliminate_backward<'e>(
         cost,
         round,
     } = state;
-    if selected.len() < 2 {
-        return Ok(());
+    let tested = selected.iter().filter(|a| !held(a)).count();
+    if tested == 0 {
+        let r = residuals(&mut workers[0], w, selected).map_err(sim_err("replay"))?;
+        let c = crate::signal::sum_sq(&r);
+        return Ok(evaluated(c, effective_n(&r, w.case.len())));
     }
-    progress.stage("backward elimination", selected.len() + 1);
-    let mut full = with_freedom(selected, true);
+    progress.stage(what, tested + 1);
+    let free = |active: &[Active<'e>]| -> Vec<Active<'e>> {
+        active
+            .iter()
+            .map(|a| Active {
+                free: !held(a),
+                ..a.clone()
+            })
+            .collect()
+    };
+    let mut full = free(selected);
     let mut o_full = fit(&mut workers[0], w, &mut full, 10, true).map_err(sim_err("replay"))?;
     progress.fitted();
     let mut i = full.len();
-    while i > 0 && full.len() >= 2 {
+    while i > 0 {
         i -= 1;
+        if held(&full[i]) {
+            continue;
+        }
         let Some(ci) = catalogue
             .iter()
             .position(|e| e.effect() == full[i].ext.effect() && e.target() == full[i].ext.target())
         else {
             continue;
         };
-        let starts = vec![without(&full, i)];
-        let fits = fit_starts(workers, w, &starts, progress);
-        let Some(Ok((o_without, a_without))) = fits.into_iter().next() else {
-            continue;
+        let rest = without(&full, i);
+        let (o_without, a_without) = if rest.iter().any(|a| a.free) {
+            let fits = fit_starts(workers, w, &[rest], progress);
+            let Some(Ok(fitted)) = fits.into_iter().next() else {
+                continue;
+            };
+            fitted
+        } else {
+            // Nothing left to fit: the model without the effect is only evaluated.
+            let r = residuals(&mut workers[0], w, &rest).map_err(sim_err("replay"))?;
+            let c = crate::signal::sum_sq(&r);
+            (evaluated(c, effective_n(&r, w.case.len())), rest)
         };
-        let o_last = with_last(&o_full, i);
+        // The tested effect's place among the free parameters of the full fit.
+        let k = full[..i]
+            .iter()
+            .filter(|a| a.free)
+            .map(|a| a.params.len())
+            .sum();
+        let o_last = with_last(&o_full, k);
         let ctx = RoundContext {
             round,
             base_cost: o_without.cost_after,
@@ -109,29 +141,47 @@ pub(super) fn eliminate_backward<'e>(
             continue;
         };
         c.rejected_because = Some(format!(
-            "dropped by backward elimination, with the other named effects in the model: {reason}"
+            "dropped by {what}, with the other named effects in the model: {reason}"
         ));
         candidates.push(c);
         named.remove(i);
         full = a_without;
         o_full = o_without;
     }
-    for (k, n) in named.iter_mut().enumerate() {
-        n.value = full[k].params[0];
-        n.std_error = o_full.std_errors.get(k).copied().unwrap_or(f64::NAN);
+    let mut k = 0;
+    for (a, n) in full.iter().zip(named.iter_mut()) {
+        n.value = a.params[0];
+        if a.free {
+            n.std_error = o_full.std_errors.get(k).copied().unwrap_or(f64::NAN);
+            k += a.params.len();
+        }
     }
     *cost = o_full.cost_after;
     adopt(selected, full);
-    Ok(())
+    Ok(o_full)
+}
+
+/// The outcome of a model with nothing free, evaluated once: cost `cost`, `n_eff` effective samples.
+fn evaluated(cost: f64, n_eff: f64) -> FitOutcome {
+    FitOutcome {
+        cost_before: cost,
+        cost_after: cost,
+        values: Vec::new(),
+        std_errors: Vec::new(),
+        crb_std_errors: Vec::new(),
+        n_eff,
+        sensitivities: Vec::new(),
+        evaluations: 1,
+    }
 }
 
 /// The state of the selection that [`replace_ambiguous`] may change.
-pub(super) struct Replacement<'a, 'e> {
-    pub(super) selected: &'a mut Vec<Active<'e>>,
-    pub(super) named: &'a mut Vec<NamedCause>,
-    pub(super) candidates: &'a mut Vec<Candidate>,
-    pub(super) cost: &'a mut f64,
-    pub(super) round: usize,
+pub(in crate::diagnose) struct Replacement<'a, 'e> {
+    pub(in crate::diagnose) selected: &'a mut Vec<Active<'e>>,
+    pub(in crate::diagnose) named: &'a mut Vec<NamedCause>,
+    pub(in crate::diagnose) candidates: &'a mut Vec<Candidate>,
+    pub(in crate::diagnose) cost: &'a mut f64,
+    pub(in crate::diagnose) round: usize,
 }
 
 /// Sequential replacement (Miller, Subset Selection in Regression, 2nd ed., §3.3): once forward selection has
