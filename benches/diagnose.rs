@@ -11,7 +11,7 @@
 //! Run: `cargo bench --bench diagnose [-- --flown-at HZ]`.
 
 use flightid::aircraft;
-use flightid::diagnose::simulator::{start_workers, SimSource};
+use flightid::diagnose::workers::{start_workers, SimSource};
 use flightid::diagnose::{diagnose, replay::ReplayCase, DiagnoseOptions};
 use flightid::signal::{add_white_noise, generate, Maneuver};
 use flightid::sim::{FlightPlan, JsbsimSim, Simulator, SurfaceInput, TrimPoint};

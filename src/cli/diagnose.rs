@@ -8,7 +8,7 @@ use super::UsageError;
 use crate::data::FlightRecord;
 use crate::diagnose::model::write_model;
 use crate::diagnose::replay::ReplayCase;
-use crate::diagnose::simulator::{start_workers, SimSource};
+use crate::diagnose::workers::{start_workers, SimSource};
 use crate::diagnose::{diagnose, report, DiagnoseOptions, Diagnosis};
 
 /// Replay measured data on the aircraft's simulation, fit the catalogue of model extensions (signal path,

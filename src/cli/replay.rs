@@ -10,7 +10,7 @@ use crate::diagnose::analyse_replay;
 use crate::diagnose::extension::ExtensionFile;
 use crate::diagnose::model::ExtendedModel;
 use crate::diagnose::replay::ReplayCase;
-use crate::diagnose::simulator::{start_workers, SimSource};
+use crate::diagnose::workers::{start_workers, SimSource};
 
 /// Replay a measured record on the aircraft's simulation (trimmed at the measured initial condition, surfaces
 /// driven with the measured deflections), optionally with fitted extensions, and compare the outputs.

@@ -23,6 +23,7 @@ pub mod search;
 pub mod select;
 pub mod simulator;
 pub mod validate;
+pub mod workers;
 
 use std::collections::BTreeMap;
 
