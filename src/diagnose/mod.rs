@@ -279,7 +279,8 @@ pub fn diagnose(
     let base = baseline::baseline(&mut workers[0], &p)?;
     let mut sel = select::select(workers, &p, &base, opts, &progress)?;
     let (process_noise, refit_note) = match process_noise {
-        None if opts.filter_values => {
+        // Output error searched (no filter, or none used): the values may still want the filter.
+        searched if opts.filter_values && !searched.as_ref().is_some_and(|n| n.used) => {
             progress.stage("values in turbulence", 0);
             let found = refit::refit_in_turbulence(
                 &mut workers[0],
@@ -288,7 +289,8 @@ pub fn diagnose(
                 &mut sel,
                 opts,
                 &progress,
-            )?;
+            )?
+            .or(searched);
             let note = found.as_ref().filter(|n| n.used).map(refit::warning);
             (found, note)
         }
@@ -337,6 +339,15 @@ fn turbulence(
     let r0 = search::raw_residuals(worker, &p.case, &p.sigma, &[]).map_err(sim_err("replay"))?;
     let estimate = process_noise::estimate(&p.case, &columns, &r0);
     let (filter, report) = match estimate {
+        // Process noise on the body rates alone is the unextended model's own error, not gusts (see
+        // `refit::GUST_VARIANCE_MIN`): the search stays output error's.
+        Some((_, report)) if report.velocity_variance < refit::GUST_VARIANCE_MIN => (
+            None,
+            Some(process_noise::ProcessNoise {
+                used: false,
+                ..report
+            }),
+        ),
         Some((f, report)) => (f, Some(report)),
         None => (None, None),
     };

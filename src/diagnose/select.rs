@@ -486,35 +486,79 @@ pub fn select<'e>(
         if top.is_empty() {
             break;
         }
-        let top_exts: Vec<&dyn Extension> = top.iter().map(|&j| catalogue[pool[j]]).collect();
-        // Full pass: the top candidates jointly with the selected effects, from the score test's estimate.
-        let starts: Vec<Vec<Active>> = top
-            .iter()
-            .map(|&j| with_candidate(&selected, catalogue[pool[j]], quick[j].values[0], true))
-            .collect();
-        let full = search::coarse(workers, &w, &selected, |ws, cw| {
-            fit_starts(ws, cw, &starts, progress)
-        })
-        .map_err(sim_err("replay"))?;
-        // Significance of each fully fitted candidate.
+        let mut top = top;
+        let mut full: Vec<FullFit> = Vec::new();
         let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
-        let first = candidates.len();
-        for (t, r) in full.iter().enumerate() {
-            let Ok((o, _)) = r else { continue };
-            let i = pool[top[t]];
-            let mut c = ctx.candidate(top_exts[t], o, true, resolution[i]);
-            c.rejected_because = rejection(&c, top_exts[t], o, base_cost, opts, &masks[i]);
-            if c.rejected_because.is_none() {
-                sig.push((t, o.cost_after, candidates.len()));
+        let mut first = candidates.len();
+        // Full pass: the top candidates jointly with the selected effects, from the score test's estimate. When
+        // none of them is significant, one more batch: the next entries down the ranking whose score test alone
+        // already passes the criterion and the |z| test. On innovations a small cause with a large score (a q
+        // gyro scale ×1.13 at ΔBIC −430) can rank below entries that only the fit shows to be nothing.
+        for batch in 0..2 {
+            let fitted = if batch == 0 {
+                top.clone()
+            } else {
+                let compelling = |&j: &usize| {
+                    let c =
+                        ctx.candidate(catalogue[pool[j]], &quick[j], false, resolution[pool[j]]);
+                    c.criterion_delta < opts.bic_threshold && c.z > opts.min_z
+                };
+                let more: Vec<usize> = order
+                    .iter()
+                    .copied()
+                    .filter(|j| !best_few.contains(j) && compelling(j))
+                    .take(opts.full_fit_top)
+                    .collect();
+                if !sig.is_empty() || more.is_empty() {
+                    break;
+                }
+                // Their score-test entries give way to the fits.
+                let before = candidates.len();
+                candidates.retain(|c| {
+                    !(c.round == round
+                        && !c.full_fit
+                        && more.iter().any(|&j| {
+                            c.effect == catalogue[pool[j]].effect()
+                                && c.target == catalogue[pool[j]].target()
+                        }))
+                });
+                first -= before - candidates.len();
+                more
+            };
+            let starts: Vec<Vec<Active>> = fitted
+                .iter()
+                .map(|&j| with_candidate(&selected, catalogue[pool[j]], quick[j].values[0], true))
+                .collect();
+            let fits = search::coarse(workers, &w, &selected, |ws, cw| {
+                fit_starts(ws, cw, &starts, progress)
+            })
+            .map_err(sim_err("replay"))?;
+            if batch > 0 {
+                top.extend(&fitted);
             }
-            candidates.push(c);
+            // Significance of each fully fitted candidate.
+            for r in fits {
+                let t = full.len();
+                if let Ok((o, _)) = &r {
+                    let i = pool[top[t]];
+                    let e = catalogue[i];
+                    let mut c = ctx.candidate(e, o, true, resolution[i]);
+                    c.rejected_because = rejection(&c, e, o, base_cost, opts, &masks[i]);
+                    if c.rejected_because.is_none() {
+                        sig.push((t, o.cost_after, candidates.len()));
+                    }
+                    candidates.push(c);
+                }
+                full.push(r);
+            }
+            sig.retain(|&(_, _, ci)| {
+                let reason = beaten_within_resolution(&candidates[first..], &candidates[ci]);
+                let keep = reason.is_none();
+                candidates[ci].rejected_because = reason;
+                keep
+            });
         }
-        sig.retain(|&(_, _, ci)| {
-            let reason = beaten_within_resolution(&candidates[first..], &candidates[ci]);
-            let keep = reason.is_none();
-            candidates[ci].rejected_because = reason;
-            keep
-        });
+        let top_exts: Vec<&dyn Extension> = top.iter().map(|&j| catalogue[pool[j]]).collect();
         sig.sort_by(|a, b| a.1.total_cmp(&b.1));
         let Some(&(best, best_cost, best_ci)) = sig.first() else {
             break;
@@ -653,137 +697,4 @@ fn ambiguity(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::{
-        beaten_within_resolution, drop_below_resolution, profiled_information, WITHIN_RESOLUTION,
-    };
-    use crate::diagnose::extension::make;
-    use crate::diagnose::search::Active;
-    use crate::diagnose::{Candidate, NamedCause};
-
-    /// The accepted candidate entry of a named effect.
-    fn accepted(effect: &str, target: &str, value: f64, resolution: f64) -> Candidate {
-        Candidate {
-            effect: effect.into(),
-            target: target.into(),
-            value,
-            std_error: 0.01,
-            cost_before: 100.0,
-            cost_after: 50.0,
-            criterion: "BIC".into(),
-            criterion_delta: -100.0,
-            z: 30.0,
-            n_eff: 1000.0,
-            resolution,
-            validation_gain: None,
-            rejected_because: None,
-            round: 0,
-            full_fit: true,
-        }
-    }
-
-    #[test]
-    fn a_named_effect_a_later_joint_fit_moved_within_its_resolution_is_dropped() {
-        let no_coefficients: Vec<String> = Vec::new();
-        let gain = make("control_effectiveness", "elevator", &no_coefficients).unwrap();
-        let delay = make("input_delay", "rudder", &no_coefficients).unwrap();
-        // resolutions 0.1 and 0.02 (the accepted entries'): ×1.02 is within 0.1 of 1 (no effect); a 0.08 s delay is four resolutions from 0.
-        let mut selected = vec![
-            Active {
-                ext: gain.as_ref(),
-                params: vec![1.02],
-                free: false,
-            },
-            Active {
-                ext: delay.as_ref(),
-                params: vec![0.08],
-                free: false,
-            },
-        ];
-        let named_as = |e: &str, t: &str, v: f64| NamedCause {
-            effect: e.into(),
-            target: t.into(),
-            value: v,
-            std_error: 0.01,
-            ambiguous_with: Vec::new(),
-        };
-        let mut named = vec![
-            named_as("control_effectiveness", "elevator", 1.02),
-            named_as("input_delay", "rudder", 0.08),
-        ];
-        let mut candidates = vec![
-            accepted("control_effectiveness", "elevator", 1.48, 0.1),
-            accepted("input_delay", "rudder", 0.08, 0.02),
-        ];
-        let dropped = drop_below_resolution(&mut selected, &mut named, &mut candidates);
-        assert!(dropped);
-        assert_eq!(named.len(), 1);
-        assert_eq!(named[0].target, "rudder");
-        assert_eq!(selected.len(), 1);
-        assert_eq!(selected[0].ext.target(), "rudder");
-        let why = candidates[0].rejected_because.as_deref().unwrap_or("");
-        assert!(
-            why.contains("1.0200") && why.contains("resolution"),
-            "{why}"
-        );
-        assert!(candidates[1].rejected_because.is_none());
-        // Nothing left to drop: a second pass changes nothing.
-        assert!(!drop_below_resolution(
-            &mut selected,
-            &mut named,
-            &mut candidates
-        ));
-    }
-
-    #[test]
-    fn a_candidate_beaten_by_a_change_within_resolution_is_not_named() {
-        // The seed-12 false alarm: Cn_p ×1.058 (within its resolution 0.15) fits better than Cn_da ×0.69.
-        let mut within = accepted("aero_derivative", "Cn_p", 1.058, 0.15);
-        within.criterion_delta = -325.3;
-        within.rejected_because = Some(format!(
-            "{WITHIN_RESOLUTION} 0.150 of the effect on this record"
-        ));
-        let mut cn_da = accepted("aero_derivative", "Cn_da", 0.691, 0.15);
-        cn_da.criterion_delta = -268.4;
-        let round = vec![within.clone(), cn_da.clone()];
-        let why = beaten_within_resolution(&round, &cn_da).unwrap_or_default();
-        assert!(why.contains("Cn_p") && why.contains("-325.3"), "{why}");
-        // A cause that explains more than every change within resolution is named.
-        cn_da.criterion_delta = -400.0;
-        assert!(beaten_within_resolution(&round, &cn_da).is_none());
-        // Only full fits within resolution count; one rejected for another reason does not.
-        let mut other = within;
-        other.rejected_because = Some("|z| 3.0 ≤ 5".into());
-        cn_da.criterion_delta = -268.4;
-        assert!(beaten_within_resolution(&[other, cn_da.clone()], &cn_da).is_none());
-    }
-
-    /// Two channels of four samples each.
-    const MASK_BOTH: [bool; 2] = [true, true];
-
-    #[test]
-    fn an_offset_carries_no_information_once_offsets_are_nuisance_terms() {
-        // A constant on each channel is exactly what the two offsets explain: nothing is left.
-        let s = [1.0, 1.0, 1.0, 1.0, -2.0, -2.0, -2.0, -2.0];
-        assert!(profiled_information(&s, &[], &MASK_BOTH) < 1e-24);
-        // Without the offsets, the whole ‖s‖² = 4 + 16 is information.
-        assert!((profiled_information(&s, &[], &[false, false]) - 20.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn information_is_the_schur_complement_of_the_information_matrix() {
-        // Schur complement I_ss − I_sn² / I_nn for one nuisance column, no offsets:
-        // s·s = 1 + 4 + 9 + 16 = 30, s·n = 1 + 2 = 3, n·n = 2 → 30 − 9/2 = 25.5.
-        let s = [1.0, 2.0, 3.0, 4.0];
-        let n = vec![1.0, 1.0, 0.0, 0.0];
-        let i = profiled_information(&s, &[n], &[false]);
-        assert!((i - 25.5).abs() < 1e-12, "{i}");
-    }
-
-    #[test]
-    fn a_parallel_nuisance_column_removes_all_information() {
-        let s = [0.5, -1.0, 2.0, 0.0, 1.0, 3.0, -1.0, 0.5];
-        let n = s.iter().map(|v| -3.0 * v).collect::<Vec<f64>>();
-        assert!(profiled_information(&s, &[n], &[false, false]) < 1e-20);
-    }
-}
+mod tests;

@@ -1,0 +1,133 @@
+//! Unit tests of the selection's rules.
+use super::{
+    beaten_within_resolution, drop_below_resolution, profiled_information, WITHIN_RESOLUTION,
+};
+use crate::diagnose::extension::make;
+use crate::diagnose::search::Active;
+use crate::diagnose::{Candidate, NamedCause};
+
+/// The accepted candidate entry of a named effect.
+fn accepted(effect: &str, target: &str, value: f64, resolution: f64) -> Candidate {
+    Candidate {
+        effect: effect.into(),
+        target: target.into(),
+        value,
+        std_error: 0.01,
+        cost_before: 100.0,
+        cost_after: 50.0,
+        criterion: "BIC".into(),
+        criterion_delta: -100.0,
+        z: 30.0,
+        n_eff: 1000.0,
+        resolution,
+        validation_gain: None,
+        rejected_because: None,
+        round: 0,
+        full_fit: true,
+    }
+}
+
+#[test]
+fn a_named_effect_a_later_joint_fit_moved_within_its_resolution_is_dropped() {
+    let no_coefficients: Vec<String> = Vec::new();
+    let gain = make("control_effectiveness", "elevator", &no_coefficients).unwrap();
+    let delay = make("input_delay", "rudder", &no_coefficients).unwrap();
+    // resolutions 0.1 and 0.02 (the accepted entries'): ×1.02 is within 0.1 of 1 (no effect); a 0.08 s delay is four resolutions from 0.
+    let mut selected = vec![
+        Active {
+            ext: gain.as_ref(),
+            params: vec![1.02],
+            free: false,
+        },
+        Active {
+            ext: delay.as_ref(),
+            params: vec![0.08],
+            free: false,
+        },
+    ];
+    let named_as = |e: &str, t: &str, v: f64| NamedCause {
+        effect: e.into(),
+        target: t.into(),
+        value: v,
+        std_error: 0.01,
+        ambiguous_with: Vec::new(),
+    };
+    let mut named = vec![
+        named_as("control_effectiveness", "elevator", 1.02),
+        named_as("input_delay", "rudder", 0.08),
+    ];
+    let mut candidates = vec![
+        accepted("control_effectiveness", "elevator", 1.48, 0.1),
+        accepted("input_delay", "rudder", 0.08, 0.02),
+    ];
+    let dropped = drop_below_resolution(&mut selected, &mut named, &mut candidates);
+    assert!(dropped);
+    assert_eq!(named.len(), 1);
+    assert_eq!(named[0].target, "rudder");
+    assert_eq!(selected.len(), 1);
+    assert_eq!(selected[0].ext.target(), "rudder");
+    let why = candidates[0].rejected_because.as_deref().unwrap_or("");
+    assert!(
+        why.contains("1.0200") && why.contains("resolution"),
+        "{why}"
+    );
+    assert!(candidates[1].rejected_because.is_none());
+    // Nothing left to drop: a second pass changes nothing.
+    assert!(!drop_below_resolution(
+        &mut selected,
+        &mut named,
+        &mut candidates
+    ));
+}
+
+#[test]
+fn a_candidate_beaten_by_a_change_within_resolution_is_not_named() {
+    // The seed-12 false alarm: Cn_p ×1.058 (within its resolution 0.15) fits better than Cn_da ×0.69.
+    let mut within = accepted("aero_derivative", "Cn_p", 1.058, 0.15);
+    within.criterion_delta = -325.3;
+    within.rejected_because = Some(format!(
+        "{WITHIN_RESOLUTION} 0.150 of the effect on this record"
+    ));
+    let mut cn_da = accepted("aero_derivative", "Cn_da", 0.691, 0.15);
+    cn_da.criterion_delta = -268.4;
+    let round = vec![within.clone(), cn_da.clone()];
+    let why = beaten_within_resolution(&round, &cn_da).unwrap_or_default();
+    assert!(why.contains("Cn_p") && why.contains("-325.3"), "{why}");
+    // A cause that explains more than every change within resolution is named.
+    cn_da.criterion_delta = -400.0;
+    assert!(beaten_within_resolution(&round, &cn_da).is_none());
+    // Only full fits within resolution count; one rejected for another reason does not.
+    let mut other = within;
+    other.rejected_because = Some("|z| 3.0 ≤ 5".into());
+    cn_da.criterion_delta = -268.4;
+    assert!(beaten_within_resolution(&[other, cn_da.clone()], &cn_da).is_none());
+}
+
+/// Two channels of four samples each.
+const MASK_BOTH: [bool; 2] = [true, true];
+
+#[test]
+fn an_offset_carries_no_information_once_offsets_are_nuisance_terms() {
+    // A constant on each channel is exactly what the two offsets explain: nothing is left.
+    let s = [1.0, 1.0, 1.0, 1.0, -2.0, -2.0, -2.0, -2.0];
+    assert!(profiled_information(&s, &[], &MASK_BOTH) < 1e-24);
+    // Without the offsets, the whole ‖s‖² = 4 + 16 is information.
+    assert!((profiled_information(&s, &[], &[false, false]) - 20.0).abs() < 1e-12);
+}
+
+#[test]
+fn information_is_the_schur_complement_of_the_information_matrix() {
+    // Schur complement I_ss − I_sn² / I_nn for one nuisance column, no offsets:
+    // s·s = 1 + 4 + 9 + 16 = 30, s·n = 1 + 2 = 3, n·n = 2 → 30 − 9/2 = 25.5.
+    let s = [1.0, 2.0, 3.0, 4.0];
+    let n = vec![1.0, 1.0, 0.0, 0.0];
+    let i = profiled_information(&s, &[n], &[false]);
+    assert!((i - 25.5).abs() < 1e-12, "{i}");
+}
+
+#[test]
+fn a_parallel_nuisance_column_removes_all_information() {
+    let s = [0.5, -1.0, 2.0, 0.0, 1.0, 3.0, -1.0, 0.5];
+    let n = s.iter().map(|v| -3.0 * v).collect::<Vec<f64>>();
+    assert!(profiled_information(&s, &[n], &[false, false]) < 1e-20);
+}
