@@ -486,78 +486,35 @@ pub fn select<'e>(
         if top.is_empty() {
             break;
         }
-        let mut top = top;
-        let mut full: Vec<FullFit> = Vec::new();
+        // Full pass: the top candidates jointly with the selected effects, from the score test's estimate.
+        let starts: Vec<Vec<Active>> = top
+            .iter()
+            .map(|&j| with_candidate(&selected, catalogue[pool[j]], quick[j].values[0], true))
+            .collect();
+        let full = search::coarse(workers, &w, &selected, |ws, cw| {
+            fit_starts(ws, cw, &starts, progress)
+        })
+        .map_err(sim_err("replay"))?;
+        // Significance of each fully fitted candidate.
         let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
-        let mut first = candidates.len();
-        // Full pass: the top candidates jointly with the selected effects, from the score test's estimate. When
-        // none of them is significant, one more batch: the next entries down the ranking whose score test alone
-        // already passes the criterion and the |z| test. On innovations a small cause with a large score (a q
-        // gyro scale ×1.13 at ΔBIC −430) can rank below entries that only the fit shows to be nothing.
-        for batch in 0..2 {
-            let fitted = if batch == 0 {
-                top.clone()
-            } else {
-                let compelling = |&j: &usize| {
-                    let c =
-                        ctx.candidate(catalogue[pool[j]], &quick[j], false, resolution[pool[j]]);
-                    c.criterion_delta < opts.bic_threshold && c.z > opts.min_z
-                };
-                let more: Vec<usize> = order
-                    .iter()
-                    .copied()
-                    .filter(|j| !best_few.contains(j) && compelling(j))
-                    .take(opts.full_fit_top)
-                    .collect();
-                if !sig.is_empty() || more.is_empty() {
-                    break;
-                }
-                // Their score-test entries give way to the fits.
-                let before = candidates.len();
-                candidates.retain(|c| {
-                    !(c.round == round
-                        && !c.full_fit
-                        && more.iter().any(|&j| {
-                            c.effect == catalogue[pool[j]].effect()
-                                && c.target == catalogue[pool[j]].target()
-                        }))
-                });
-                first -= before - candidates.len();
-                more
-            };
-            let starts: Vec<Vec<Active>> = fitted
-                .iter()
-                .map(|&j| with_candidate(&selected, catalogue[pool[j]], quick[j].values[0], true))
-                .collect();
-            let fits = search::coarse(workers, &w, &selected, |ws, cw| {
-                fit_starts(ws, cw, &starts, progress)
-            })
-            .map_err(sim_err("replay"))?;
-            if batch > 0 {
-                top.extend(&fitted);
+        let first = candidates.len();
+        for (t, r) in full.iter().enumerate() {
+            let Ok((o, _)) = r else { continue };
+            let i = pool[top[t]];
+            let e = catalogue[i];
+            let mut c = ctx.candidate(e, o, true, resolution[i]);
+            c.rejected_because = rejection(&c, e, o, base_cost, opts, &masks[i]);
+            if c.rejected_because.is_none() {
+                sig.push((t, o.cost_after, candidates.len()));
             }
-            // Significance of each fully fitted candidate.
-            for r in fits {
-                let t = full.len();
-                if let Ok((o, _)) = &r {
-                    let i = pool[top[t]];
-                    let e = catalogue[i];
-                    let mut c = ctx.candidate(e, o, true, resolution[i]);
-                    c.rejected_because = rejection(&c, e, o, base_cost, opts, &masks[i]);
-                    if c.rejected_because.is_none() {
-                        sig.push((t, o.cost_after, candidates.len()));
-                    }
-                    candidates.push(c);
-                }
-                full.push(r);
-            }
-            sig.retain(|&(_, _, ci)| {
-                let reason = beaten_within_resolution(&candidates[first..], &candidates[ci]);
-                let keep = reason.is_none();
-                candidates[ci].rejected_because = reason;
-                keep
-            });
+            candidates.push(c);
         }
+        sig.retain(|&(_, _, ci)| {
+            let reason = beaten_within_resolution(&candidates[first..], &candidates[ci]);
+            let keep = reason.is_none();
+            candidates[ci].rejected_because = reason;
+            keep
+        });
         let top_exts: Vec<&dyn Extension> = top.iter().map(|&j| catalogue[pool[j]]).collect();
         sig.sort_by(|a, b| a.1.total_cmp(&b.1));
         let Some(&(best, best_cost, best_ci)) = sig.first() else {
