@@ -65,7 +65,8 @@ pub enum DiagnoseError {
 /// Search settings.
 #[derive(Debug, Clone)]
 pub struct DiagnoseOptions {
-    /// At most this many effects are named (forward selection rounds).
+    /// At most this many effects are named (forward selection rounds; a round whose effect a later joint fit
+    /// drops is given back, up to this many times).
     pub max_effects: usize,
     /// Candidates fully fitted after the score-test screening, per round.
     pub full_fit_top: usize,
