@@ -148,7 +148,7 @@ fn fit_starts<'e>(
 /// explained better there than with no effect, halving the step at most four times. The score test's one-step
 /// estimate extrapolates the residual's sensitivity at "no effect"; for a large effect it can land at or beyond
 /// the bound, where the replay departs and the fit has no gradient to come back along (a hidden C_mα ×0.43 in
-/// gusts started at the bound ×0.2, where the replay departs, and stayed there). Halving the Gauss–Newton step
+/// gusts started at the bound ×0.2 and stayed there). Halving the Gauss–Newton step
 /// until the cost falls is the backtracking line search (Dennis & Schnabel, *Numerical Methods for
 /// Unconstrained Optimization and Nonlinear Equations*, §6.3). Both costs are usually in the workers' store
 /// already (the round's model and the fit's own first replay).
