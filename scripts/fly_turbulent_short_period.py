@@ -5,7 +5,7 @@ short-period channels as a flightid flight CSV, driving JSBSim's Python API dire
 Trim at 4000 ft, 100 KTAS, wings level; then an elevator 3-2-1-1 (unit 0.4 s, 0.15 of the
 normalised command, beyond the c172x actuator's 0.05 rad hysteresis) at 1 s and a reversed one at 6 s around the trim command. Turbulence: JSBSim's
 MIL-F-8785C (Dryden) model, `atmosphere/turb-type` 3 (ttMilspec) with
-`atmosphere/turbulence/milspec/windspeed_at_20ft_ft_sec` and `.../severity`, seeded by
+`atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps` and `.../severity`, seeded by
 `simulation/randomseed`. Logged at 50 Hz as deviations from trim (elevator_rad, alpha_rad; q_rad_s
 as is), with white sensor noise (alpha 0.0005 rad, q 0.001 rad/s, numpy seed).
 
@@ -54,7 +54,7 @@ def main():
     trim_alpha = fdm["aero/alpha-rad"]
     if args.turbulence == "milspec":
         fdm["atmosphere/turb-type"] = 3
-        fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_ft_sec"] = args.wind_20ft_fps
+        fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps"] = args.wind_20ft_fps
         fdm["atmosphere/turbulence/milspec/severity"] = args.severity
 
     def elevator(t):

@@ -255,7 +255,10 @@ def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation, plan
         fdm[f"gen/override/{s}"] = 1.0
     if turbulence:
         fdm["atmosphere/turb-type"] = 3
-        fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_ft_sec"] = rng.uniform(10.0, 20.0)
+        # The case's own gust realisation: FGWinds keeps one random sequence per FGFDMExec, which every case of a
+        # run would otherwise continue (case K alone would then meet other gusts than case K of a longer run).
+        fdm["atmosphere/randomseed"] = int(rng.integers(1, 2**31 - 1))
+        fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps"] = rng.uniform(10.0, 20.0)
         fdm["atmosphere/turbulence/milspec/severity"] = 1
     cmd = maneuvers(rng, duration_s, validation, plan)
     tau_act, rate_max = 0.04, 1.2  # the aircraft's own actuator: first order with a rate limit
