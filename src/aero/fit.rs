@@ -351,6 +351,7 @@ pub fn estimate_derivatives(
     let lm = optimise::Options {
         max_iterations: options.max_iterations,
         tolerance: 1e-14,
+        min_decrease: 0.0,
         damping: optimise::Damping {
             initial: 1e-6,
             min: 1e-16,

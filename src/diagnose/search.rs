@@ -518,6 +518,12 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
     }
 }
 
+/// A fit ends without simulating a step that predicts a cost decrease below this share of the residual
+/// variance s² = J/(n − p): the step would move the parameters by less than a tenth of their Cramér–Rao bounds
+/// (Δ J / s² = Σ (δ_i/σ_i)² for uncorrelated parameters), far inside what the selection and the reported values
+/// resolve, and each step is a replay.
+const MIN_DECREASE_SHARE: f64 = 0.01;
+
 /// Levenberg–Marquardt output-error fit of the free parameters of `active` (updated in place).
 pub fn fit(
     worker: &mut Worker,
@@ -568,6 +574,7 @@ fn fit_from(
     let options = optimise::Options {
         max_iterations: max_iter,
         tolerance: 1e-5,
+        min_decrease: MIN_DECREASE_SHARE * cost_before / (r.len() as f64 - x.len() as f64).max(1.0),
         damping: optimise::Damping {
             initial: 1e-3,
             min: 1e-6,

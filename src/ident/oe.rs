@@ -164,6 +164,7 @@ pub(super) fn lm_options(max_iterations: usize) -> optimise::Options {
     optimise::Options {
         max_iterations,
         tolerance: 1e-12,
+        min_decrease: 0.0,
         damping: optimise::Damping {
             initial: 1e-3,
             min: 1e-12,

@@ -60,6 +60,7 @@ pub(super) fn fit(data: &Data, params: &[Param], start: Vec<f64>, max_iterations
     let options = optimise::Options {
         max_iterations,
         tolerance: 1e-9,
+        min_decrease: 0.0,
         damping: optimise::Damping {
             tries: 12,
             ..optimise::Damping::default()
