@@ -345,10 +345,7 @@ pub fn initial_state_columns(
     case: &ReplayCase,
     sigma: &[f64],
 ) -> Result<Vec<Vec<f64>>, SimError> {
-    let Some(first) = workers.first_mut() else {
-        return Ok(Vec::new());
-    };
-    if !first.sim.supports_resets() {
+    if !workers.first().is_some_and(|w| w.sim.supports_resets()) {
         return Ok(Vec::new());
     }
     at_sensitivity_rate(workers, case, |workers| state_columns(workers, case, sigma))

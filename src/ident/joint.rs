@@ -33,6 +33,7 @@ use serde::{Deserialize, Serialize};
 use super::filter::{simulate, Columns, Hold, Svf};
 use super::linalg::{lstsq_qr, poly_from_roots, solve_square, stabilize_continuous};
 use super::ls::{arx_regressor, arx_to_continuous, continuous_poles};
+use super::srivc::lambdas;
 use super::{metrics, nrmse_fit, ContinuousModel, IdentError, IdentOptions, IdentResult, Method};
 
 mod oe;
@@ -522,7 +523,6 @@ fn srivc_joint(
     delay_s: f64,
 ) -> Result<ContinuousModel, IdentError> {
     const MAX_ITER: usize = 30;
-    let nyquist = std::f64::consts::PI / dt_s;
     let mut best: Option<(f64, ContinuousModel)> = None;
     let consider = |model: &ContinuousModel, best: &mut Option<(f64, ContinuousModel)>| {
         let cost = joint_cost(recs, dt_s, model);
@@ -531,10 +531,7 @@ fn srivc_joint(
         }
     };
     let mut start: Option<(f64, ContinuousModel)> = None;
-    for lambda in [0.5, 2.0, 8.0, 30.0]
-        .into_iter()
-        .filter(|l| *l < 0.2 * nyquist)
-    {
+    for lambda in lambdas(dt_s) {
         let den_f = poly_from_roots(&vec![num_complex::Complex64::new(-lambda, 0.0); n]);
         if let Some(model) = srivc_step(recs, dt_s, m, delay_s, &den_f, None) {
             consider(&model, &mut start);

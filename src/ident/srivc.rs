@@ -203,8 +203,8 @@ pub(crate) fn svf_ls_start(
     best.map(|(num, den, _)| (num, den))
 }
 
-/// Prefilter break frequencies tried for the SVF-LS start, rad/s.
-fn lambdas(dt_s: f64) -> Vec<f64> {
+/// Prefilter break frequencies tried for the SVF-LS start (one record or all records stacked), rad/s.
+pub(super) fn lambdas(dt_s: f64) -> Vec<f64> {
     let nyquist = std::f64::consts::PI / dt_s;
     [0.5, 2.0, 8.0, 30.0]
         .into_iter()

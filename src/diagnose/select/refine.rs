@@ -199,17 +199,10 @@ pub(super) fn replace_ambiguous<'e>(
     let workers = &mut *refiner.workers;
     let (w, catalogue, resolution) = (refiner.w, refiner.catalogue, refiner.resolution);
     let (masks, opts, progress) = (refiner.masks, refiner.opts, refiner.progress);
-    let Replacement {
-        selected,
-        named,
-        candidates,
-        cost,
-        round,
-    } = state;
     // The sensitivities of the last adopted fit, whose free parameters are those of the final selection.
     let mut adopted_sensitivities = Vec::new();
-    for i in 0..named.len() {
-        let alternatives: Vec<usize> = named[i]
+    for i in 0..state.named.len() {
+        let alternatives: Vec<usize> = state.named[i]
             .ambiguous_with
             .iter()
             .filter_map(|key| {
@@ -223,7 +216,8 @@ pub(super) fn replace_ambiguous<'e>(
         }
         progress.stage("ambiguity groups", alternatives.len());
         // The model without effect i, its residual and cost: the base the alternatives are judged against.
-        let r = residuals(&mut workers[0], w, &without(selected, i)).map_err(sim_err("replay"))?;
+        let r = residuals(&mut workers[0], w, &without(state.selected, i))
+            .map_err(sim_err("replay"))?;
         let cost_without = crate::signal::sum_sq(&r);
         let n_eff = effective_n(&r, w.case.len());
         // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate.
@@ -231,18 +225,18 @@ pub(super) fn replace_ambiguous<'e>(
             .iter()
             .map(|&j| {
                 let start = score_test(catalogue[j], &sens[j], &r, cost_without, n_eff).values[0];
-                let mut a = with_freedom(selected, true);
+                let mut a = with_freedom(state.selected, true);
                 let one = with_candidate(&[], catalogue[j], start, true);
                 a[i] = one[0].clone();
                 a
             })
             .collect();
-        let fits = search::coarse(workers, w, selected, |ws, cw| {
+        let fits = search::coarse(workers, w, state.selected, |ws, cw| {
             fit_starts(ws, cw, &starts, progress)
         })
         .map_err(sim_err("replay"))?;
         let ctx = RoundContext {
-            round,
+            round: state.round,
             base_cost: cost_without,
             floor: opts.residual_floor * w.n() as f64,
         };
@@ -255,7 +249,7 @@ pub(super) fn replace_ambiguous<'e>(
             c.rejected_because =
                 rejection(&c, catalogue[j], &o_last, cost_without, opts, &masks[j]);
             if c.rejected_because.is_none()
-                && o.cost_after < *cost
+                && o.cost_after < *state.cost
                 && best
                     .as_ref()
                     .is_none_or(|(_, b, _)| o.cost_after < b.cost_after)
@@ -264,20 +258,20 @@ pub(super) fn replace_ambiguous<'e>(
             } else if c.rejected_because.is_none() {
                 c.rejected_because = Some(format!(
                     "in place of {}/{}: cost {:.1} not below {:.1}",
-                    named[i].effect, named[i].target, o.cost_after, *cost
+                    state.named[i].effect, state.named[i].target, o.cost_after, *state.cost
                 ));
             }
-            candidates.push(c);
+            state.candidates.push(c);
         }
         let Some((j, o, a)) = best else { continue };
-        let replaced = format!("{}/{}", named[i].effect, named[i].target);
+        let replaced = format!("{}/{}", state.named[i].effect, state.named[i].target);
         let kept = format!("{}/{}", catalogue[j].effect(), catalogue[j].target());
-        adopt(selected, a);
-        *cost = o.cost_after;
+        adopt(state.selected, a);
+        *state.cost = o.cost_after;
         adopted_sensitivities = o.sensitivities.clone();
         let mut group: Vec<String> = std::iter::once(replaced)
             .chain(
-                named[i]
+                state.named[i]
                     .ambiguous_with
                     .iter()
                     .filter(|g| **g != kept)
@@ -285,7 +279,12 @@ pub(super) fn replace_ambiguous<'e>(
             )
             .collect();
         group.dedup();
-        for (k, (n, s)) in named.iter_mut().zip(selected.iter()).enumerate() {
+        for (k, (n, s)) in state
+            .named
+            .iter_mut()
+            .zip(state.selected.iter())
+            .enumerate()
+        {
             n.effect = s.ext.effect().into();
             n.target = s.ext.target().into();
             n.value = s.params[0];
@@ -299,13 +298,6 @@ pub(super) fn replace_ambiguous<'e>(
         return Ok(());
     }
     // The replacement frees every named effect: one may now sit within its resolution of no effect.
-    let state = Replacement {
-        selected,
-        named,
-        candidates,
-        cost,
-        round,
-    };
     settle(&mut workers[0], w, progress, state, &adopted_sensitivities)
 }
 
