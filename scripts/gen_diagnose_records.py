@@ -389,7 +389,9 @@ def main():
         for i in range(args.first, args.first + args.cases):
             rng = np.random.default_rng([args.seed, i])
             sim_hz, log_hz = rates[rng.integers(len(rates))]
-            if sim_hz not in aircraft:
+            # In turbulence every case gets a fresh FGFDMExec: the Dryden filters' states carry over from one
+            # flight to the next, so a case would otherwise depend on the cases flown before it.
+            if sim_hz not in aircraft or args.turbulence:
                 aircraft[sim_hz] = Aircraft(root, sim_hz)
             ac = aircraft[sim_hz]
             u = rng.uniform()

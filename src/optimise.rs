@@ -581,10 +581,17 @@ mod tests {
         let (every, _) = run(0.0);
         let (fewer, m) = run(1e-6);
         assert_eq!(m.stop, Stop::Converged);
-        assert!(fewer < every, "{fewer} evaluations with the minimum decrease, {every} without");
+        assert!(
+            fewer < every,
+            "{fewer} evaluations with the minimum decrease, {every} without"
+        );
         assert!(fewer <= 8, "{fewer} evaluations");
         let r = m.point;
-        assert!(crate::signal::sum_sq(&r) < 1e-6, "cost {}", crate::signal::sum_sq(&r));
+        assert!(
+            crate::signal::sum_sq(&r) < 1e-6,
+            "cost {}",
+            crate::signal::sum_sq(&r)
+        );
     }
 
     #[test]

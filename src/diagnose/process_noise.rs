@@ -237,7 +237,7 @@ pub fn estimate(
         }
     }
     // the gain in effective samples of the output-error residual (coloured by modelling error as well)
-    let n_eff = super::search::effective_n(&oe, len);
+    let n_eff = super::residual::effective_n(&oe, len);
     let n_total = (len * case.outputs.len()) as f64;
     let (gain, filter) = match best {
         Some((cost, f)) => ((cost_oe - cost) * n_eff / n_total, Some(f)),

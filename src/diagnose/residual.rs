@@ -2,6 +2,7 @@
 
 use serde::Serialize;
 
+use crate::estimate::covariance;
 use crate::ident::nrmse_fit;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
@@ -118,3 +119,47 @@ pub fn analyse(
 }
 
 pub use crate::signal::noise_std;
+
+/// Sample correlation of two sensitivity vectors (|ρ| near 1: the data cannot tell the parameters apart).
+pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    let ab: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+    let aa: f64 = a.iter().map(|x| x * x).sum();
+    let bb: f64 = b.iter().map(|x| x * x).sum();
+    if aa <= 0.0 || bb <= 0.0 {
+        0.0
+    } else {
+        ab / (aa * bb).sqrt()
+    }
+}
+
+/// `Σ_c Σ_i Σ_j s_c[i] R_c(|i−j|) s_c[j]ᵀ` (row-major p × p) over the output channels c, with R_c the
+/// Bartlett-tapered autocorrelation of channel c's residual over the lags where it is correlated
+/// ([`covariance::lag_weights`], the estimation core's window; channel-major vectors of `m` samples each; the
+/// channels are taken as mutually uncorrelated). A window fitted to the residual matters in gusts: their
+/// response stays correlated over the phugoid and Dutch-roll periods, and a fixed one-second window made the
+/// standard errors of the effects that absorb it several times too small.
+pub fn coloured_products(cols: &[Vec<f64>], r: &[f64], m: usize) -> Vec<f64> {
+    let p = cols.len();
+    let mut total = vec![0.0; p * p];
+    for (c, rc) in r.chunks(m.max(1)).enumerate() {
+        let slices: Vec<&[f64]> = cols.iter().map(|s| &s[c * m..c * m + rc.len()]).collect();
+        let w = covariance::lag_weighted_products(&slices, &covariance::lag_weights(rc));
+        total.iter_mut().zip(w).for_each(|(t, v)| *t += v);
+    }
+    total
+}
+
+/// Effective number of independent residuals: the sum over channels of
+/// [`covariance::effective_samples`] of the mean-removed residual with the window of [`coloured_products`].
+pub fn effective_n(r: &[f64], m: usize) -> f64 {
+    if m == 0 {
+        return 0.0;
+    }
+    r.chunks(m)
+        .map(|e| {
+            let mean = e.iter().sum::<f64>() / e.len() as f64;
+            let centred: Vec<f64> = e.iter().map(|v| v - mean).collect();
+            covariance::effective_samples(&covariance::lag_weights(&centred), e.len())
+        })
+        .sum()
+}

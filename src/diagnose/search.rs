@@ -21,6 +21,7 @@ use std::sync::{Arc, Mutex};
 use super::cache::{fingerprint, ReplayCache, ReplayKey};
 use super::extension::{Extension, Stage};
 use super::replay::{replay, replay_with_resets, ReplayCase};
+use super::residual::{coloured_products, effective_n};
 use super::residual_filter::ResidualFilter;
 use super::simulator::ReplaySim;
 use crate::data::FlightRecord;
@@ -450,6 +451,26 @@ fn residual_jacobian(
     Ok(cols)
 }
 
+/// Broyden's rank-one secant update of the sensitivities `cols` (∂r/∂θ, one column per parameter) from the
+/// step `x0 → x` and the residuals `r0 → r` there: `J ← J + (Δr − J Δθ) Δθᵀ / (Δθᵀ Δθ)` (Dennis & Schnabel,
+/// *Numerical Methods for Unconstrained Optimization and Nonlinear Equations*, SIAM 1996, eq. 8.1.5), the least
+/// change that makes `J` reproduce the step it was last used for. With one parameter it is the secant slope,
+/// and the chord iterations converge superlinearly instead of linearly. Nothing changes for a zero step.
+fn secant_update(cols: &mut [Vec<f64>], x0: &[f64], x: &[f64], r0: &[f64], r: &[f64]) {
+    let dx: Vec<f64> = x.iter().zip(x0).map(|(a, b)| a - b).collect();
+    let dxx = linalg::dot(&dx, &dx);
+    if dxx <= 0.0 || !dxx.is_finite() {
+        return;
+    }
+    for k in 0..r.len() {
+        let predicted: f64 = cols.iter().zip(&dx).map(|(c, d)| c[k] * d).sum();
+        let miss = (r[k] - r0[k]) - predicted;
+        for (c, d) in cols.iter_mut().zip(&dx) {
+            c[k] += miss * d / dxx;
+        }
+    }
+}
+
 /// The replayed case for [`optimise::levenberg_marquardt`]: `x` holds the free parameters.
 struct Replayed<'a, 'c, 'e> {
     worker: &'a mut Worker,
@@ -461,8 +482,11 @@ struct Replayed<'a, 'c, 'e> {
     evaluations: usize,
     /// ∂r/∂θ of the last linearisation.
     last_cols: Vec<Vec<f64>>,
-    /// ∂r/∂θ for every linearisation in place of forward differences (the chord method, see [`polish`]).
+    /// ∂r/∂θ for every linearisation in place of forward differences (the chord method, see [`polish`]),
+    /// updated along each accepted step by Broyden's secant rule.
     fixed: Option<Vec<Vec<f64>>>,
+    /// The parameters and residual of the last linearisation (for the secant update of `fixed`).
+    previous: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Replayed<'_, '_, '_> {
@@ -493,6 +517,12 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
         r: &Vec<f64>,
     ) -> Result<Option<optimise::Linearised>, SimError> {
         self.set(x);
+        if let (Some(cols), Some((x0, r0))) = (self.fixed.as_mut(), self.previous.take()) {
+            secant_update(cols, &x0, x, r0.as_slice(), r);
+        }
+        if self.fixed.is_some() {
+            self.previous = Some((x.to_vec(), r.clone()));
+        }
         let cols = match self.fixed.clone() {
             Some(cols) => cols,
             None => {
@@ -558,7 +588,8 @@ fn fit_from(
         .collect();
     let fixed = fixed.filter(|cols| cols.len() == free.len());
     let mut problem = Replayed {
-        fixed,
+        fixed: fixed.clone(),
+        previous: None,
         worker,
         w,
         active,
@@ -594,8 +625,11 @@ fn fit_from(
         ..
     } = problem;
     // Cramér–Rao bound at the fitted values with the residual variance estimate s² = J / (n − p).
-    // (The cheap pass uses the last iteration's sensitivities instead of new ones.)
-    let cols = if final_jacobian || last_cols.is_empty() {
+    // (The cheap pass uses the last iteration's sensitivities instead of new ones; the chord refit, the fixed
+    // sensitivities it was given, not their secant updates, which are exact along the steps taken only.)
+    let cols = if let Some(given) = fixed {
+        given
+    } else if final_jacobian || last_cols.is_empty() {
         let cols = residual_jacobian(worker, w, active, &free, &r)?;
         evaluations += free.len();
         cols
@@ -717,46 +751,29 @@ pub fn par_map<S: Send, T: Sync, R: Send>(
         .collect()
 }
 
-/// Sample correlation of two sensitivity vectors (|ρ| near 1: the data cannot tell the parameters apart).
-pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
-    let ab: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
-    let aa: f64 = a.iter().map(|x| x * x).sum();
-    let bb: f64 = b.iter().map(|x| x * x).sum();
-    if aa <= 0.0 || bb <= 0.0 {
-        0.0
-    } else {
-        ab / (aa * bb).sqrt()
-    }
-}
+#[cfg(test)]
+mod tests {
+    use super::secant_update;
 
-/// `Σ_c Σ_i Σ_j s_c[i] R_c(|i−j|) s_c[j]ᵀ` (row-major p × p) over the output channels c, with R_c the
-/// Bartlett-tapered autocorrelation of channel c's residual over the lags where it is correlated
-/// ([`covariance::lag_weights`], the estimation core's window; channel-major vectors of `m` samples each; the
-/// channels are taken as mutually uncorrelated). A window fitted to the residual matters in gusts: their
-/// response stays correlated over the phugoid and Dutch-roll periods, and a fixed one-second window made the
-/// standard errors of the effects that absorb it several times too small.
-fn coloured_products(cols: &[Vec<f64>], r: &[f64], m: usize) -> Vec<f64> {
-    let p = cols.len();
-    let mut total = vec![0.0; p * p];
-    for (c, rc) in r.chunks(m.max(1)).enumerate() {
-        let slices: Vec<&[f64]> = cols.iter().map(|s| &s[c * m..c * m + rc.len()]).collect();
-        let w = covariance::lag_weighted_products(&slices, &covariance::lag_weights(rc));
-        total.iter_mut().zip(w).for_each(|(t, v)| *t += v);
+    #[test]
+    fn the_secant_update_reproduces_the_step_and_recovers_a_one_parameter_slope() {
+        // r(θ) = r₀ + J θ with J = [2, −1, 0.5]; the chord starts from the coarse J_c = [1.5, −0.8, 0.4]. After
+        // one step the updated column is the exact slope (one parameter: the secant), to rounding.
+        let slope = [2.0, -1.0, 0.5];
+        let r_at = |t: f64| -> Vec<f64> { slope.iter().map(|j| 0.3 + j * t).collect() };
+        let mut cols = vec![vec![1.5, -0.8, 0.4]];
+        secant_update(&mut cols, &[0.1], &[0.25], &r_at(0.1), &r_at(0.25));
+        for (c, j) in cols[0].iter().zip(slope) {
+            assert!((c - j).abs() < 1e-12, "{c} for {j}");
+        }
+        // Two parameters: the update is exact along the step and leaves the orthogonal direction as it was.
+        let mut cols = vec![vec![1.0, 0.0], vec![0.0, 1.0]];
+        let (x0, x1) = ([0.0, 0.0], [1.0, 0.0]);
+        let (r0, r1) = (vec![0.0, 0.0], vec![3.0, 2.0]); // the first column is really [3, 2]
+        secant_update(&mut cols, &x0, &x1, &r0, &r1);
+        assert_eq!(cols, vec![vec![3.0, 2.0], vec![0.0, 1.0]]);
+        // No step, no change.
+        secant_update(&mut cols, &x1, &x1, &r1, &r0);
+        assert_eq!(cols, vec![vec![3.0, 2.0], vec![0.0, 1.0]]);
     }
-    total
-}
-
-/// Effective number of independent residuals: the sum over channels of
-/// [`covariance::effective_samples`] of the mean-removed residual with the window of [`coloured_products`].
-pub fn effective_n(r: &[f64], m: usize) -> f64 {
-    if m == 0 {
-        return 0.0;
-    }
-    r.chunks(m)
-        .map(|e| {
-            let mean = e.iter().sum::<f64>() / e.len() as f64;
-            let centred: Vec<f64> = e.iter().map(|v| v - mean).collect();
-            covariance::effective_samples(&covariance::lag_weights(&centred), e.len())
-        })
-        .sum()
 }

@@ -39,9 +39,8 @@ use super::baseline::Baseline;
 use super::extension::Extension;
 use super::prepare::Prepared;
 use super::progress::Progress;
-use super::search::{
-    self, effective_n, fit, par_map, residuals, Active, FitOutcome, Weighted, Worker,
-};
+use super::residual::effective_n;
+use super::search::{self, fit, par_map, residuals, Active, FitOutcome, Weighted, Worker};
 use super::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause, Skipped};
 
 /// The outcome of the selection.
@@ -647,7 +646,7 @@ fn ambiguity(
             continue;
         }
         let Ok((o, _)) = &full[t] else { continue };
-        let rho = search::correlation(
+        let rho = super::residual::correlation(
             &best_fit.sensitivities[kb],
             &o.sensitivities[o.values.len() - 1],
         );

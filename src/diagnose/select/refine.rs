@@ -8,9 +8,8 @@ use super::{
 };
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
-use crate::diagnose::search::{
-    self, effective_n, fit, residuals, Active, FitOutcome, Weighted, Worker,
-};
+use crate::diagnose::residual::effective_n;
+use crate::diagnose::search::{self, fit, residuals, Active, FitOutcome, Weighted, Worker};
 use crate::diagnose::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 
 /// The fit `o` with free parameter `i` moved last, where the selection's tests read the candidate's.
