@@ -6,6 +6,7 @@ use super::replay::{self, ReplayCase};
 use super::search::{self, Worker};
 use super::{residual, sim_err, DiagnoseError, Skipped};
 use crate::data::FlightRecord;
+use crate::sim::{SimError, TrimPoint};
 
 /// Everything the later stages need about the records and the catalogue.
 pub struct Prepared {
@@ -70,6 +71,48 @@ pub fn weights(case: &ReplayCase) -> Vec<f64> {
         .collect()
 }
 
+/// Airspeed offsets tried, in order, when the model cannot trim at a record's measured initial airspeed, kts.
+const TRIM_SPEED_NUDGES_KTS: [f64; 6] = [-0.5, 0.5, -1.0, 1.0, -2.0, 2.0];
+
+/// Replays `case` unextended (the replay is kept in the workers' store); where JSBSim's trim fails at the
+/// record's initial condition, at the nearest airspeed of [`TRIM_SPEED_NUDGES_KTS`] that trims, which becomes
+/// the case's trim point (returned as a warning). The
+/// measured initial airspeed is a mean over the record's first quiet second, a gust or a pitot error away from
+/// the air-relative speed; near the edge of the envelope a knot decides whether the trim converges (the c172x
+/// at 2830 ft: 113.5 kts fails, 112.5 kts trims). Every segment's initial body velocities are nuisance terms of
+/// the fits, so a trim a knot or two off the record changes its replay only by what they absorb. The first
+/// failure is returned when no nudge trims either.
+fn trimmable_point(
+    worker: &mut Worker,
+    case: &mut ReplayCase,
+    which: &str,
+) -> Result<Option<String>, DiagnoseError> {
+    let first = match search::simulate(worker, case, &[]) {
+        Ok(_) => return Ok(None),
+        Err(e @ SimError::TrimFailed(_)) => e,
+        Err(e) => return Err(sim_err("replay")(e)),
+    };
+    let measured = case.point;
+    for nudge in TRIM_SPEED_NUDGES_KTS {
+        case.point = TrimPoint {
+            speed_kts: measured.speed_kts + nudge,
+            ..measured
+        };
+        match search::simulate(worker, case, &[]) {
+            Ok(_) => {
+                return Ok(Some(format!(
+                    "the model cannot trim at the {which} record's initial condition ({:.2} kts, {:.0} ft); it was \
+                     trimmed at {:.2} kts instead, and the segment initial states absorb the difference",
+                    measured.speed_kts, measured.altitude_ft, case.point.speed_kts
+                )));
+            }
+            Err(SimError::TrimFailed(_)) => case.point = measured,
+            Err(e) => return Err(sim_err("replay")(e)),
+        }
+    }
+    Err(sim_err("replay")(first))
+}
+
 /// Prepares the training and validation records and the catalogue for the simulation of `worker`.
 pub fn prepare(
     worker: &mut Worker,
@@ -113,6 +156,14 @@ pub fn prepare(
         })
         .collect();
     warnings.extend(rate_note);
+    for (c, which) in [
+        (Some(&mut case), "training"),
+        (vcase.as_mut(), "validation"),
+    ] {
+        if let Some(c) = c {
+            warnings.extend(trimmable_point(worker, c, which)?);
+        }
+    }
     // Compare only the channels the simulation produces (a linear model may lack accelerations).
     let (probe, _) = search::simulate(worker, &case, &[]).map_err(sim_err("replay"))?;
     let missing: Vec<String> = case

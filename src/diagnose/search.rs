@@ -504,7 +504,13 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
     fn evaluate(&mut self, x: &[f64]) -> Result<Option<Vec<f64>>, SimError> {
         self.set(x);
         self.evaluations += 1;
-        residuals(self.worker, self.w, self.active).map(Some)
+        // A trial at which the extended model cannot trim at the record's initial condition lies outside
+        // the region the record can be replayed in: the optimiser rejects the step and shortens it.
+        match residuals(self.worker, self.w, self.active) {
+            Ok(r) => Ok(Some(r)),
+            Err(SimError::TrimFailed(_)) => Ok(None),
+            Err(e) => Err(e),
+        }
     }
 
     fn cost(&self, r: &Vec<f64>) -> f64 {
@@ -526,7 +532,13 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
         let cols = match self.fixed.clone() {
             Some(cols) => cols,
             None => {
-                let cols = residual_jacobian(self.worker, self.w, self.active, &self.free, r)?;
+                // A difference step whose model cannot trim: no sensitivities here, the fit ends.
+                let cols = match residual_jacobian(self.worker, self.w, self.active, &self.free, r)
+                {
+                    Ok(cols) => cols,
+                    Err(SimError::TrimFailed(_)) => return Ok(None),
+                    Err(e) => return Err(e),
+                };
                 self.evaluations += cols.len();
                 cols
             }

@@ -308,13 +308,21 @@ fn beaten_within_resolution(round: &[Candidate], c: &Candidate) -> Option<String
 const WITHIN_RESOLUTION: &str = "smaller than the resolution";
 
 /// The score test of one entry: the one-step Gauss–Newton estimate from "no effect" and its cost
-/// reduction (sᵀr)²/(sᵀs), with the Cramér–Rao bound √(J/n)/√(sᵀs).
+/// reduction, with the Cramér–Rao bound √(J/n)/√(sᵀs). On the quadratic model J(δ) = J + 2δ sᵀr + δ² sᵀs the
+/// step is δ* = −sᵀr/sᵀs and the reduction (sᵀr)²/(sᵀs); where δ* leaves the parameter's range (the fit is
+/// bounded) the step is held at the bound and the reduction is the model's there, sᵀs (2δδ* − δ²). A residual
+/// that an entry could explain only far beyond its range (in gusts: `Cn_r` ×6, `CD_0` below zero) then ranks
+/// by what the entry can explain, not by what it cannot, and the entries whose estimate lies in range get the
+/// full fits.
 fn score_test(e: &dyn Extension, s: &[f64], r: &[f64], cost: f64, n_eff: f64) -> FitOutcome {
     let ss: f64 = s.iter().map(|v| v * v).sum();
     let sr: f64 = s.iter().zip(r).map(|(a, b)| a * b).sum();
-    let null = e.params()[0].null;
+    let spec = e.params()[0];
+    let null = spec.null;
     let (step, drop) = if ss > 0.0 {
-        (-sr / ss, sr * sr / ss)
+        let free = -sr / ss;
+        let step = free.clamp(spec.min - null, spec.max - null);
+        (step, ss * (2.0 * step * free - step * step))
     } else {
         (0.0, 0.0)
     };
@@ -427,6 +435,8 @@ pub fn select<'e>(
     let mut candidates = Vec::new();
     let mut base_cost = base.cost;
     let mut valid_cost = base.valid_cost;
+    // Entries whose accepted fit left a model that cannot trim: not screened again.
+    let mut untrimmable: Vec<usize> = Vec::new();
     // Rounds until `max_effects` effects are named: an effect that a later joint fit drops
     // (`drop_below_resolution`) gives its round back, with at most as many extra rounds as `max_effects`. A
     // `Cn_r` ×2.7 named first and dropped at ×1.03 once `Cn_beta` and an a_y bias were named had used up the
@@ -436,6 +446,7 @@ pub fn select<'e>(
             break;
         }
         let pool: Vec<usize> = (0..catalogue.len())
+            .filter(|i| !untrimmable.contains(i))
             .filter(|&i| {
                 !selected.iter().any(|s| {
                     s.ext.effect() == catalogue[i].effect()
@@ -552,6 +563,7 @@ pub fn select<'e>(
             opts,
         );
         // Accept: the joint fit updates the values of the effects already selected.
+        let before = (selected.clone(), named.clone(), base_cost);
         adopt(&mut selected, best_active.clone());
         named = selected
             .iter()
@@ -574,20 +586,40 @@ pub fn select<'e>(
             cost: &mut base_cost,
             round,
         };
-        settle(
+        let settled = settle(
             &mut workers[0],
             &w,
             progress,
             state,
             &best_fit.sensitivities,
-        )?;
-        // The validation record only reports the gain of the accepted effects.
-        if let (Some(vw), Some(before)) = (&vw, valid_cost) {
-            let r =
-                residuals(&mut workers[0], vw, &selected).map_err(sim_err("validation replay"))?;
-            let after = crate::signal::sum_sq(&r);
-            candidates[best_ci].validation_gain = Some(1.0 - after / before);
-            valid_cost = Some(after);
+        )
+        .and_then(|()| match (&vw, valid_cost) {
+            // The validation record only reports the gain of the accepted effects.
+            (Some(vw), Some(_)) => residuals(&mut workers[0], vw, &selected)
+                .map(|r| Some(crate::signal::sum_sq(&r)))
+                .map_err(sim_err("validation replay")),
+            _ => Ok(None),
+        });
+        match settled {
+            Ok(after) => {
+                if let (Some(after), Some(before)) = (after, valid_cost) {
+                    candidates[best_ci].validation_gain = Some(1.0 - after / before);
+                    valid_cost = Some(after);
+                }
+            }
+            // The coarse fit trimmed, but the model with the candidate cannot trim at the replay's rate or at the
+            // validation record's initial condition: a model the records cannot be replayed with is not named.
+            Err(DiagnoseError::Sim {
+                source: crate::sim::SimError::TrimFailed(m),
+                ..
+            }) => {
+                (selected, named, base_cost) = before;
+                candidates[best_ci].rejected_because = Some(format!(
+                    "the model with it cannot trim at the records' initial conditions ({m})"
+                ));
+                untrimmable.push(ib);
+            }
+            Err(e) => return Err(e),
         }
     }
     let mut refiner = Refiner {

@@ -1,6 +1,7 @@
 //! Unit tests of the selection's rules.
 use super::{
-    beaten_within_resolution, drop_below_resolution, profiled_information, WITHIN_RESOLUTION,
+    beaten_within_resolution, drop_below_resolution, profiled_information, score_test,
+    WITHIN_RESOLUTION,
 };
 use crate::diagnose::extension::make;
 use crate::diagnose::search::Active;
@@ -130,4 +131,27 @@ fn a_parallel_nuisance_column_removes_all_information() {
     let s = [0.5, -1.0, 2.0, 0.0, 1.0, 3.0, -1.0, 0.5];
     let n = s.iter().map(|v| -3.0 * v).collect::<Vec<f64>>();
     assert!(profiled_information(&s, &[n], &[false, false]) < 1e-20);
+}
+
+#[test]
+fn a_score_test_step_beyond_the_range_is_held_at_the_bound() {
+    // An elevator effectiveness (null 1, range 0.1 … 3) whose residual wants a step of +10 (×11):
+    // sᵀs = 4, sᵀr = −40. Unbounded the reduction would be (sᵀr)²/sᵀs = 400, the whole cost; held at the bound
+    // (step +2) it is sᵀs (2·2·10 − 2²) = 144, and the estimate is the bound.
+    let no_coefficients: Vec<String> = Vec::new();
+    let gain = make("control_effectiveness", "elevator", &no_coefficients).unwrap();
+    let s = [1.0, 1.0, 1.0, 1.0];
+    let r = [-10.0, -10.0, -10.0, -10.0];
+    let o = score_test(gain.as_ref(), &s, &r, 400.0, 4.0);
+    assert!((o.values[0] - 3.0).abs() < 1e-12, "{}", o.values[0]);
+    assert!(
+        (o.cost_after - (400.0 - 144.0)).abs() < 1e-9,
+        "{}",
+        o.cost_after
+    );
+    // A step inside the range is the Gauss–Newton one: −0.5, reduction (−2)²/4 = 1.
+    let r = [0.5, 0.5, 0.5, 0.5];
+    let o = score_test(gain.as_ref(), &s, &r, 1.0, 4.0);
+    assert!((o.values[0] - 0.5).abs() < 1e-12, "{}", o.values[0]);
+    assert!(o.cost_after.abs() < 1e-12, "{}", o.cost_after);
 }
