@@ -437,6 +437,8 @@ pub fn select<'e>(
     let mut valid_cost = base.valid_cost;
     // Entries whose accepted fit left a model that cannot trim: not screened again.
     let mut untrimmable: Vec<usize> = Vec::new();
+    // Per named effect (`effect/target`), the other candidates that passed every test in its round.
+    let mut runner_ups: Vec<(String, Vec<String>)> = Vec::new();
     // Rounds until `max_effects` effects are named: an effect that a later joint fit drops
     // (`drop_below_resolution`) gives its round back, with at most as many extra rounds as `max_effects`. A
     // `Cn_r` ×2.7 named first and dropped at ×1.03 once `Cn_beta` and an a_y bias were named had used up the
@@ -602,6 +604,9 @@ pub fn select<'e>(
         });
         match settled {
             Ok(after) => {
+                let key = |t: usize| format!("{}/{}", top_exts[t].effect(), top_exts[t].target());
+                let seconds = sig.iter().skip(1).map(|&(t, _, _)| key(t)).collect();
+                runner_ups.push((key(best), seconds));
                 if let (Some(after), Some(before)) = (after, valid_cost) {
                     candidates[best_ci].validation_gain = Some(1.0 - after / before);
                     valid_cost = Some(after);
@@ -639,7 +644,7 @@ pub fn select<'e>(
         cost: &mut base_cost,
         round: rounds,
     };
-    replace_ambiguous(&mut refiner, &sens, state.reborrow())?;
+    replace_ambiguous(&mut refiner, &sens, &runner_ups, state.reborrow())?;
     if opts.backward_elimination {
         state.round += 1;
         eliminate_backward(&mut refiner, state, "backward elimination", |_| false)?;

@@ -1,6 +1,6 @@
 //! After forward selection has stopped: backward elimination (every named effect must still pass the
 //! selection's tests with the others in the model) and sequential replacement (each named effect against the
-//! members of its ambiguity group, with all the others modelled); Miller, *Subset Selection in Regression*,
+//! members of its ambiguity group and the runner-ups of its round, with all the others modelled); Miller, *Subset Selection in Regression*,
 //! 2nd ed., §3.2–3.3.
 
 use super::{
@@ -184,15 +184,20 @@ pub(in crate::diagnose) struct Replacement<'a, 'e> {
 }
 
 /// Sequential replacement (Miller, Subset Selection in Regression, 2nd ed., §3.3): once forward selection has
-/// stopped, every named effect is fitted again against the members of its ambiguity group with all the other
-/// named effects in the model, and the one with the lower cost is kept. Two candidates whose sensitivities are
+/// stopped, every named effect is fitted again against its alternatives with all the other named effects in the
+/// model, and the one with the lower cost is kept. The alternatives are the members of its ambiguity group and
+/// the runner-ups of the round that named it (`runner_ups`, keyed `effect/target`: candidates that passed every
+/// test in that round but fitted worse), less any effect already named. Two candidates whose sensitivities are
 /// nearly parallel (an input delay and an actuator lag on doublets) differ in cost by little, and while other
 /// effects are still unmodelled their residual decides which fits better; the choice is made only once those are
-/// modelled. Both models have the same number of parameters, so the lower cost is the better criterion value;
-/// the alternative must also pass every significance test against the model without the effect it replaces.
+/// modelled. A runner-up can lose its round by much for the same reason: with `Cn_beta` ×1.57 still unmodelled,
+/// `Cl_p` ×1.84 fitted a record with `Cl_da` ×0.46 better than `Cl_da` did. Both models have the same number of
+/// parameters, so the lower cost is the better criterion value; the alternative must also pass every
+/// significance test against the model without the effect it replaces.
 pub(super) fn replace_ambiguous<'e>(
     refiner: &mut Refiner<'_, 'e>,
     sens: &[Vec<f64>],
+    runner_ups: &[(String, Vec<String>)],
     state: Replacement<'_, 'e>,
 ) -> Result<(), DiagnoseError> {
     let workers = &mut *refiner.workers;
@@ -201,19 +206,30 @@ pub(super) fn replace_ambiguous<'e>(
     // The sensitivities of the last adopted fit, whose free parameters are those of the final selection.
     let mut adopted_sensitivities = Vec::new();
     for i in 0..state.named.len() {
-        let alternatives: Vec<usize> = state.named[i]
-            .ambiguous_with
+        let key = format!("{}/{}", state.named[i].effect, state.named[i].target);
+        let seconds = runner_ups
             .iter()
-            .filter_map(|key| {
-                catalogue
-                    .iter()
-                    .position(|e| format!("{}/{}", e.effect(), e.target()) == *key)
-            })
-            .collect();
+            .filter(|(k, _)| *k == key)
+            .flat_map(|(_, v)| v.iter());
+        let mut alternatives: Vec<usize> = Vec::new();
+        for alt in state.named[i].ambiguous_with.iter().chain(seconds) {
+            let Some(j) = catalogue
+                .iter()
+                .position(|e| format!("{}/{}", e.effect(), e.target()) == *alt)
+            else {
+                continue;
+            };
+            let named_already = state.selected.iter().any(|s| {
+                s.ext.effect() == catalogue[j].effect() && s.ext.target() == catalogue[j].target()
+            });
+            if !named_already && !alternatives.contains(&j) {
+                alternatives.push(j);
+            }
+        }
         if alternatives.is_empty() {
             continue;
         }
-        progress.stage("ambiguity groups", alternatives.len());
+        progress.stage("sequential replacement", alternatives.len());
         // The model without effect i, its residual and cost: the base the alternatives are judged against.
         let r = residuals(&mut workers[0], w, &without(state.selected, i))
             .map_err(sim_err("replay"))?;
@@ -268,15 +284,21 @@ pub(super) fn replace_ambiguous<'e>(
         adopt(state.selected, a);
         *state.cost = o.cost_after;
         adopted_sensitivities = o.sensitivities.clone();
-        let mut group: Vec<String> = std::iter::once(replaced)
-            .chain(
-                state.named[i]
-                    .ambiguous_with
-                    .iter()
-                    .filter(|g| **g != kept)
-                    .cloned(),
-            )
-            .collect();
+        // A member of the ambiguity group takes the group over, with the effect it replaced; a runner-up that
+        // won by its cost is not ambiguous with the effect it replaced.
+        let mut group: Vec<String> = if state.named[i].ambiguous_with.contains(&kept) {
+            std::iter::once(replaced)
+                .chain(
+                    state.named[i]
+                        .ambiguous_with
+                        .iter()
+                        .filter(|g| **g != kept)
+                        .cloned(),
+                )
+                .collect()
+        } else {
+            Vec::new()
+        };
         group.dedup();
         for (k, (n, s)) in state
             .named
