@@ -435,97 +435,86 @@ pub struct NamedMode {
     pub pole_1_s: Option<f64>,
 }
 
-/// Names the longitudinal eigenvalues: the faster complex pair is the short period, the slower the phugoid.
-pub fn longitudinal_modes(ev: &[(f64, f64)]) -> Vec<NamedMode> {
-    let mut pairs: Vec<(f64, f64)> = ev.iter().copied().filter(|e| e.1 > 1e-9).collect();
-    pairs.sort_by(|a, b| b.0.hypot(b.1).total_cmp(&a.0.hypot(a.1)));
-    let osc = |name, (re, im): (f64, f64)| {
+impl NamedMode {
+    /// An oscillatory mode from its eigenvalue (re, im): ωn = |λ|, ζ = −re/ωn.
+    fn oscillatory(mode: &'static str, (re, im): (f64, f64)) -> NamedMode {
         let wn = re.hypot(im);
         NamedMode {
-            mode: name,
+            mode,
             omega_n_rad_s: Some(wn),
             zeta: Some(-re / wn),
             pole_1_s: None,
         }
-    };
-    let mut out = Vec::new();
+    }
+
+    /// A mode of one real pole, 1/s.
+    fn real(mode: &'static str, pole_1_s: f64) -> NamedMode {
+        NamedMode {
+            mode,
+            omega_n_rad_s: None,
+            zeta: None,
+            pole_1_s: Some(pole_1_s),
+        }
+    }
+}
+
+/// The real eigenvalues (|im| ≤ 1e-9) of `ev`, fastest (largest |pole|) first.
+fn real_poles_fastest_first(ev: &[(f64, f64)]) -> Vec<f64> {
     let mut reals: Vec<f64> = ev
         .iter()
         .filter(|e| e.1.abs() <= 1e-9)
         .map(|e| e.0)
         .collect();
     reals.sort_by(|a, b| b.abs().total_cmp(&a.abs()));
+    reals
+}
+
+/// Names the longitudinal eigenvalues: the faster complex pair is the short period, the slower the phugoid.
+pub fn longitudinal_modes(ev: &[(f64, f64)]) -> Vec<NamedMode> {
+    let mut pairs: Vec<(f64, f64)> = ev.iter().copied().filter(|e| e.1 > 1e-9).collect();
+    pairs.sort_by(|a, b| b.0.hypot(b.1).total_cmp(&a.0.hypot(a.1)));
+    let reals = real_poles_fastest_first(ev);
     match pairs.len() {
-        2 => {
-            out.push(osc("short_period", pairs[0]));
-            out.push(osc("phugoid", pairs[1]));
-        }
+        2 => vec![
+            NamedMode::oscillatory("short_period", pairs[0]),
+            NamedMode::oscillatory("phugoid", pairs[1]),
+        ],
         1 => {
             // One pair: fast pair = short period (the phugoid split into reals), or the reverse.
             let fast_real = reals
                 .first()
                 .is_some_and(|r| r.abs() > pairs[0].0.hypot(pairs[0].1));
-            out.push(osc(
-                if fast_real { "phugoid" } else { "short_period" },
-                pairs[0],
-            ));
-            for r in reals {
-                out.push(NamedMode {
-                    mode: if fast_real {
-                        "short_period_real"
-                    } else {
-                        "phugoid_real"
-                    },
-                    omega_n_rad_s: None,
-                    zeta: None,
-                    pole_1_s: Some(r),
-                });
-            }
+            let (pair_name, real_name) = if fast_real {
+                ("phugoid", "short_period_real")
+            } else {
+                ("short_period", "phugoid_real")
+            };
+            let mut out = vec![NamedMode::oscillatory(pair_name, pairs[0])];
+            out.extend(reals.into_iter().map(|r| NamedMode::real(real_name, r)));
+            out
         }
-        _ => {
-            for r in reals {
-                out.push(NamedMode {
-                    mode: "longitudinal_real",
-                    omega_n_rad_s: None,
-                    zeta: None,
-                    pole_1_s: Some(r),
-                });
-            }
-        }
+        _ => reals
+            .into_iter()
+            .map(|r| NamedMode::real("longitudinal_real", r))
+            .collect(),
     }
-    out
 }
 
 /// Names the lateral eigenvalues: the complex pair is the Dutch roll, the faster real pole the roll mode,
 /// the slower the spiral.
 pub fn lateral_modes(ev: &[(f64, f64)]) -> Vec<NamedMode> {
-    let mut out = Vec::new();
-    for &(re, im) in ev.iter().filter(|e| e.1 > 1e-9) {
-        let wn = re.hypot(im);
-        out.push(NamedMode {
-            mode: "dutch_roll",
-            omega_n_rad_s: Some(wn),
-            zeta: Some(-re / wn),
-            pole_1_s: None,
-        });
-    }
-    let mut reals: Vec<f64> = ev
+    let mut out: Vec<NamedMode> = ev
         .iter()
-        .filter(|e| e.1.abs() <= 1e-9)
-        .map(|e| e.0)
+        .filter(|e| e.1 > 1e-9)
+        .map(|&e| NamedMode::oscillatory("dutch_roll", e))
         .collect();
-    reals.sort_by(|a, b| b.abs().total_cmp(&a.abs()));
-    for (k, r) in reals.into_iter().enumerate() {
-        out.push(NamedMode {
-            mode: match k {
-                0 => "roll",
-                1 => "spiral",
-                _ => "lateral_real",
-            },
-            omega_n_rad_s: None,
-            zeta: None,
-            pole_1_s: Some(r),
-        });
+    for (k, r) in real_poles_fastest_first(ev).into_iter().enumerate() {
+        let name = match k {
+            0 => "roll",
+            1 => "spiral",
+            _ => "lateral_real",
+        };
+        out.push(NamedMode::real(name, r));
     }
     out
 }
