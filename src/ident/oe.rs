@@ -189,16 +189,22 @@ struct OutputError<'a> {
 }
 
 impl OutputError<'_> {
-    /// `y − ŷ(x)`.
-    fn residuals(&self, x: &[f64]) -> Vec<f64> {
+    /// The model parameters `[b…, a…]` of `x` and the delay τ, s (estimated or fixed).
+    fn model_and_delay<'x>(&self, x: &'x [f64]) -> (&'x [f64], f64) {
         let np = x.len() - 1 - usize::from(self.with_delay);
         let delay_s = if self.with_delay {
             x[np]
         } else {
             self.fixed_delay_s
         };
+        (&x[..np], delay_s)
+    }
+
+    /// `y − ŷ(x)`.
+    fn residuals(&self, x: &[f64]) -> Vec<f64> {
+        let (model, delay_s) = self.model_and_delay(x);
         let c = x[x.len() - 1];
-        let y_hat = sim(&x[..np], self.m, self.u, self.dt_s, delay_s);
+        let y_hat = sim(model, self.m, self.u, self.dt_s, delay_s);
         self.y.iter().zip(&y_hat).map(|(a, b)| a - b - c).collect()
     }
 }
@@ -220,22 +226,10 @@ impl optimise::Problem for OutputError<'_> {
         x: &[f64],
         r: &Vec<f64>,
     ) -> Result<Option<optimise::Linearised>, Self::Error> {
-        let np = x.len() - 1 - usize::from(self.with_delay);
-        let delay_s = if self.with_delay {
-            x[np]
-        } else {
-            self.fixed_delay_s
-        };
+        let (model, delay_s) = self.model_and_delay(x);
         let p = x.len() - 1;
         let s = with_offset_column(
-            &sensitivities(
-                &x[..np],
-                self.m,
-                self.u,
-                self.dt_s,
-                delay_s,
-                self.with_delay,
-            ),
+            &sensitivities(model, self.m, self.u, self.dt_s, delay_s, self.with_delay),
             p,
         );
         Ok(Some(optimise::Linearised {
