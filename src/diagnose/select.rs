@@ -644,6 +644,18 @@ pub fn select<'e>(
         cost: &mut base_cost,
         round: rounds,
     };
+    // A runner-up lost its round to the model of that round; it is worth another fit only when an effect named
+    // in a later round is still in the model.
+    let in_model = |k: &String| {
+        state
+            .selected
+            .iter()
+            .any(|s| format!("{}/{}", s.ext.effect(), s.ext.target()) == *k)
+    };
+    let runner_ups: Vec<(String, Vec<String>)> = (0..runner_ups.len())
+        .filter(|&m| runner_ups[m + 1..].iter().any(|(k, _)| in_model(k)))
+        .map(|m| runner_ups[m].clone())
+        .collect();
     replace_ambiguous(&mut refiner, &sens, &runner_ups, state.reborrow())?;
     if opts.backward_elimination {
         state.round += 1;

@@ -187,7 +187,8 @@ pub(in crate::diagnose) struct Replacement<'a, 'e> {
 /// stopped, every named effect is fitted again against its alternatives with all the other named effects in the
 /// model, and the one with the lower cost is kept. The alternatives are the members of its ambiguity group and
 /// the runner-ups of the round that named it (`runner_ups`, keyed `effect/target`: candidates that passed every
-/// test in that round but fitted worse), less any effect already named. Two candidates whose sensitivities are
+/// test in that round but fitted worse; the caller passes them only where an effect named later is in the
+/// model, since otherwise they lost to the same model), less any effect already named. Two candidates whose sensitivities are
 /// nearly parallel (an input delay and an actuator lag on doublets) differ in cost by little, and while other
 /// effects are still unmodelled their residual decides which fits better; the choice is made only once those are
 /// modelled. A runner-up can lose its round by much for the same reason: with `Cn_beta` ×1.57 still unmodelled,
