@@ -139,3 +139,16 @@ fn delay_and_roll_damping_pair_is_named() {
             {"effect": "aero_derivative", "target": "Cl_p", "value": 0.6}]"#,
     );
 }
+
+/// Three effects, of which the first round cannot tell two apart: with the vane scales still unmodelled,
+/// `Cm_alpha2` ×2.5 fits this record better than the hidden `CL_alpha2` 16. Sequential replacement fits the
+/// runner-up again once both scales are named, and `CL_alpha2` takes its place.
+#[test]
+fn lift_curvature_beside_vane_scales_is_named() {
+    check(
+        106,
+        r#"[{"effect": "sensor_scale", "target": "beta_rad", "value": 1.17},
+            {"effect": "aero_nonlinearity", "target": "CL_alpha2", "value": 16},
+            {"effect": "sensor_scale", "target": "alpha_rad", "value": 1.135}]"#,
+    );
+}
