@@ -497,6 +497,16 @@ impl Replayed<'_, '_, '_> {
     }
 }
 
+/// `None` where the model cannot trim at the record's initial condition (outside the region the record can be
+/// replayed in), the value otherwise; any other simulator error stays an error.
+fn untrimmable_is_none<T>(r: Result<T, SimError>) -> Result<Option<T>, SimError> {
+    match r {
+        Ok(v) => Ok(Some(v)),
+        Err(SimError::TrimFailed(_)) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
 impl optimise::Problem for Replayed<'_, '_, '_> {
     type Point = Vec<f64>;
     type Error = SimError;
@@ -506,11 +516,7 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
         self.evaluations += 1;
         // A trial at which the extended model cannot trim at the record's initial condition lies outside
         // the region the record can be replayed in: the optimiser rejects the step and shortens it.
-        match residuals(self.worker, self.w, self.active) {
-            Ok(r) => Ok(Some(r)),
-            Err(SimError::TrimFailed(_)) => Ok(None),
-            Err(e) => Err(e),
-        }
+        untrimmable_is_none(residuals(self.worker, self.w, self.active))
     }
 
     fn cost(&self, r: &Vec<f64>) -> f64 {
@@ -533,11 +539,9 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
             Some(cols) => cols,
             None => {
                 // A difference step whose model cannot trim: no sensitivities here, the fit ends.
-                let cols = match residual_jacobian(self.worker, self.w, self.active, &self.free, r)
-                {
-                    Ok(cols) => cols,
-                    Err(SimError::TrimFailed(_)) => return Ok(None),
-                    Err(e) => return Err(e),
+                let jacobian = residual_jacobian(self.worker, self.w, self.active, &self.free, r);
+                let Some(cols) = untrimmable_is_none(jacobian)? else {
+                    return Ok(None);
                 };
                 self.evaluations += cols.len();
                 cols
