@@ -48,6 +48,10 @@ pub trait Extension: Send + Sync {
     fn effect(&self) -> &'static str;
     /// Target: a surface, a CSV column or a derivative name.
     fn target(&self) -> &str;
+    /// `effect/target`, the name candidates and ambiguity groups are reported by.
+    fn key(&self) -> String {
+        format!("{}/{}", self.effect(), self.target())
+    }
     /// Where the extension acts.
     fn stage(&self) -> Stage;
     /// Parameter specifications (the first one is the reported `value`).

@@ -124,12 +124,7 @@ pub fn simulate(
         extensions
             .iter()
             .filter(|(e, p)| e.stage() != Stage::Output && !is_null(*e, p))
-            .map(|(e, p)| {
-                (
-                    format!("{}/{}", e.effect(), e.target()),
-                    p.iter().map(|v| v.to_bits()).collect(),
-                )
-            })
+            .map(|(e, p)| (e.key(), p.iter().map(|v| v.to_bits()).collect()))
             .collect(),
     );
     let stored = match worker.cache.get(&key) {
@@ -499,7 +494,7 @@ impl Replayed<'_, '_, '_> {
 
 /// `None` where the model cannot trim at the record's initial condition (outside the region the record can be
 /// replayed in), the value otherwise; any other simulator error stays an error.
-fn untrimmable_is_none<T>(r: Result<T, SimError>) -> Result<Option<T>, SimError> {
+pub(super) fn untrimmable_is_none<T>(r: Result<T, SimError>) -> Result<Option<T>, SimError> {
     match r {
         Ok(v) => Ok(Some(v)),
         Err(SimError::TrimFailed(_)) => Ok(None),

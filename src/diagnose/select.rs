@@ -40,7 +40,9 @@ use super::extension::Extension;
 use super::prepare::Prepared;
 use super::progress::Progress;
 use super::residual::effective_n;
-use super::search::{self, fit, par_map, residuals, Active, FitOutcome, Weighted, Worker};
+use super::search::{
+    self, fit, par_map, residuals, untrimmable_is_none, Active, FitOutcome, Weighted, Worker,
+};
 use super::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause, Skipped};
 
 /// The outcome of the selection.
@@ -148,17 +150,14 @@ fn wide_screen(
     for (k, e) in entries.iter().enumerate() {
         let p = e.params()[0];
         for end in [p.min, p.max] {
-            if (end - p.null).abs() > 0.0 {
+            if end != p.null {
                 items.push((k, p.null + 0.5 * (end - p.null)));
             }
         }
     }
     let costs = par_map(workers, &items, |wk, &(k, value)| {
-        match residuals(wk, w, &with_candidate(selected, entries[k], value, false)) {
-            Ok(r) => Ok(crate::signal::sum_sq(&r)),
-            Err(crate::sim::SimError::TrimFailed(_)) => Ok(f64::INFINITY),
-            Err(e) => Err(e),
-        }
+        let r = residuals(wk, w, &with_candidate(selected, entries[k], value, false));
+        untrimmable_is_none(r).map(|r| r.map_or(f64::INFINITY, |r| crate::signal::sum_sq(&r)))
     });
     let mut best: Vec<Option<(f64, f64)>> = vec![None; entries.len()];
     for (&(k, value), cost) in items.iter().zip(costs) {
@@ -674,7 +673,7 @@ pub fn select<'e>(
         });
         match settled {
             Ok(after) => {
-                let key = |t: usize| format!("{}/{}", top_exts[t].effect(), top_exts[t].target());
+                let key = |t: usize| top_exts[t].key();
                 let seconds = sig.iter().skip(1).map(|&(t, _, _)| key(t)).collect();
                 runner_ups.push((key(best), seconds));
                 if let (Some(after), Some(before)) = (after, valid_cost) {
@@ -716,12 +715,7 @@ pub fn select<'e>(
     };
     // A runner-up lost its round to the model of that round; it is worth another fit only when an effect named
     // in a later round is still in the model.
-    let in_model = |k: &String| {
-        state
-            .selected
-            .iter()
-            .any(|s| format!("{}/{}", s.ext.effect(), s.ext.target()) == *k)
-    };
+    let in_model = |k: &String| state.selected.iter().any(|s| s.ext.key() == *k);
     let runner_ups: Vec<(String, Vec<String>)> = (0..runner_ups.len())
         .filter(|&m| runner_ups[m + 1..].iter().any(|(k, _)| in_model(k)))
         .map(|m| runner_ups[m].clone())
@@ -772,7 +766,7 @@ fn ambiguity(
         let alike =
             best_fit.n_eff * (c / best_cost).ln() < 10.0 && rho.abs() > opts.ambiguity_correlation;
         if alike || inseparable.get(t).copied().unwrap_or(false) {
-            out.push(format!("{}/{}", exts[t].effect(), exts[t].target()));
+            out.push(exts[t].key());
         }
     }
     out

@@ -1,7 +1,7 @@
 //! After forward selection has stopped: backward elimination (every named effect must still pass the
 //! selection's tests with the others in the model) and sequential replacement (each named effect against the
-//! members of its ambiguity group and the runner-ups of its round, with all the others modelled); Miller, *Subset Selection in Regression*,
-//! 2nd ed., §3.2–3.3.
+//! members of its ambiguity group and the runner-ups of its round, with all the others modelled); Miller,
+//! *Subset Selection in Regression*, 2nd ed., §3.2–3.3.
 
 use super::{
     adopt, fit_starts, rejection, score_test, settle, with_candidate, with_freedom, RoundContext,
@@ -188,10 +188,10 @@ pub(in crate::diagnose) struct Replacement<'a, 'e> {
 /// model, and the one with the lower cost is kept. The alternatives are the members of its ambiguity group and
 /// the runner-ups of the round that named it (`runner_ups`, keyed `effect/target`: candidates that passed every
 /// test in that round but fitted worse; the caller passes them only where an effect named later is in the
-/// model, since otherwise they lost to the same model), less any effect already named. Two candidates whose sensitivities are
-/// nearly parallel (an input delay and an actuator lag on doublets) differ in cost by little, and while other
-/// effects are still unmodelled their residual decides which fits better; the choice is made only once those are
-/// modelled. A runner-up can lose its round by much for the same reason: with `Cn_beta` ×1.57 still unmodelled,
+/// model, since otherwise they lost to the same model), less any effect already named. Two candidates whose
+/// sensitivities are nearly parallel (an input delay and an actuator lag on doublets) differ in cost by little,
+/// and while other effects are still unmodelled their residual decides which fits better; the choice is made
+/// only once those are modelled. A runner-up can lose its round by much for the same reason: with `Cn_beta` ×1.57 still unmodelled,
 /// `Cl_p` ×1.84 fitted a record with `Cl_da` ×0.46 better than `Cl_da` did. Both models have the same number of
 /// parameters, so the lower cost is the better criterion value; the alternative must also pass every
 /// significance test against the model without the effect it replaces.
@@ -214,10 +214,7 @@ pub(super) fn replace_ambiguous<'e>(
             .flat_map(|(_, v)| v.iter());
         let mut alternatives: Vec<usize> = Vec::new();
         for alt in state.named[i].ambiguous_with.iter().chain(seconds) {
-            let Some(j) = catalogue
-                .iter()
-                .position(|e| format!("{}/{}", e.effect(), e.target()) == *alt)
-            else {
+            let Some(j) = catalogue.iter().position(|e| e.key() == *alt) else {
                 continue;
             };
             let named_already = state.selected.iter().any(|s| {
@@ -281,7 +278,7 @@ pub(super) fn replace_ambiguous<'e>(
         }
         let Some((j, o, a)) = best else { continue };
         let replaced = format!("{}/{}", state.named[i].effect, state.named[i].target);
-        let kept = format!("{}/{}", catalogue[j].effect(), catalogue[j].target());
+        let kept = catalogue[j].key();
         adopt(state.selected, a);
         *state.cost = o.cost_after;
         adopted_sensitivities = o.sensitivities.clone();
