@@ -5,9 +5,10 @@
 //! (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
-//! [--first K] [--random-mix] [--process-noise] [--out DIR]`
+//! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--out DIR]`
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
+//! - `--noise-weights`: weight every channel by its sensor noise only (`flightid diagnose --noise-weights`).
 //! - the mix is stratified by case index (i mod 4 = 0 clean, 3 two or three effects, else one: 40 cases give
 //!   10 clean, 20 single, 10 multiple); `--random-mix` draws it by chance (a quarter clean, a quarter multiple).
 //! - `--clean`: every case clean (the acceptance's maneuver sequence, lengths 30–90 s).
@@ -34,6 +35,7 @@ struct Args {
     false_alarm: bool,
     random_mix: bool,
     process_noise: bool,
+    noise_weights: bool,
     out: PathBuf,
     first: usize,
 }
@@ -47,6 +49,7 @@ fn args() -> Args {
         false_alarm: false,
         random_mix: false,
         process_noise: false,
+        noise_weights: false,
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
     };
@@ -81,6 +84,11 @@ fn args() -> Args {
             }
             "--process-noise" => {
                 a.process_noise = true;
+                i += 1;
+                continue;
+            }
+            "--noise-weights" => {
+                a.noise_weights = true;
                 i += 1;
                 continue;
             }
@@ -222,6 +230,7 @@ fn main() {
         let opts = DiagnoseOptions {
             progress: false,
             process_noise: a.process_noise,
+            relax_weights: !a.noise_weights,
             ..Default::default()
         };
         let d = match diagnose(&mut workers, &train, Some(&valid), &opts) {

@@ -63,6 +63,11 @@ pub struct DiagnoseCmd {
     /// other named effects in the model (experimental; docs/diagnose.md, "Selection")
     #[arg(long)]
     pub backward_elimination: bool,
+    /// Weight every channel by its sensor noise only, even where the unextended model misses it by far more
+    /// (by default such a channel is weighted by its residual, as output error with the residual covariance
+    /// unknown does; docs/diagnose.md, "Turbulence")
+    #[arg(long)]
+    pub noise_weights: bool,
     #[command(flatten)]
     pub columns: ColumnsArg,
 }
@@ -107,6 +112,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         &DiagnoseOptions {
             process_noise: args.process_noise,
             backward_elimination: args.backward_elimination,
+            relax_weights: !args.noise_weights,
             ..DiagnoseOptions::default()
         },
     )?;

@@ -15,6 +15,7 @@ pub mod prepare;
 pub mod process_noise;
 pub mod progress;
 pub mod refit;
+pub mod relax;
 pub mod replay;
 pub mod report;
 pub mod residual;
@@ -97,6 +98,9 @@ pub struct DiagnoseOptions {
     /// After forward selection, drop every named effect that no longer passes the tests with the others in the
     /// model (`select::eliminate_backward`).
     pub backward_elimination: bool,
+    /// Weight every channel whose unextended residual is far above its sensor noise by that residual instead
+    /// (`relax`; docs/diagnose.md, Turbulence).
+    pub relax_weights: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -114,6 +118,7 @@ impl Default for DiagnoseOptions {
             process_noise: false,
             filter_values: true,
             backward_elimination: false,
+            relax_weights: true,
         }
     }
 }
@@ -222,6 +227,9 @@ pub struct Diagnosis {
     pub process_noise: Option<process_noise::ProcessNoise>,
     /// Noise standard deviation estimated per channel (the cost weights).
     pub noise_std: BTreeMap<String, f64>,
+    /// Channels weighted by their unextended residual instead of their noise, with the factor on their noise
+    /// variance (`relax`; empty when every channel sits near its noise).
+    pub relaxed_weights: BTreeMap<String, f64>,
     /// Number of residual values (samples × channels).
     pub n_residuals: usize,
     /// Simulations run.
@@ -271,6 +279,8 @@ pub fn diagnose(
     progress.stage("segment initial states", 0);
     let columns =
         search::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
+    let (columns, relaxed_weights) =
+        relax::relax(&mut workers[0], &mut p, columns, opts.relax_weights)?;
     let process_noise = if opts.process_noise {
         turbulence(&mut workers[0], &mut p, columns.clone())?
     } else {
@@ -317,7 +327,8 @@ pub fn diagnose(
             .collect(),
         warnings: p.warnings.into_iter().chain(refit_note).collect(),
         process_noise,
-        noise_std: p.case.outputs.iter().cloned().zip(p.sigma).collect(),
+        noise_std: p.case.outputs.iter().cloned().zip(p.noise_sigma).collect(),
+        relaxed_weights,
         n_residuals: p.case.len() * p.case.outputs.len(),
         simulations: progress.simulations(),
         wall_s: t0.elapsed().as_secs_f64(),

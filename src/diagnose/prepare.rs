@@ -27,6 +27,10 @@ pub struct Prepared {
     /// The filter error method's filter on the training record's residuals when it flew in turbulence
     /// (`process_noise::estimate`; set by `diagnose`).
     pub filter: Option<super::process_noise::ResidualFilter>,
+    /// The measurement noise standard deviation per compared channel (`sigma` before any relaxation).
+    pub noise_sigma: Vec<f64>,
+    /// The training residual's cost at the measurement noise in the weights `sigma` (see `search::Weighted`).
+    pub noise_cost: f64,
 }
 
 impl Prepared {
@@ -43,6 +47,7 @@ impl Prepared {
             nuisance: &self.nuisance,
             filter: self.filter.as_ref(),
             correction: None,
+            noise_cost: self.noise_cost,
         }
     }
 
@@ -54,6 +59,7 @@ impl Prepared {
             nuisance: &[],
             filter: None,
             correction: None,
+            noise_cost: (case.len() * case.outputs.len()) as f64,
         })
     }
 }
@@ -211,8 +217,11 @@ pub fn prepare(
             catalogue.push(e);
         }
     }
+    let sigma = weights(&case);
     Ok(Prepared {
-        sigma: weights(&case),
+        noise_sigma: sigma.clone(),
+        noise_cost: (case.len() * case.outputs.len()) as f64,
+        sigma,
         valid: vcase.map(|v| {
             let s = weights(&v);
             (v, s)

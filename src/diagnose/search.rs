@@ -179,6 +179,9 @@ pub struct Weighted<'c> {
     /// Added to the noise-normalised residual before the filter: the difference between the replay's rate and
     /// the coarse rate the workers integrate at inside [`coarse`], at its reference model.
     pub correction: Option<&'c [f64]>,
+    /// The cost of a residual at the measurement noise in these weights: the number of residuals, less where a
+    /// channel's weight was relaxed below its noise's (`relax`).
+    pub noise_cost: f64,
 }
 
 impl<'c> Weighted<'c> {
@@ -266,6 +269,7 @@ pub fn coarse<R>(
             nuisance: w.nuisance,
             filter: w.filter,
             correction: Some(&d),
+            noise_cost: w.noise_cost,
         };
         Ok(f(ws, &corrected))
     })

@@ -544,7 +544,7 @@ pub fn select<'e>(
         let ctx = RoundContext {
             round,
             base_cost,
-            floor: opts.residual_floor * w.n() as f64,
+            floor: opts.residual_floor * w.noise_cost,
         };
         for (j, o) in quick.iter().enumerate() {
             if !top.contains(&j) {
@@ -562,7 +562,7 @@ pub fn select<'e>(
         }
         // A round that fits nothing, or names nothing, while the residual stays far above the noise screens
         // once more, wide.
-        let widen_now = !widened && cost_now > WIDE_SCREEN_COST * w.n() as f64;
+        let widen_now = !widened && cost_now > WIDE_SCREEN_COST * w.noise_cost;
         if top.is_empty() {
             if widen_now {
                 (widen, widened) = (true, true);

@@ -132,7 +132,7 @@ pub(in crate::diagnose) fn eliminate_backward<'e>(
         let ctx = RoundContext {
             round,
             base_cost: o_without.cost_after,
-            floor: opts.residual_floor * w.n() as f64,
+            floor: opts.residual_floor * w.noise_cost,
         };
         let e = catalogue[ci];
         let mut c = ctx.candidate(e, &o_last, true, resolution[ci]);
@@ -251,7 +251,7 @@ pub(super) fn replace_ambiguous<'e>(
         let ctx = RoundContext {
             round: state.round,
             base_cost: cost_without,
-            floor: opts.residual_floor * w.n() as f64,
+            floor: opts.residual_floor * w.noise_cost,
         };
         let mut best: Option<(usize, FitOutcome, Vec<Active<'e>>)> = None;
         for (&j, out) in alternatives.iter().zip(fits) {
