@@ -68,6 +68,7 @@ LOGGED = [
     ("airspeed_m_s", "velocities/vt-fps", FT), ("altitude_m", "position/h-sl-meters", 1.0),
     ("ax_m_s2", "accelerations/a-pilot-x-ft_sec2", FT), ("ay_m_s2", "accelerations/a-pilot-y-ft_sec2", FT),
     ("az_m_s2", "accelerations/a-pilot-z-ft_sec2", FT),
+    ("latitude_rad", "position/lat-geod-rad", 1.0),  # GPS
 ]
 # Noise standard deviations at "level 1" (scaled by a random level per case): 0.05 deg attitude, 0.1 deg/s rates
 NOISE = {

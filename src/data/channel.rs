@@ -54,11 +54,13 @@ pub enum Channel {
     QDot,
     /// `rdot_rad_s2`: body yaw acceleration ṙ, rad/s².
     RDot,
+    /// `latitude_rad`: geodetic latitude, rad (from GPS; a replay trims at it, as gravity changes with it).
+    Latitude,
 }
 
 impl Channel {
     /// Every column of the schema, in its canonical order.
-    pub const ALL: [Channel; 23] = [
+    pub const ALL: [Channel; 24] = [
         Channel::Time,
         Channel::Elevator,
         Channel::Aileron,
@@ -82,6 +84,7 @@ impl Channel {
         Channel::PDot,
         Channel::QDot,
         Channel::RDot,
+        Channel::Latitude,
     ];
 
     /// The control inputs: the three surfaces and the throttle.
@@ -131,6 +134,7 @@ impl Channel {
             Channel::PDot => "pdot_rad_s2",
             Channel::QDot => "qdot_rad_s2",
             Channel::RDot => "rdot_rad_s2",
+            Channel::Latitude => "latitude_rad",
         }
     }
 

@@ -84,7 +84,13 @@ pub fn fingerprint(case: &ReplayCase, sim_rate_hz: Option<f64>) -> u64 {
     case.rate_hz.to_bits().hash(&mut h);
     case.len().hash(&mut h);
     let p = &case.point;
-    for v in [p.altitude_ft, p.speed_kts, p.heading_deg, p.gamma_deg] {
+    for v in [
+        p.altitude_ft,
+        p.speed_kts,
+        p.heading_deg,
+        p.gamma_deg,
+        p.latitude_deg,
+    ] {
         v.to_bits().hash(&mut h);
     }
     for (surface, dev) in &case.inputs {

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use super::extension::{Extension, Stage};
 pub use super::simulator::ReplaySim;
 use super::DiagnoseError;
-use crate::data::FlightRecord;
+use crate::data::{Channel, FlightRecord};
 use crate::sim::{
     FlightPlan, LinearSim, SimError, Simulator, StateReset, SurfaceInput, TrimPoint, TrimState,
     FT_TO_M, KTS_TO_M_S,
@@ -229,6 +229,9 @@ impl ReplayCase {
             speed_kts: initial["airspeed_m_s"] / KTS_TO_M_S,
             heading_deg: heading_deg.rem_euclid(360.0),
             gamma_deg: 0.0,
+            latitude_deg: initial
+                .get(Channel::Latitude.name())
+                .map_or(0.0, |l| l.to_degrees()),
         };
         if !(point.speed_kts > 1.0 && point.altitude_ft.is_finite()) {
             return Err(DiagnoseError::BadData(format!(

@@ -316,6 +316,7 @@ impl Simulator for JsbsimSim {
             speed_kts: point.speed_kts,
             heading_deg: point.heading_deg,
             gamma_deg: point.gamma_deg,
+            latitude_deg: point.latitude_deg,
             knobs: self.knob_values.clone(),
             report,
             reuse: self.reuse_trims,

@@ -71,16 +71,19 @@ pub struct TrimPoint {
     pub heading_deg: f64,
     /// Flight-path angle, deg.
     pub gamma_deg: f64,
+    /// Geodetic latitude, deg (gravity grows by 0.5 % from the equator to the poles).
+    pub latitude_deg: f64,
 }
 
 impl TrimPoint {
-    /// Level flight at an altitude and speed, heading north.
+    /// Level flight at an altitude and speed, heading north, on the equator.
     pub fn level(altitude_ft: f64, speed_kts: f64) -> Self {
         TrimPoint {
             altitude_ft,
             speed_kts,
             heading_deg: 0.0,
             gamma_deg: 0.0,
+            latitude_deg: 0.0,
         }
     }
 }

@@ -68,6 +68,8 @@ pub enum Request {
         heading_deg: f64,
         /// Flight-path angle, deg.
         gamma_deg: f64,
+        /// Geodetic latitude, deg.
+        latitude_deg: f64,
         /// Properties set after the model reset (coefficient factors, added terms, mass and CG variants).
         knobs: PropertyValues,
         /// Properties to read back once trimmed.
@@ -381,6 +383,7 @@ mod tests {
                     speed_kts: 100.0,
                     heading_deg: 0.0,
                     gamma_deg: 0.0,
+                    latitude_deg: 0.0,
                     knobs: values.clone(),
                     report: strings(&["aero/alpha-rad"]),
                     reuse: false,
@@ -391,6 +394,7 @@ mod tests {
                     "gamma_deg",
                     "heading_deg",
                     "knobs",
+                    "latitude_deg",
                     "report",
                     "reuse",
                     "speed_kts",
