@@ -1,8 +1,9 @@
 //! `diagnose` on records from the independent generator (`scripts/gen_diagnose_records.py`: JSBSim's c172x
 //! through JSBSim's own Python API, its own actuator and sample timing, a random trim point and heading, the
 //! maneuvers in sequence, sensor noise). A representative subset of the acceptance evaluation
-//! (`cargo bench --bench diagnose_eval`): a clean record, a signal-path effect, a sensor effect, a derivative
-//! and a pair. The named set must be exactly the hidden one, each value within 15 % of the effect's size.
+//! (`cargo bench --bench diagnose_eval`): a clean record, a signal-path effect, a sensor effect, a derivative,
+//! a pair, and a pair in light turbulence. The named set must be exactly the hidden one, each value within 15 %
+//! of the effect's size.
 
 use std::path::Path;
 use std::process::Command;
@@ -11,19 +12,27 @@ use flightid::aircraft;
 use flightid::data::read_csv;
 use flightid::diagnose::replay::ReplayCase;
 use flightid::diagnose::search::Worker;
-use flightid::diagnose::{diagnose, DiagnoseOptions};
+use flightid::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use flightid::sim::JsbsimSim;
 
-/// Generates one case (training and validation record, 30 s) with the given hidden effects and diagnoses it.
-fn check(seed: u64, effects: &str) {
+/// Generates one case (training and validation record, 30 s, still air) with the given hidden effects,
+/// diagnoses it and checks the named set and values.
+fn check(seed: u64, effects: &str) -> Diagnosis {
+    check_flown(seed, effects, 30.0, false)
+}
+
+/// [`check`] for a record of `duration_s`, flown in light turbulence when `turbulence`.
+fn check_flown(seed: u64, effects: &str, duration_s: f64, turbulence: bool) -> Diagnosis {
     let dir = tempfile::tempdir().unwrap();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_diagnose_records.py");
     let st = Command::new(flightid::sim::env::python().expect("the provisioned Python"))
         .arg(script)
         .arg("--out")
         .arg(dir.path())
-        .args(["--cases", "1", "--duration", "30", "--effects", effects])
+        .args(["--cases", "1", "--effects", effects])
+        .args(["--duration", &duration_s.to_string()])
         .args(["--seed", &seed.to_string()])
+        .args(turbulence.then_some("--turbulence"))
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .status()
@@ -98,11 +107,14 @@ fn check(seed: u64, effects: &str) {
             c.value
         );
     }
+    d
 }
 
 #[test]
 fn clean_record_names_nothing() {
-    check(101, "[]");
+    let d = check(101, "[]");
+    // Every channel sits near its sensor noise: the search keeps the noise weights.
+    assert!(d.relaxed_weights.is_empty(), "{:?}", d.relaxed_weights);
 }
 
 #[test]
@@ -150,5 +162,24 @@ fn lift_curvature_beside_vane_scales_is_named() {
         r#"[{"effect": "sensor_scale", "target": "beta_rad", "value": 1.17},
             {"effect": "aero_nonlinearity", "target": "CL_alpha2", "value": 16},
             {"effect": "sensor_scale", "target": "alpha_rad", "value": 1.135}]"#,
+    );
+}
+
+/// A pair in light turbulence (40 s): the gusts' response is tens of times the sensor noise in φ, θ, p, r and
+/// β, so those channels are weighted by the unextended model's residual instead (output error with the
+/// residual covariance unknown), and the rudder's yaw power and the θ-vane bias are both named.
+#[test]
+fn rudder_power_and_pitch_bias_in_turbulence_are_named() {
+    let d = check_flown(
+        205,
+        r#"[{"effect": "aero_derivative", "target": "Cn_dr", "value": 1.4},
+            {"effect": "sensor_bias", "target": "theta_rad", "value": -0.024}]"#,
+        40.0,
+        true,
+    );
+    assert!(
+        d.relaxed_weights.len() >= 2 && d.relaxed_weights.values().all(|&f| f > 4.0),
+        "{:?}",
+        d.relaxed_weights
     );
 }

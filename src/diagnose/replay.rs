@@ -522,7 +522,29 @@ impl ReplaySim for LinearReplay {
 
 #[cfg(test)]
 mod tests {
-    use super::segment_starts;
+    use super::{segment_starts, ReplayCase};
+    use crate::data::{Channel, FlightRecord};
+
+    /// A level record at 10 Hz, 10 s, with a constant elevator; `latitude_rad` when given.
+    fn level_record(latitude_rad: Option<f64>) -> FlightRecord {
+        let n = 100;
+        let mut r = FlightRecord::new((0..n).map(|k| k as f64 / 10.0).collect());
+        r.push_column(Channel::Airspeed, vec![50.0; n]);
+        r.push_column(Channel::Altitude, vec![1000.0; n]);
+        r.push_column(Channel::Elevator, vec![-0.02; n]);
+        if let Some(l) = latitude_rad {
+            r.push_column(Channel::Latitude, vec![l; n]);
+        }
+        r
+    }
+
+    #[test]
+    fn the_trim_point_is_at_the_record_latitude() {
+        let at = |l| ReplayCase::new(&level_record(l)).unwrap().point.latitude_deg;
+        assert!((at(Some(51.5f64.to_radians())) - 51.5).abs() < 1e-9);
+        // Without a GPS column the model trims on the equator.
+        assert_eq!(at(None), 0.0);
+    }
 
     /// A record at 10 Hz: `pulses` = (start s, length s, amplitude) on one input.
     fn input(pulses: &[(f64, f64, f64)], duration_s: f64) -> Vec<(String, Vec<f64>)> {
