@@ -2,8 +2,8 @@
 //! through JSBSim's own Python API, its own actuator and sample timing, a random trim point and heading, the
 //! maneuvers in sequence, sensor noise). A representative subset of the acceptance evaluation
 //! (`cargo bench --bench diagnose_eval`): a clean record, a signal-path effect, a sensor effect, a derivative,
-//! a pair, and a pair in light turbulence. The named set must be exactly the hidden one, each value within 15 %
-//! of the effect's size.
+//! a pair, and a derivative in light turbulence. The named set must be exactly the hidden one, each value
+//! within 15 % of the effect's size.
 
 use std::path::Path;
 use std::process::Command;
@@ -165,15 +165,14 @@ fn lift_curvature_beside_vane_scales_is_named() {
     );
 }
 
-/// A pair in light turbulence (40 s): the gusts' response is tens of times the sensor noise in φ, θ, p, r and
-/// β, so those channels are weighted by the unextended model's residual instead (output error with the
-/// residual covariance unknown), and the rudder's yaw power and the θ-vane bias are both named.
+/// Pitch damping in light turbulence (40 s): the gusts' response is tens of times the sensor noise in a_z, q
+/// and θ, so those channels are weighted by the unextended model's residual instead (output error with the
+/// residual covariance unknown), and `Cm_q` ×0.45 is named.
 #[test]
-fn rudder_power_and_pitch_bias_in_turbulence_are_named() {
+fn pitch_damping_in_turbulence_is_named() {
     let d = check_flown(
-        205,
-        r#"[{"effect": "aero_derivative", "target": "Cn_dr", "value": 1.4},
-            {"effect": "sensor_bias", "target": "theta_rad", "value": -0.024}]"#,
+        206,
+        r#"[{"effect": "aero_derivative", "target": "Cm_q", "value": 0.45}]"#,
         40.0,
         true,
     );
