@@ -165,20 +165,14 @@ fn lift_curvature_beside_vane_scales_is_named() {
     );
 }
 
-/// Pitch damping in light turbulence (40 s): the gusts' response is tens of times the sensor noise in a_z, q
-/// and θ, so those channels are weighted by the unextended model's residual instead (output error with the
-/// residual covariance unknown), and `Cm_q` ×0.45 is named.
+/// Pitch damping in light turbulence (40 s): `Cm_q` ×0.45 is named with its value within 15 % although the
+/// gusts' response stays in every channel of the record.
 #[test]
 fn pitch_damping_in_turbulence_is_named() {
-    let d = check_flown(
+    check_flown(
         206,
         r#"[{"effect": "aero_derivative", "target": "Cm_q", "value": 0.45}]"#,
         40.0,
         true,
-    );
-    assert!(
-        d.relaxed_weights.len() >= 2 && d.relaxed_weights.values().all(|&f| f > 4.0),
-        "{:?}",
-        d.relaxed_weights
     );
 }

@@ -645,9 +645,20 @@ fn fit_from(
     let cols = if let Some(given) = fixed {
         given
     } else if final_jacobian || last_cols.is_empty() {
-        let cols = residual_jacobian(worker, w, active, &free, &r)?;
-        evaluations += free.len();
-        cols
+        // At an optimum next to where the model stops trimming, a difference step can cross it: the last
+        // iteration's sensitivities then stand in.
+        match untrimmable_is_none(residual_jacobian(worker, w, active, &free, &r))? {
+            Some(cols) => {
+                evaluations += free.len();
+                cols
+            }
+            None if !last_cols.is_empty() => last_cols,
+            None => {
+                return Err(SimError::TrimFailed(
+                    "every sensitivity step at the fitted values leaves a model that cannot trim".into(),
+                ))
+            }
+        }
     } else {
         last_cols
     };

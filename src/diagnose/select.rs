@@ -205,9 +205,11 @@ fn backtrack_start(
     if start == null {
         return Ok(());
     }
+    // A start whose model cannot trim explains nothing: the step is halved as for any worse one.
     let mut cost_at = |x: f64, active: &mut [Active]| {
         active[k].params[0] = x;
-        residuals(worker, w, active).map(|r| crate::signal::sum_sq(&r))
+        untrimmable_is_none(residuals(worker, w, active))
+            .map(|r| r.map_or(f64::INFINITY, |r| crate::signal::sum_sq(&r)))
     };
     let no_effect = cost_at(null, active)?;
     let mut x = start;
@@ -583,9 +585,18 @@ pub fn select<'e>(
         let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
         let first = candidates.len();
         for (t, r) in full.iter().enumerate() {
-            let Ok((o, _)) = r else { continue };
             let i = pool[top[t]];
             let e = catalogue[i];
+            let (o, _) = match r {
+                Ok(fitted) => fitted,
+                Err(err) => {
+                    // Listed with the score test's estimate and why the fit stopped, not left out.
+                    let mut c = ctx.candidate(e, &quick[top[t]], false, resolution[i]);
+                    c.rejected_because = Some(format!("the fit failed: {err}"));
+                    candidates.push(c);
+                    continue;
+                }
+            };
             let mut c = ctx.candidate(e, o, true, resolution[i]);
             c.rejected_because = rejection(&c, e, o, base_cost, opts, &masks[i]);
             if c.rejected_because.is_none() {
