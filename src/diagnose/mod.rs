@@ -14,6 +14,7 @@ pub mod model;
 pub mod prepare;
 pub mod process_noise;
 pub mod progress;
+pub mod projection;
 pub mod refit;
 pub mod relax;
 pub mod replay;

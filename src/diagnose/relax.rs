@@ -24,6 +24,9 @@ use super::prepare::Prepared;
 use super::search::{self, Worker};
 use super::{sim_err, DiagnoseError};
 
+/// The nuisance columns in the relaxed weights, and each relaxed channel's factor on its noise variance.
+pub type Relaxed = (Vec<Vec<f64>>, BTreeMap<String, f64>);
+
 /// Mean square of a channel's noise-normalised residual above which its weight is relaxed to it: well above
 /// what a clean record leaves (1–3 on the independent generator's still-air records).
 pub const RELAX_MIN: f64 = 4.0;
@@ -37,7 +40,7 @@ pub fn relax(
     p: &mut Prepared,
     columns: Vec<Vec<f64>>,
     enabled: bool,
-) -> Result<(Vec<Vec<f64>>, BTreeMap<String, f64>), DiagnoseError> {
+) -> Result<Relaxed, DiagnoseError> {
     if !enabled {
         return Ok((columns, BTreeMap::new()));
     }
@@ -155,7 +158,11 @@ fn input_responses(inputs: &[(String, Vec<f64>)], dt_s: f64) -> Vec<Vec<f64>> {
                 // The all-pass section (q⁻¹ − a) / (1 − a q⁻¹): y_k = a y_{k−1} + x_{k−1} − a x_k.
                 let mut y = vec![0.0; x.len()];
                 for k in 0..x.len() {
-                    let (y1, x1) = if k > 0 { (y[k - 1], x[k - 1]) } else { (0.0, 0.0) };
+                    let (y1, x1) = if k > 0 {
+                        (y[k - 1], x[k - 1])
+                    } else {
+                        (0.0, 0.0)
+                    };
                     y[k] = a * y1 + x1 - a * x[k];
                 }
                 x = y;
@@ -188,7 +195,7 @@ mod tests {
         // The residual of a channel whose sensor reads 1.2 × the simulated output plus an offset, with a
         // little noise: the offset and the scale are the search's to find, so the channel keeps its weight.
         let s: Vec<f64> = (0..200).map(|k| 30.0 * (0.1 * k as f64).sin()).collect();
-        let noise = |k: usize| if k % 2 == 0 { 0.9 } else { -0.9 };
+        let noise = |k: usize| if k.is_multiple_of(2) { 0.9 } else { -0.9 };
         let r: Vec<f64> = (0..200).map(|k| 0.2 * s[k] + 5.0 + noise(k)).collect();
         assert_eq!(relaxation(&r, &[&s], &[], 200), vec![1.0]);
         // The same misfit uncorrelated with the output (a gust's response) is relaxed.
@@ -211,7 +218,7 @@ mod tests {
             .collect();
         let (w, z) = (3.0f64, 0.3);
         let (mut x, mut v) = (0.0, 0.0);
-        let noise = |k: usize| if k % 2 == 0 { 1.0 } else { -1.0 };
+        let noise = |k: usize| if k.is_multiple_of(2) { 1.0 } else { -1.0 };
         let r: Vec<f64> = (0..n)
             .map(|k| {
                 let acc = w * w * (u[k] - x) - 2.0 * z * w * v;

@@ -540,7 +540,12 @@ mod tests {
 
     #[test]
     fn the_trim_point_is_at_the_record_latitude() {
-        let at = |l| ReplayCase::new(&level_record(l)).unwrap().point.latitude_deg;
+        let at = |l| {
+            ReplayCase::new(&level_record(l))
+                .unwrap()
+                .point
+                .latitude_deg
+        };
         assert!((at(Some(51.5f64.to_radians())) - 51.5).abs() < 1e-9);
         // Without a GPS column the model trims on the equator.
         assert_eq!(at(None), 0.0);

@@ -20,6 +20,7 @@ use std::sync::{Arc, Mutex};
 
 use super::cache::{fingerprint, ReplayCache, ReplayKey};
 use super::extension::{Extension, Stage};
+pub use super::projection::{orthonormal_basis, project_off};
 use super::replay::{replay, replay_with_resets, ReplayCase};
 use super::residual::{coloured_products, effective_n};
 use super::residual_filter::ResidualFilter;
@@ -273,36 +274,6 @@ pub fn coarse<R>(
         };
         Ok(f(ws, &corrected))
     })
-}
-
-/// r ← (1 − Q Qᵀ) r for an orthonormal basis Q: the least-squares residual once the nuisance terms, linear in
-/// their effect on the output, are estimated jointly (variable projection, Golub & Pereyra 1973).
-pub(super) fn project_off(r: &mut [f64], basis: &[Vec<f64>]) {
-    for q in basis {
-        let c: f64 = q.iter().zip(r.iter()).map(|(a, b)| a * b).sum();
-        r.iter_mut().zip(q).for_each(|(x, y)| *x -= c * y);
-    }
-}
-
-/// An orthonormal basis of the span of `columns` by modified Gram–Schmidt; a column that is (nearly) in the
-/// span of the ones before it (norm left below 10⁻⁹ of its own) is dropped.
-pub fn orthonormal_basis(columns: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
-    let mut basis: Vec<Vec<f64>> = Vec::new();
-    for col in columns {
-        let mut u = col.clone();
-        let norm0 = dot(&u, &u).sqrt();
-        for b in &basis {
-            let c = dot(&u, b);
-            u.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
-        }
-        let norm = dot(&u, &u).sqrt();
-        if norm > 1e-9 * norm0.max(1e-300) && norm.is_finite() {
-            u.iter_mut().for_each(|x| *x /= norm);
-            basis.push(u);
-        }
-    }
-    basis
 }
 
 /// State perturbations whose output effect spans a segment's initial-state error: (roll, pitch, body rates,
@@ -642,26 +613,26 @@ fn fit_from(
     // Cramér–Rao bound at the fitted values with the residual variance estimate s² = J / (n − p).
     // (The cheap pass uses the last iteration's sensitivities instead of new ones; the chord refit, the fixed
     // sensitivities it was given, not their secant updates, which are exact along the steps taken only.)
-    let cols = if let Some(given) = fixed {
-        given
-    } else if final_jacobian || last_cols.is_empty() {
-        // At an optimum next to where the model stops trimming, a difference step can cross it: the last
-        // iteration's sensitivities then stand in.
-        match untrimmable_is_none(residual_jacobian(worker, w, active, &free, &r))? {
-            Some(cols) => {
-                evaluations += free.len();
-                cols
+    let cols =
+        if let Some(given) = fixed {
+            given
+        } else if final_jacobian || last_cols.is_empty() {
+            // At an optimum next to where the model stops trimming, a difference step can cross it: the last
+            // iteration's sensitivities then stand in.
+            match untrimmable_is_none(residual_jacobian(worker, w, active, &free, &r))? {
+                Some(cols) => {
+                    evaluations += free.len();
+                    cols
+                }
+                None if !last_cols.is_empty() => last_cols,
+                None => return Err(SimError::TrimFailed(
+                    "every sensitivity step at the fitted values leaves a model that cannot trim"
+                        .into(),
+                )),
             }
-            None if !last_cols.is_empty() => last_cols,
-            None => {
-                return Err(SimError::TrimFailed(
-                    "every sensitivity step at the fitted values leaves a model that cannot trim".into(),
-                ))
-            }
-        }
-    } else {
-        last_cols
-    };
+        } else {
+            last_cols
+        };
     let p = free.len();
     let a: Vec<f64> = (0..p * p)
         .map(|ij| linalg::dot(&cols[ij / p], &cols[ij % p]))
