@@ -29,11 +29,20 @@ pub struct Prepared {
     pub filter: Option<super::process_noise::ResidualFilter>,
     /// The measurement noise standard deviation per compared channel (`sigma` before any relaxation).
     pub noise_sigma: Vec<f64>,
-    /// The training residual's cost at the measurement noise in the weights `sigma` (see `search::Weighted`).
-    pub noise_cost: f64,
 }
 
 impl Prepared {
+    /// The training residual's cost at the measurement noise in the weights `sigma` (see `search::Weighted`):
+    /// Σ over channels of the samples × (noise σ / weight σ)².
+    pub fn noise_cost(&self) -> f64 {
+        let len = self.case.len() as f64;
+        self.noise_sigma
+            .iter()
+            .zip(&self.sigma)
+            .map(|(n, s)| len * (n / s).powi(2))
+            .sum()
+    }
+
     /// The evaluated catalogue entries as references.
     pub fn entries(&self) -> Vec<&dyn Extension> {
         self.catalogue.iter().map(|b| b.as_ref()).collect()
@@ -47,7 +56,7 @@ impl Prepared {
             nuisance: &self.nuisance,
             filter: self.filter.as_ref(),
             correction: None,
-            noise_cost: self.noise_cost,
+            noise_cost: self.noise_cost(),
         }
     }
 
@@ -220,7 +229,6 @@ pub fn prepare(
     let sigma = weights(&case);
     Ok(Prepared {
         noise_sigma: sigma.clone(),
-        noise_cost: (case.len() * case.outputs.len()) as f64,
         sigma,
         valid: vcase.map(|v| {
             let s = weights(&v);

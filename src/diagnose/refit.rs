@@ -54,7 +54,7 @@ pub fn refit_in_turbulence(
         nuisance: &basis,
         filter: Some(&filter),
         correction: None,
-        noise_cost: p.noise_cost,
+        noise_cost: p.noise_cost(),
     };
     // A sensor bias stays at its output-error value: to the filter a constant offset on a rate gyro looks like
     // a steady moment disturbance, which the process noise on the body rates partly tracks.

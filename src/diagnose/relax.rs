@@ -62,7 +62,6 @@ pub fn relax(
     for (s, f) in p.sigma.iter_mut().zip(&factors) {
         *s *= f.sqrt();
     }
-    p.noise_cost = factors.iter().map(|f| len as f64 / f).sum();
     let columns = columns
         .into_iter()
         .map(|mut c| {
@@ -109,16 +108,21 @@ pub fn relax(
 ///   a hidden `Cn_beta` ×0.41 left β, p, r and φ at 160–940 times their noise, and weighted by that the
 ///   search named a rudder delay instead.
 fn relaxation(r: &[f64], simulated: &[&[f64]], driven: &[Vec<f64>], len: usize) -> Vec<f64> {
+    // The offset and the input responses are every channel's: orthonormalised once.
+    let mut shared = vec![vec![1.0; len]];
+    shared.extend(driven.iter().filter(|d| d.len() == len).cloned());
+    let shared = search::orthonormal_basis(&shared);
     r.chunks(len.max(1))
         .enumerate()
         .map(|(c, chunk)| {
-            let mut columns = vec![vec![1.0; chunk.len()]];
-            if let Some(s) = simulated.get(c).filter(|s| s.len() == chunk.len()) {
-                columns.push(s.to_vec());
-            }
-            columns.extend(driven.iter().filter(|d| d.len() == chunk.len()).cloned());
             let mut e = chunk.to_vec();
-            search::project_off(&mut e, &search::orthonormal_basis(&columns));
+            search::project_off(&mut e, &shared);
+            // The channel's own scale: its simulated output, orthogonal to the shared directions.
+            if let Some(s) = simulated.get(c).filter(|s| s.len() == chunk.len()) {
+                let mut s = s.to_vec();
+                search::project_off(&mut s, &shared);
+                search::project_off(&mut e, &search::orthonormal_basis(&[s]));
+            }
             let ms = crate::signal::sum_sq(&e) / e.len().max(1) as f64;
             if ms > RELAX_MIN {
                 ms

@@ -477,6 +477,11 @@ pub(super) fn untrimmable_is_none<T>(r: Result<T, SimError>) -> Result<Option<T>
     }
 }
 
+/// The cost of a residual, or infinity where the model cannot trim (a trial that explains nothing).
+pub(super) fn cost_or_untrimmable(r: Result<Vec<f64>, SimError>) -> Result<f64, SimError> {
+    untrimmable_is_none(r).map(|r| r.map_or(f64::INFINITY, |r| cost(&r)))
+}
+
 impl optimise::Problem for Replayed<'_, '_, '_> {
     type Point = Vec<f64>;
     type Error = SimError;
@@ -613,26 +618,22 @@ fn fit_from(
     // Cramér–Rao bound at the fitted values with the residual variance estimate s² = J / (n − p).
     // (The cheap pass uses the last iteration's sensitivities instead of new ones; the chord refit, the fixed
     // sensitivities it was given, not their secant updates, which are exact along the steps taken only.)
-    let cols =
-        if let Some(given) = fixed {
-            given
-        } else if final_jacobian || last_cols.is_empty() {
-            // At an optimum next to where the model stops trimming, a difference step can cross it: the last
-            // iteration's sensitivities then stand in.
-            match untrimmable_is_none(residual_jacobian(worker, w, active, &free, &r))? {
-                Some(cols) => {
-                    evaluations += free.len();
-                    cols
-                }
-                None if !last_cols.is_empty() => last_cols,
-                None => return Err(SimError::TrimFailed(
-                    "every sensitivity step at the fitted values leaves a model that cannot trim"
-                        .into(),
-                )),
+    let cols = if let Some(given) = fixed {
+        given
+    } else if final_jacobian || last_cols.is_empty() {
+        // At an optimum next to where the model stops trimming, a difference step can cross it: the last
+        // iteration's sensitivities then stand in.
+        match untrimmable_is_none(residual_jacobian(worker, w, active, &free, &r))? {
+            Some(cols) => {
+                evaluations += free.len();
+                cols
             }
-        } else {
-            last_cols
-        };
+            None if !last_cols.is_empty() => last_cols,
+            None => return Err(SimError::TrimFailed("no sensitivity step trims".into())),
+        }
+    } else {
+        last_cols
+    };
     let p = free.len();
     let a: Vec<f64> = (0..p * p)
         .map(|ij| linalg::dot(&cols[ij / p], &cols[ij % p]))

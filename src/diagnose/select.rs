@@ -40,9 +40,7 @@ use super::extension::Extension;
 use super::prepare::Prepared;
 use super::progress::Progress;
 use super::residual::effective_n;
-use super::search::{
-    self, fit, par_map, residuals, untrimmable_is_none, Active, FitOutcome, Weighted, Worker,
-};
+use super::search::{self, fit, par_map, residuals, Active, FitOutcome, Weighted, Worker};
 use super::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause, Skipped};
 
 /// The outcome of the selection.
@@ -156,8 +154,11 @@ fn wide_screen(
         }
     }
     let costs = par_map(workers, &items, |wk, &(k, value)| {
-        let r = residuals(wk, w, &with_candidate(selected, entries[k], value, false));
-        untrimmable_is_none(r).map(|r| r.map_or(f64::INFINITY, |r| crate::signal::sum_sq(&r)))
+        search::cost_or_untrimmable(residuals(
+            wk,
+            w,
+            &with_candidate(selected, entries[k], value, false),
+        ))
     });
     let mut best: Vec<Option<(f64, f64)>> = vec![None; entries.len()];
     for (&(k, value), cost) in items.iter().zip(costs) {
@@ -208,8 +209,7 @@ fn backtrack_start(
     // A start whose model cannot trim explains nothing: the step is halved as for any worse one.
     let mut cost_at = |x: f64, active: &mut [Active]| {
         active[k].params[0] = x;
-        untrimmable_is_none(residuals(worker, w, active))
-            .map(|r| r.map_or(f64::INFINITY, |r| crate::signal::sum_sq(&r)))
+        search::cost_or_untrimmable(residuals(worker, w, active))
     };
     let no_effect = cost_at(null, active)?;
     let mut x = start;
