@@ -32,7 +32,7 @@ mod identifiability;
 mod refine;
 pub use identifiability::profiled_information;
 use identifiability::{identifiable, Identifiable};
-pub(super) use refine::{eliminate_backward, Replacement};
+pub(super) use refine::{eliminate_backward, substitute_dropped, Replacement};
 use refine::{replace_ambiguous, Refiner};
 
 use super::baseline::Baseline;
@@ -53,6 +53,8 @@ pub struct Selection<'e> {
     pub candidates: Vec<Candidate>,
     /// Catalogue entries the record cannot identify.
     pub unidentifiable: Vec<Skipped>,
+    /// Per effect named in a round (`effect/target`), the other candidates that passed every test there.
+    pub runner_ups: Vec<(String, Vec<String>)>,
     /// The identifiable catalogue entries, each with its resolution on the record and its sensor-offset mask
     /// (what a later stage needs to test a named effect as the selection did).
     pub entries: Entries<'e>,
@@ -727,11 +729,11 @@ pub fn select<'e>(
     // A runner-up lost its round to the model of that round; it is worth another fit only when an effect named
     // in a later round is still in the model.
     let in_model = |k: &String| state.selected.iter().any(|s| s.ext.key() == *k);
-    let runner_ups: Vec<(String, Vec<String>)> = (0..runner_ups.len())
+    let later_in_model: Vec<(String, Vec<String>)> = (0..runner_ups.len())
         .filter(|&m| runner_ups[m + 1..].iter().any(|(k, _)| in_model(k)))
         .map(|m| runner_ups[m].clone())
         .collect();
-    replace_ambiguous(&mut refiner, &sens, &runner_ups, state.reborrow())?;
+    replace_ambiguous(&mut refiner, &sens, &later_in_model, state.reborrow())?;
     if opts.backward_elimination {
         state.round += 1;
         eliminate_backward(&mut refiner, state, "backward elimination", |_| false)?;
@@ -741,6 +743,7 @@ pub fn select<'e>(
         named,
         candidates,
         unidentifiable,
+        runner_ups,
         entries: Entries {
             catalogue,
             resolution,
