@@ -33,7 +33,9 @@ pub fn refit_in_turbulence(
         // The process noise was estimated from the residual of a model with an effect that has gone, and the
         // filter took part of the named alternative's response for it (a hidden `Cn_dr` ×0.53 refitted at
         // 0.24 ± 0.05): it is estimated again from the new model's residual, and the refit repeated once.
-        found = refit_once(worker, p, columns, sel, opts, progress)?.0.or(found);
+        found = refit_once(worker, p, columns, sel, opts, progress)?
+            .0
+            .or(found);
     }
     Ok(found)
 }
@@ -105,7 +107,7 @@ fn refit_once(
         named,
         candidates,
         entries,
-        runner_ups,
+        alternatives,
         ..
     } = sel;
     // Without the share of the cost a named effect must explain: that gate guards output error against its
@@ -125,10 +127,15 @@ fn refit_once(
             cost: &mut cost,
             round,
         };
-        let o = eliminate_backward(&mut refiner, state.reborrow(), "the filter error refit", held)?;
+        let o = eliminate_backward(
+            &mut refiner,
+            state.reborrow(),
+            "the filter error refit",
+            held,
+        )?;
         // What the refit dropped may have hidden the right effect from output error: its alternatives are
         // fitted again on the innovations.
-        let dropped = alternatives_of_dropped(&reference_named, runner_ups, &state);
+        let dropped = alternatives_of_dropped(&reference_named, alternatives, &state);
         let substituted = substitute_dropped(
             &mut refiner,
             state,
@@ -167,11 +174,11 @@ fn refit_once(
 }
 
 /// For each effect in `reference` that `state` no longer names (`effect/target`), its alternatives with their
-/// latest output-error value: the members of its ambiguity group and the runner-ups of the round that named it,
-/// less anything in `reference`.
+/// latest output-error value: the members of its ambiguity group and the candidates that passed their own tests in
+/// the round that named it (`alternatives`, see [`Selection::alternatives`]), less anything in `reference`.
 fn alternatives_of_dropped(
     reference: &[NamedCause],
-    runner_ups: &[(String, Vec<String>)],
+    alternatives: &[(String, Vec<String>)],
     state: &Replacement,
 ) -> Vec<(String, Vec<(String, f64)>)> {
     let key = |effect: &str, target: &str| format!("{effect}/{target}");
@@ -194,20 +201,20 @@ fn alternatives_of_dropped(
         })
         .map(|n| {
             let k = key(&n.effect, &n.target);
-            let seconds = runner_ups
+            let seconds = alternatives
                 .iter()
                 .filter(|(r, _)| *r == k)
                 .flat_map(|(_, v)| v.iter());
-            let mut alternatives: Vec<(String, f64)> = Vec::new();
+            let mut tries: Vec<(String, f64)> = Vec::new();
             for alt in n.ambiguous_with.iter().chain(seconds) {
-                if in_reference(alt) || alternatives.iter().any(|(a, _)| a == alt) {
+                if in_reference(alt) || tries.iter().any(|(a, _)| a == alt) {
                     continue;
                 }
                 if let Some(v) = start(alt) {
-                    alternatives.push((alt.clone(), v));
+                    tries.push((alt.clone(), v));
                 }
             }
-            (k, alternatives)
+            (k, tries)
         })
         .collect()
 }

@@ -53,8 +53,9 @@ pub struct Selection<'e> {
     pub candidates: Vec<Candidate>,
     /// Catalogue entries the record cannot identify.
     pub unidentifiable: Vec<Skipped>,
-    /// Per effect named in a round (`effect/target`), the other candidates that passed every test there.
-    pub runner_ups: Vec<(String, Vec<String>)>,
+    /// Per effect named in a round (`effect/target`), the other candidates that passed their own tests there:
+    /// the runner-ups, and those a candidate within its resolution of "no effect" fitted better.
+    pub alternatives: Vec<(String, Vec<String>)>,
     /// The identifiable catalogue entries, each with its resolution on the record and its sensor-offset mask
     /// (what a later stage needs to test a named effect as the selection did).
     pub entries: Entries<'e>,
@@ -485,6 +486,7 @@ pub fn select<'e>(
     let mut untrimmable: Vec<usize> = Vec::new();
     // Per named effect (`effect/target`), the other candidates that passed every test in its round.
     let mut runner_ups: Vec<(String, Vec<String>)> = Vec::new();
+    let mut alternatives: Vec<(String, Vec<String>)> = Vec::new();
     // Whether this round screens wide (see `wide_screen`), and whether a round has.
     let (mut widen, mut widened) = (false, false);
     // Rounds until `max_effects` effects are named: an effect that a later joint fit drops
@@ -606,6 +608,7 @@ pub fn select<'e>(
             }
             candidates.push(c);
         }
+        let passed: Vec<usize> = sig.iter().map(|&(t, _, _)| t).collect();
         sig.retain(|&(_, _, ci)| {
             let reason = beaten_within_resolution(&candidates[first..], &candidates[ci]);
             let keep = reason.is_none();
@@ -689,6 +692,8 @@ pub fn select<'e>(
                 let key = |t: usize| top_exts[t].key();
                 let seconds = sig.iter().skip(1).map(|&(t, _, _)| key(t)).collect();
                 runner_ups.push((key(best), seconds));
+                let others = passed.iter().filter(|&&t| t != best).map(|&t| key(t));
+                alternatives.push((key(best), others.collect()));
                 if let (Some(after), Some(before)) = (after, valid_cost) {
                     candidates[best_ci].validation_gain = Some(1.0 - after / before);
                     valid_cost = Some(after);
@@ -743,7 +748,7 @@ pub fn select<'e>(
         named,
         candidates,
         unidentifiable,
-        runner_ups,
+        alternatives,
         entries: Entries {
             catalogue,
             resolution,

@@ -378,9 +378,13 @@ pub(in crate::diagnose) fn substitute_dropped<'e>(
             c.rejected_because = rejection(&c, catalogue[j], &o, *state.cost, opts, &masks[j])
                 .map(|reason| format!("in place of {key} after {what}: {reason}"));
             if c.rejected_because.is_none() {
-                if best.as_ref().is_some_and(|(b, _)| b.cost_after <= o.cost_after) {
-                    c.rejected_because =
-                        Some(format!("in place of {key} after {what}: another fitted better"));
+                if best
+                    .as_ref()
+                    .is_some_and(|(b, _)| b.cost_after <= o.cost_after)
+                {
+                    c.rejected_because = Some(format!(
+                        "in place of {key} after {what}: another fitted better"
+                    ));
                 } else {
                     best = Some((o, a));
                 }
