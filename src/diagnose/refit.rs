@@ -28,149 +28,165 @@ pub fn refit_in_turbulence(
     opts: &DiagnoseOptions,
     progress: &Progress,
 ) -> Result<Option<ProcessNoise>, DiagnoseError> {
-    let (mut found, substituted) = refit_once(worker, p, columns, sel, opts, progress)?;
+    let pass = Pass {
+        p,
+        columns,
+        opts,
+        progress,
+    };
+    let (mut found, substituted) = pass.run(worker, sel)?;
     if substituted {
-        // The process noise was estimated from the residual of a model with an effect that has gone, and the
-        // filter took part of the named alternative's response for it (a hidden `Cn_dr` ×0.53 refitted at
-        // 0.24 ± 0.05): it is estimated again from the new model's residual, and the refit repeated once.
-        found = refit_once(worker, p, columns, sel, opts, progress)?
-            .0
-            .or(found);
+        // The process noise was estimated from the residual of a model with an effect that has gone: it is
+        // estimated again from the new model's residual, and the refit repeated once.
+        found = pass.run(worker, sel)?.0.or(found);
     }
     Ok(found)
 }
 
-/// One pass of [`refit_in_turbulence`]: the process noise estimated from the residual of `sel`'s model, the
-/// refit on the filter's innovations, and whether an alternative took the place of a dropped effect.
-fn refit_once(
-    worker: &mut Worker,
-    p: &Prepared,
-    columns: &[Vec<f64>],
-    sel: &mut Selection,
-    opts: &DiagnoseOptions,
-    progress: &Progress,
-) -> Result<(Option<ProcessNoise>, bool), DiagnoseError> {
-    if sel.selected.is_empty() || columns.is_empty() {
-        return Ok((None, false));
-    }
-    let r = search::raw_residuals(worker, &p.case, &p.sigma, &sel.selected)
-        .map_err(sim_err("replay"))?;
-    let Some((filter, report)) = process_noise::estimate(&p.case, columns, &r) else {
-        return Ok((None, false));
-    };
-    let Some(filter) = filter else {
-        return Ok((Some(report), false));
-    };
-    if report.velocity_variance < GUST_VARIANCE_MIN {
-        // Process noise on the body rates alone: the small dynamics the named effects leave unexplained, not
-        // gusts; output error is the estimator for a record without gusts, and its values stay.
-        return Ok((
-            Some(ProcessNoise {
-                used: false,
-                ..report
-            }),
-            false,
-        ));
-    }
-    let mut filtered = columns.to_vec();
-    filtered.iter_mut().for_each(|c| filter.apply(c));
-    let basis = search::orthonormal_basis(&filtered);
-    let w = search::Weighted {
-        case: &p.case,
-        sigma: p.sigma.clone(),
-        nuisance: &basis,
-        filter: Some(&filter),
-        correction: None,
-        noise_cost: p.noise_cost(),
-    };
-    // A sensor bias stays at its output-error value: to the filter a constant offset on a rate gyro looks like
-    // a steady moment disturbance, which the process noise on the body rates partly tracks.
-    let held = |a: &Active| a.ext.effect() == "sensor_bias";
-    if sel.selected.iter().all(held) {
-        return Ok((Some(report), false));
-    }
-    // At the coarse rate from the output-error values: the joint fit, and every named effect tested again
-    // against the model without it on the filter's innovations (backward elimination). Output error in gusts
-    // names effects that bend the replay towards the gusts' response; once the filter follows the gusts they
-    // no longer pay (in gusts a `CL_alpha2` −65, replaced by `Cm_alpha2` −11, came beside a hidden `Cn_r` ×0.57
-    // and raised the validation record's cost elevenfold).
-    let reference = sel.selected.clone();
-    let round = sel
-        .candidates
-        .iter()
-        .map(|c| c.round + 1)
-        .max()
-        .unwrap_or(0);
-    let reference_named = sel.named.clone();
-    let Selection {
-        selected,
-        named,
-        candidates,
-        entries,
-        alternatives,
-        ..
-    } = sel;
-    // Without the share of the cost a named effect must explain: that gate guards output error against its
-    // coloured residual, and the innovations are white but for what the lag window still finds; their cost is
-    // mostly the gusts' own, so a hidden `Cn_beta` ×1.46 at z 20.7 and ΔBIC −162 explains only 1.5 % of it.
-    let tests = DiagnoseOptions {
-        min_relative_reduction: 0.0,
-        ..opts.clone()
-    };
-    let mut cost = 0.0;
-    let coarse = search::coarse(std::slice::from_mut(worker), &w, &reference, |ws, cw| {
-        let mut refiner = entries.refiner(ws, cw, &tests, progress);
-        let mut state = Replacement {
+/// What one pass of [`refit_in_turbulence`] works on besides the worker and the selection.
+struct Pass<'a> {
+    p: &'a Prepared,
+    columns: &'a [Vec<f64>],
+    opts: &'a DiagnoseOptions,
+    progress: &'a Progress,
+}
+
+impl Pass<'_> {
+    /// The process noise estimated from the residual of `sel`'s model, the refit on the filter's innovations,
+    /// and whether an alternative took the place of a dropped effect.
+    fn run(
+        &self,
+        worker: &mut Worker,
+        sel: &mut Selection,
+    ) -> Result<(Option<ProcessNoise>, bool), DiagnoseError> {
+        let Pass {
+            p,
+            columns,
+            opts,
+            progress,
+        } = *self;
+        if sel.selected.is_empty() || columns.is_empty() {
+            return Ok((None, false));
+        }
+        let r = search::raw_residuals(worker, &p.case, &p.sigma, &sel.selected)
+            .map_err(sim_err("replay"))?;
+        let Some((filter, report)) = process_noise::estimate(&p.case, columns, &r) else {
+            return Ok((None, false));
+        };
+        let Some(filter) = filter else {
+            return Ok((Some(report), false));
+        };
+        if report.velocity_variance < GUST_VARIANCE_MIN {
+            // Process noise on the body rates alone: the small dynamics the named effects leave unexplained, not
+            // gusts; output error is the estimator for a record without gusts, and its values stay.
+            return Ok((
+                Some(ProcessNoise {
+                    used: false,
+                    ..report
+                }),
+                false,
+            ));
+        }
+        let mut filtered = columns.to_vec();
+        filtered.iter_mut().for_each(|c| filter.apply(c));
+        let basis = search::orthonormal_basis(&filtered);
+        let w = search::Weighted {
+            case: &p.case,
+            sigma: p.sigma.clone(),
+            nuisance: &basis,
+            filter: Some(&filter),
+            correction: None,
+            noise_cost: p.noise_cost(),
+        };
+        // A sensor bias stays at its output-error value: to the filter a constant offset on a rate gyro looks like
+        // a steady moment disturbance, which the process noise on the body rates partly tracks.
+        let held = |a: &Active| a.ext.effect() == "sensor_bias";
+        if sel.selected.iter().all(held) {
+            return Ok((Some(report), false));
+        }
+        // At the coarse rate from the output-error values: the joint fit, and every named effect tested again
+        // against the model without it on the filter's innovations (backward elimination). Output error in gusts
+        // names effects that bend the replay towards the gusts' response; once the filter follows the gusts they
+        // no longer pay (in gusts a `CL_alpha2` −65, replaced by `Cm_alpha2` −11, came beside a hidden `Cn_r` ×0.57
+        // and raised the validation record's cost elevenfold).
+        let reference = sel.selected.clone();
+        let round = sel
+            .candidates
+            .iter()
+            .map(|c| c.round + 1)
+            .max()
+            .unwrap_or(0);
+        let reference_named = sel.named.clone();
+        let Selection {
             selected,
             named,
             candidates,
-            cost: &mut cost,
-            round,
+            entries,
+            alternatives,
+            ..
+        } = sel;
+        // Without the share of the cost a named effect must explain: that gate guards output error against its
+        // coloured residual, and the innovations are white but for what the lag window still finds; their cost is
+        // mostly the gusts' own, so a hidden `Cn_beta` ×1.46 at z 20.7 and ΔBIC −162 explains only 1.5 % of it.
+        let tests = DiagnoseOptions {
+            min_relative_reduction: 0.0,
+            ..opts.clone()
         };
-        let o = eliminate_backward(
-            &mut refiner,
-            state.reborrow(),
-            "the filter error refit",
-            held,
-        )?;
-        // What the refit dropped may have hidden the right effect from output error: its alternatives are
-        // fitted again on the innovations.
-        let dropped = alternatives_of_dropped(&reference_named, alternatives, &state);
-        let substituted = substitute_dropped(
-            &mut refiner,
-            state,
-            &dropped,
-            "the filter error refit's replacement",
-            held,
-        )?;
-        Ok::<_, DiagnoseError>(match substituted {
-            Some(o) => (o, true),
-            None => (o, false),
+        let mut cost = 0.0;
+        let coarse = search::coarse(std::slice::from_mut(worker), &w, &reference, |ws, cw| {
+            let mut refiner = entries.refiner(ws, cw, &tests, progress);
+            let mut state = Replacement {
+                selected,
+                named,
+                candidates,
+                cost: &mut cost,
+                round,
+            };
+            let o = eliminate_backward(
+                &mut refiner,
+                state.reborrow(),
+                "the filter error refit",
+                held,
+            )?;
+            // What the refit dropped may have hidden the right effect from output error: its alternatives are
+            // fitted again on the innovations.
+            let dropped = alternatives_of_dropped(&reference_named, alternatives, &state);
+            let substituted = substitute_dropped(
+                &mut refiner,
+                state,
+                &dropped,
+                "the filter error refit's replacement",
+                held,
+            )?;
+            Ok::<_, DiagnoseError>(match substituted {
+                Some(o) => (o, true),
+                None => (o, false),
+            })
         })
-    })
-    .map_err(sim_err("filter error refit"))??;
-    let (coarse, substituted) = coarse;
-    // At the replay's rate from there.
-    let mut active = selected.clone();
-    active.iter_mut().for_each(|a| a.free = !held(a));
-    if active.iter().any(|a| a.free) {
-        let o = search::polish(worker, &w, &mut active, &coarse.sensitivities)
-            .map_err(sim_err("filter error refit"))?;
-        // One parameter per named effect is reported, the first; the fit's free parameters are in the same order.
-        let mut k = 0;
-        for (a, n) in active.iter_mut().zip(named.iter_mut()) {
-            if a.free {
-                n.value = a.params[0];
-                n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
-                k += a.params.len();
+        .map_err(sim_err("filter error refit"))??;
+        let (coarse, substituted) = coarse;
+        // At the replay's rate from there.
+        let mut active = selected.clone();
+        active.iter_mut().for_each(|a| a.free = !held(a));
+        if active.iter().any(|a| a.free) {
+            let o = search::polish(worker, &w, &mut active, &coarse.sensitivities)
+                .map_err(sim_err("filter error refit"))?;
+            // One parameter per named effect is reported, the first; the fit's free parameters are in the same order.
+            let mut k = 0;
+            for (a, n) in active.iter_mut().zip(named.iter_mut()) {
+                if a.free {
+                    n.value = a.params[0];
+                    n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
+                    k += a.params.len();
+                }
+                a.free = false;
             }
-            a.free = false;
+            *selected = active;
         }
-        *selected = active;
+        // The refit may move an effect named by output error back to "no effect": it goes, as after any joint fit.
+        drop_below_resolution(selected, named, candidates);
+        Ok((Some(report), substituted))
     }
-    // The refit may move an effect named by output error back to "no effect": it goes, as after any joint fit.
-    drop_below_resolution(selected, named, candidates);
-    Ok((Some(report), substituted))
 }
 
 /// For each effect in `reference` that `state` no longer names (`effect/target`), its alternatives with their
