@@ -325,8 +325,8 @@ impl<'e> Replacement<'_, 'e> {
 }
 
 /// After backward elimination on other residuals has dropped named effects (`dropped`, keyed `effect/target`,
-/// each with the alternatives the selection had for it: the members of its ambiguity group and the runner-ups
-/// of its round), each alternative is fitted in the dropped effect's place, the effects still named free but
+/// each with the alternatives the selection had for it: the members of its ambiguity group and the candidates
+/// that passed their own tests in its round), each alternative is fitted in the dropped effect's place, the effects still named free but
 /// for those `held` says, from `start` (its output-error value), and the best that passes every test of the
 /// selection against the model without it is named (Miller, *Subset Selection in Regression*, 2nd ed., §3.3:
 /// the replacement step, here after the weighting of the residuals has changed). In gusts output error
@@ -371,27 +371,30 @@ pub(in crate::diagnose) fn substitute_dropped<'e>(
             base_cost: *state.cost,
             floor: opts.residual_floor * w.noise_cost,
         };
-        let mut best: Option<(FitOutcome, Vec<Active<'e>>)> = None;
+        let fitted_better = format!("in place of {key} after {what}: another fitted better");
+        // The best passing fit so far and its entry among the candidates.
+        let mut best: Option<(FitOutcome, Vec<Active<'e>>, usize)> = None;
         for (&(j, _), out) in tries.iter().zip(fits) {
             let Ok((o, a)) = out else { continue };
             let mut c = ctx.candidate(catalogue[j], &o, true, resolution[j]);
             c.rejected_because = rejection(&c, catalogue[j], &o, *state.cost, opts, &masks[j])
                 .map(|reason| format!("in place of {key} after {what}: {reason}"));
             if c.rejected_because.is_none() {
-                if best
-                    .as_ref()
-                    .is_some_and(|(b, _)| b.cost_after <= o.cost_after)
-                {
-                    c.rejected_because = Some(format!(
-                        "in place of {key} after {what}: another fitted better"
-                    ));
-                } else {
-                    best = Some((o, a));
+                match &best {
+                    Some((b, _, _)) if b.cost_after <= o.cost_after => {
+                        c.rejected_because = Some(fitted_better.clone());
+                    }
+                    _ => {
+                        if let Some((_, _, ci)) = best {
+                            state.candidates[ci].rejected_because = Some(fitted_better.clone());
+                        }
+                        best = Some((o, a, state.candidates.len()));
+                    }
                 }
             }
             state.candidates.push(c);
         }
-        let Some((o, a)) = best else { continue };
+        let Some((o, a, _)) = best else { continue };
         adopt(state.selected, a);
         *state.cost = o.cost_after;
         let added = state.selected.last().expect("an alternative was added");
