@@ -28,64 +28,31 @@ pub fn refit_in_turbulence(
     opts: &DiagnoseOptions,
     progress: &Progress,
 ) -> Result<Option<ProcessNoise>, DiagnoseError> {
-    let pass = Pass {
-        p,
-        columns,
-        opts,
-        progress,
-    };
-    let (mut found, substituted) = pass.run(worker, sel)?;
-    if substituted {
-        // The process noise was estimated from the residual of a model with an effect that has gone: it is
-        // estimated again from the new model's residual, and the refit repeated once.
-        found = pass.run(worker, sel)?.0.or(found);
-    }
-    Ok(found)
-}
-
-/// What one pass of [`refit_in_turbulence`] works on besides the worker and the selection.
-struct Pass<'a> {
-    p: &'a Prepared,
-    columns: &'a [Vec<f64>],
-    opts: &'a DiagnoseOptions,
-    progress: &'a Progress,
-}
-
-impl Pass<'_> {
-    /// The process noise estimated from the residual of `sel`'s model, the refit on the filter's innovations,
-    /// and whether an alternative took the place of a dropped effect.
-    fn run(
-        &self,
-        worker: &mut Worker,
-        sel: &mut Selection,
-    ) -> Result<(Option<ProcessNoise>, bool), DiagnoseError> {
-        let Pass {
-            p,
-            columns,
-            opts,
-            progress,
-        } = *self;
+    let mut found = None;
+    // A second pass only after a substitution: the process noise was estimated from the residual of a model
+    // with an effect that has gone, so it is estimated again from the new model's residual and the refit
+    // repeated once.
+    for _pass in 0..2 {
         if sel.selected.is_empty() || columns.is_empty() {
-            return Ok((None, false));
+            break;
         }
         let r = search::raw_residuals(worker, &p.case, &p.sigma, &sel.selected)
             .map_err(sim_err("replay"))?;
         let Some((filter, report)) = process_noise::estimate(&p.case, columns, &r) else {
-            return Ok((None, false));
+            break;
         };
         let Some(filter) = filter else {
-            return Ok((Some(report), false));
+            found = Some(report);
+            break;
         };
         if report.velocity_variance < GUST_VARIANCE_MIN {
             // Process noise on the body rates alone: the small dynamics the named effects leave unexplained, not
             // gusts; output error is the estimator for a record without gusts, and its values stay.
-            return Ok((
-                Some(ProcessNoise {
-                    used: false,
-                    ..report
-                }),
-                false,
-            ));
+            found = Some(ProcessNoise {
+                used: false,
+                ..report
+            });
+            break;
         }
         let mut filtered = columns.to_vec();
         filtered.iter_mut().for_each(|c| filter.apply(c));
@@ -102,13 +69,14 @@ impl Pass<'_> {
         // a steady moment disturbance, which the process noise on the body rates partly tracks.
         let held = |a: &Active| a.ext.effect() == "sensor_bias";
         if sel.selected.iter().all(held) {
-            return Ok((Some(report), false));
+            found = Some(report);
+            break;
         }
         // At the coarse rate from the output-error values: the joint fit, and every named effect tested again
-        // against the model without it on the filter's innovations (backward elimination). Output error in gusts
-        // names effects that bend the replay towards the gusts' response; once the filter follows the gusts they
-        // no longer pay (in gusts a `CL_alpha2` −65, replaced by `Cm_alpha2` −11, came beside a hidden `Cn_r` ×0.57
-        // and raised the validation record's cost elevenfold).
+        // against the model without it on the filter's innovations (backward elimination). Output error in
+        // gusts names effects that bend the replay towards the gusts' response; once the filter follows the
+        // gusts they no longer pay (in gusts a `CL_alpha2` −65, replaced by `Cm_alpha2` −11, came beside a
+        // hidden `Cn_r` ×0.57 and raised the validation record's cost elevenfold).
         let reference = sel.selected.clone();
         let round = sel
             .candidates
@@ -171,7 +139,8 @@ impl Pass<'_> {
         if active.iter().any(|a| a.free) {
             let o = search::polish(worker, &w, &mut active, &coarse.sensitivities)
                 .map_err(sim_err("filter error refit"))?;
-            // One parameter per named effect is reported, the first; the fit's free parameters are in the same order.
+            // One parameter per named effect is reported, the first; the fit's free parameters are in the same
+            // order.
             let mut k = 0;
             for (a, n) in active.iter_mut().zip(named.iter_mut()) {
                 if a.free {
@@ -185,8 +154,12 @@ impl Pass<'_> {
         }
         // The refit may move an effect named by output error back to "no effect": it goes, as after any joint fit.
         drop_below_resolution(selected, named, candidates);
-        Ok((Some(report), substituted))
+        found = Some(report);
+        if !substituted {
+            break;
+        }
     }
+    Ok(found)
 }
 
 /// For each effect in `reference` that `state` no longer names (`effect/target`), its alternatives with their

@@ -182,10 +182,10 @@ pub(in crate::diagnose) struct Replacement<'a, 'e> {
 /// model, since otherwise they lost to the same model), less any effect already named. Two candidates whose
 /// sensitivities are nearly parallel (an input delay and an actuator lag on doublets) differ in cost by little,
 /// and while other effects are still unmodelled their residual decides which fits better; the choice is made
-/// only once those are modelled. A runner-up can lose its round by much for the same reason: with `Cn_beta` ×1.57 still unmodelled,
-/// `Cl_p` ×1.84 fitted a record with `Cl_da` ×0.46 better than `Cl_da` did. Both models have the same number of
-/// parameters, so the lower cost is the better criterion value; the alternative must also pass every
-/// significance test against the model without the effect it replaces.
+/// only once those are modelled. A runner-up can lose its round by much for the same reason: with `Cn_beta`
+/// ×1.57 still unmodelled, `Cl_p` ×1.84 fitted a record with `Cl_da` ×0.46 better than `Cl_da` did. Both models
+/// have the same number of parameters, so the lower cost is the better criterion value; the alternative must
+/// also pass every significance test against the model without the effect it replaces.
 pub(super) fn replace_ambiguous<'e>(
     refiner: &mut Refiner<'_, 'e>,
     sens: &[Vec<f64>],
@@ -326,13 +326,13 @@ impl<'e> Replacement<'_, 'e> {
 
 /// After backward elimination on other residuals has dropped named effects (`dropped`, keyed `effect/target`,
 /// each with the alternatives the selection had for it: the members of its ambiguity group and the candidates
-/// that passed their own tests in its round), each alternative is fitted in the dropped effect's place, the effects still named free but
-/// for those `held` says, from `start` (its output-error value), and the best that passes every test of the
-/// selection against the model without it is named (Miller, *Subset Selection in Regression*, 2nd ed., §3.3:
-/// the replacement step, here after the weighting of the residuals has changed). In gusts output error
-/// named `Cn_r` ×2.1 ahead of a hidden `Cn_dr` ×0.53 (ΔBIC −134 against −101, both significant); on the
-/// filter's innovations `Cn_r` was no longer determined and went, and `Cn_dr` was never fitted again. Returns
-/// the fit of the model with the named alternatives, None when none was named.
+/// that passed their own tests in its round), each alternative is fitted in the dropped effect's place, the
+/// effects still named free but for those `held` says, from `start` (its output-error value), and the best that
+/// passes every test of the selection against the model without it is named (Miller, *Subset Selection in
+/// Regression*, 2nd ed., §3.3: the replacement step, here after the weighting of the residuals has changed). In
+/// gusts output error named `Cn_r` ×2.1 ahead of a hidden `Cn_dr` ×0.53 (ΔBIC −134 against −101, both
+/// significant); on the filter's innovations `Cn_r` was no longer determined and went, and `Cn_dr` was never
+/// fitted again. Returns the fit of the model with the named alternatives, None when none was named.
 pub(in crate::diagnose) fn substitute_dropped<'e>(
     refiner: &mut Refiner<'_, 'e>,
     state: Replacement<'_, 'e>,
