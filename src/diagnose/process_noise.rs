@@ -61,8 +61,9 @@ pub struct ProcessNoise {
     pub used: bool,
 }
 
-/// The error dynamics `(A, C)` of `case` from the initial-state response `columns` (9 per segment, in
-/// segment order; channel-major, noise-normalised). `None` when there are none or the fit is singular.
+/// The error dynamics `(A, C)` of `case` from the initial-state response `columns` (the same number per
+/// segment, in segment order; channel-major, noise-normalised). `None` when there are none or the fit is
+/// singular.
 fn error_dynamics(case: &ReplayCase, columns: &[Vec<f64>]) -> Option<(Mat<f64>, Mat<f64>)> {
     let horizon = (MODEL_HORIZON_S / case.dt_s()).round() as usize;
     fit_error_dynamics(
@@ -74,8 +75,8 @@ fn error_dynamics(case: &ReplayCase, columns: &[Vec<f64>]) -> Option<(Mat<f64>, 
     )
 }
 
-/// [`error_dynamics`] for `columns` of `m` channels × `len` samples, 9 per segment starting at `segments`,
-/// fitted over `horizon` samples of each segment.
+/// [`error_dynamics`] for `columns` of `m` channels × `len` samples, the same number n per segment starting at
+/// `segments` (n states), fitted over `horizon` samples of each segment.
 fn fit_error_dynamics(
     columns: &[Vec<f64>],
     segments: &[usize],
@@ -83,8 +84,8 @@ fn fit_error_dynamics(
     m: usize,
     horizon: usize,
 ) -> Option<(Mat<f64>, Mat<f64>)> {
-    let n = 9;
-    if columns.len() != n * segments.len() || columns.is_empty() || len < 3 {
+    let n = columns.len() / segments.len().max(1);
+    if n == 0 || columns.len() != n * segments.len() || len < 3 {
         return None;
     }
     // Y(k) rows (one per channel) for every segment and step, and the next step's
@@ -197,7 +198,8 @@ pub fn estimate(
     let r_oe = channel_variance(&oe, len);
     // −2 ln L at q: the innovation variances relaxed twice from output error's
     let evaluate = |qv: f64, qr: f64| -> Option<(f64, ResidualFilter)> {
-        let mut q = vec![0.0; 9];
+        // (no process noise on the heading, a state the rates drive)
+        let mut q = vec![0.0; a.nrows()];
         VELOCITIES.iter().for_each(|&i| q[i] = qv);
         RATES.iter().for_each(|&i| q[i] = qr);
         let mut r = r_oe.clone();

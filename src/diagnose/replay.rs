@@ -21,9 +21,11 @@ pub const INPUTS: [(&str, &str); 4] = [
     ("throttle", "throttle"),
 ];
 
-/// Output columns compared between data and simulation (those present in both).
-/// (`psi_rad` is left out: heading wraps at 2π and drifts without bound.)
-pub const OUTPUTS: [&str; 12] = [
+/// Output columns compared between data and simulation (those present in both). Heading is compared as a
+/// continuous angle (the record's is unwrapped, see [`HEADING`]); its value at each segment's start is a
+/// nuisance term like the rest of the state (`search::initial_state_columns`), so what it adds is the turn
+/// rate: a replay banked by a φ-sensor bias turns at g·tanφ/V, which the r gyro reads like its own bias.
+pub const OUTPUTS: [&str; 13] = [
     "phi_rad",
     "theta_rad",
     "p_rad_s",
@@ -36,7 +38,12 @@ pub const OUTPUTS: [&str; 12] = [
     "ax_m_s2",
     "ay_m_s2",
     "az_m_s2",
+    HEADING,
 ];
+
+/// The heading column: compared only on the training record, where each segment's initial heading is
+/// estimated (a replay's heading drifts without bound from the record's otherwise).
+pub const HEADING: &str = "psi_rad";
 
 /// Lowest integration rate of a replay, Hz: a record logged slower is replayed at a whole multiple of its rate.
 /// JSBSim's discrete integration delays the response to a surface by about one integration step (measured on
@@ -206,6 +213,12 @@ impl ReplayCase {
                 mean0(col)
             };
             initial.insert(name.clone(), v);
+        }
+        let mut rec = rec;
+        if let Some(psi) = rec.column(HEADING) {
+            // continuous, starting within half a turn of zero as the simulation's heading does
+            let continuous = crate::signal::heading_from_zero_rad(psi);
+            rec.push_column(HEADING, continuous);
         }
         let inputs: Vec<(String, Vec<f64>)> = present_inputs
             .iter()

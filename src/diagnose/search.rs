@@ -233,8 +233,16 @@ pub fn raw_residuals(
         let yhat = rec.column(name).ok_or_else(|| {
             SimError::Protocol(format!("the simulation does not produce column {name}"))
         })?;
+        let heading = name == super::replay::HEADING;
         for k in 0..y.len() {
-            let e = (y[k] - yhat[k]) / sigma[c];
+            let d = y[k] - yhat[k];
+            // a heading error is an angle: a turn apart is no error
+            let d = if heading {
+                d - std::f64::consts::TAU * (d / std::f64::consts::TAU).round()
+            } else {
+                d
+            };
+            let e = d / sigma[c];
             r.push(if e.is_finite() { e } else { 1e6 });
         }
     }
@@ -303,7 +311,8 @@ fn state_perturbations() -> Vec<StateReset> {
 /// The nuisance terms of every fit: the state at the start of each of the case's segments (roll and pitch
 /// angles, body rates and velocities, altitude; `ReplayCase::segments`). Their effect on the noise-normalised
 /// residual is linearised once at the unextended model (one simulation per segment and state, in parallel on
-/// the workers, flown to the segment's end) and returned column by column (nine per segment, in segment order);
+/// the workers, flown to the segment's end) and returned column by column (nine per segment, in segment order,
+/// then the heading's where it is compared: [`heading_columns`]);
 /// [`residuals`] projects their [`orthonormal_basis`] off. A column ends with its segment, as in multiple
 /// shooting: what a state error at one segment's start does after the next one starts is the response to a
 /// state error there, which the next segment's columns span (to first order; engine and actuator states are
@@ -319,7 +328,41 @@ pub fn initial_state_columns(
     if !workers.first().is_some_and(|w| w.sim.supports_resets()) {
         return Ok(Vec::new());
     }
-    at_sensitivity_rate(workers, case, |workers| state_columns(workers, case, sigma))
+    let simulated =
+        at_sensitivity_rate(workers, case, |workers| state_columns(workers, case, sigma))?;
+    let heading = heading_columns(case, sigma);
+    if heading.is_empty() {
+        return Ok(simulated);
+    }
+    let per = simulated.len() / case.segments.len().max(1);
+    Ok(simulated
+        .chunks(per.max(1))
+        .zip(heading)
+        .flat_map(|(states, h)| states.iter().cloned().chain(std::iter::once(h)))
+        .collect())
+}
+
+/// Size of the heading step of [`heading_columns`], rad (the roll angle's step).
+const HEADING_STEP_RAD: f64 = 0.01;
+
+/// The heading at each segment's start, one column per segment: a step of [`HEADING_STEP_RAD`] moves the
+/// replayed heading by the step over that segment and nothing else (in the replay's still air no force or
+/// moment depends on heading), so the column is known without a simulation. Empty when heading is not compared.
+fn heading_columns(case: &ReplayCase, sigma: &[f64]) -> Vec<Vec<f64>> {
+    let Some(h) = case.outputs.iter().position(|o| o == super::replay::HEADING) else {
+        return Vec::new();
+    };
+    let len = case.len();
+    case.segments
+        .iter()
+        .enumerate()
+        .map(|(s, &b)| {
+            let end = case.segments.get(s + 1).copied().unwrap_or(len);
+            let mut col = vec![0.0; len * case.outputs.len()];
+            col[h * len + b..h * len + end].fill(HEADING_STEP_RAD / sigma[h]);
+            col
+        })
+        .collect()
 }
 
 /// [`initial_state_columns`] simulated at the workers' current rate.
