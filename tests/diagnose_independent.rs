@@ -2,8 +2,9 @@
 //! through JSBSim's own Python API, its own actuator and sample timing, a random trim point and heading, the
 //! maneuvers in sequence, sensor noise). A representative subset of the acceptance evaluation
 //! (`cargo bench --bench diagnose_eval`): a clean record, a signal-path effect, a sensor effect, a derivative,
-//! a pair, a derivative in light turbulence, and an effect the filter error refit must name in place of one it
-//! drops. The named set must be exactly the hidden one, each value within 15 % of the effect's size.
+//! a pair, a derivative in light turbulence, an effect the filter error refit must name in place of one it
+//! drops, and a yaw-rate gyro bias that only the heading tells from a roll-angle bias. The named set must be
+//! exactly the hidden one, each value within 15 % of the effect's size.
 
 use std::path::Path;
 use std::process::Command;
@@ -220,5 +221,31 @@ fn dropped_effect_gives_way_to_its_alternative_in_turbulence() {
             .as_deref()
             .is_some_and(|r| r.starts_with("dropped by the filter error refit"))),
         "the filter error refit dropped nothing: the case no longer exercises the replacement"
+    );
+}
+
+/// An r-gyro bias of −0.55°/s beside `Cn_r` ×0.51 and an elevator effectiveness ×1.37, in light turbulence
+/// (case 7 of `cargo bench --bench diagnose_eval -- --seed 4 --turbulence`, 50 s at 40 Hz). Without heading a
+/// replay banked by 0.039 rad turns at the rate the bias adds, and a φ bias took the r bias' place; the
+/// heading the record carries tells the two apart.
+#[test]
+fn yaw_gyro_bias_is_told_from_a_roll_bias_by_heading() {
+    let d = check_generated(
+        &[
+            "--cases",
+            "1",
+            "--first",
+            "7",
+            "--seed",
+            "4",
+            "--turbulence",
+            "--stratified",
+        ],
+        7,
+    );
+    assert!(
+        d.noise_std.contains_key("psi_rad"),
+        "heading is not compared: {:?}",
+        d.noise_std
     );
 }
