@@ -158,9 +158,13 @@ pub fn prepare(
         None => None,
     };
     let mut vcase = valid.as_deref().map(ReplayCase::new).transpose()?;
-    // The validation replay estimates no initial state, so its heading drifts from the record's without bound.
+    // Heading is compared only where each segment's initial heading is estimated (a simulation that can set
+    // its state mid-flight, the training record): elsewhere it drifts from the record's without bound.
     if let Some(v) = vcase.as_mut() {
         v.outputs.retain(|o| o != replay::HEADING);
+    }
+    if !worker.sim.supports_resets() {
+        case.outputs.retain(|o| o != replay::HEADING);
     }
     // A surface without a column is held at its trim in the replay: if it moved in flight, its effect is
     // unmodelled and any cause named on the axes it drives is suspect.
