@@ -10,6 +10,7 @@ pub mod baseline;
 pub mod cache;
 pub mod export;
 pub mod extension;
+pub mod initial_state;
 pub mod model;
 pub mod prepare;
 pub mod process_noise;
@@ -279,7 +280,7 @@ pub fn diagnose(
     let mut p = prepare::prepare(first, train, valid)?;
     progress.stage("segment initial states", 0);
     let columns =
-        search::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
+        initial_state::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
     let (columns, relaxed_weights) =
         relax::relax(&mut workers[0], &mut p, columns, opts.relax_weights)?;
     let process_noise = if opts.process_noise {

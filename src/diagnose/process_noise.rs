@@ -8,7 +8,7 @@
 //! `δx_{k+1} = A δx_k + w_k`,  `r_k = C δx_k + v_k`.
 //!
 //! `A` and `C` come from the responses that the segment initial states already need
-//! ([`super::search::initial_state_columns`]): the response to a unit perturbation `e_j` of state j at a
+//! ([`super::initial_state::initial_state_columns`]): the response to a unit perturbation `e_j` of state j at a
 //! segment start is `Y(k) e_j` with `Y(k) = C A^{k−k₀}`, so `A` is the least-squares solution of
 //! `Y(k+1) = Y(k) A` over the first [`MODEL_HORIZON_S`] of every segment, and `C = Y(k₀)`.
 //!
@@ -35,7 +35,7 @@ use crate::estimate::fem;
 pub const MODEL_HORIZON_S: f64 = 8.0;
 
 /// Grid of the process-noise variances tried, per second in the perturbation units of
-/// [`super::search::initial_state_columns`] (0.5 m/s, 0.005 rad/s): 10^(−3 … 2) in half decades.
+/// [`super::initial_state::initial_state_columns`] (0.5 m/s, 0.005 rad/s): 10^(−3 … 2) in half decades.
 fn variance_grid() -> Vec<f64> {
     (0..=10)
         .map(|i| 10f64.powf(-3.0 + 0.5 * i as f64))

@@ -23,7 +23,7 @@ pub const INPUTS: [(&str, &str); 4] = [
 
 /// Output columns compared between data and simulation (those present in both). Heading is compared as a
 /// continuous angle (the record's is unwrapped, see [`HEADING`]); its value at each segment's start is a
-/// nuisance term like the rest of the state (`search::initial_state_columns`), so what it adds is the turn
+/// nuisance term like the rest of the state (`initial_state::initial_state_columns`), so what it adds is the turn
 /// rate: a replay banked by a φ-sensor bias turns at g·tanφ/V, which the r gyro reads like its own bias.
 pub const OUTPUTS: [&str; 13] = [
     "phi_rad",
@@ -85,7 +85,7 @@ pub const SEGMENT_LEAD_S: f64 = 0.3;
 /// segment starting at 0 is not listed). An input is moving at sample k when it changed over the last half
 /// second by more than a tenth of its largest deviation from its initial value (robust to sensor noise on the
 /// surface columns). The state at each segment's start is estimated with every fit (a nuisance term, see
-/// `search::initial_state_columns`), so the slow modes (spiral, phugoid) cannot drift apart from the record over
+/// `initial_state::initial_state_columns`), so the slow modes (spiral, phugoid) cannot drift apart from the record over
 /// more than one maneuver: drift is not taken for a cause (the idea of multiple shooting, Bock & Plitt 1984;
 /// Jategaonkar, Flight Vehicle System Identification, 2nd ed., on estimating initial conditions per maneuver).
 pub fn segment_starts(inputs: &[(String, Vec<f64>)], dt_s: f64) -> Vec<usize> {

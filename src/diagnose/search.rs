@@ -21,7 +21,7 @@ use std::sync::{Arc, Mutex};
 use super::cache::{fingerprint, ReplayCache, ReplayKey};
 use super::extension::{Extension, Stage};
 pub use super::projection::{orthonormal_basis, project_off};
-use super::replay::{replay, replay_with_resets, ReplayCase};
+use super::replay::{replay, ReplayCase};
 use super::residual::{coloured_products, effective_n};
 use super::residual_filter::ResidualFilter;
 use super::simulator::ReplaySim;
@@ -29,7 +29,7 @@ use crate::data::FlightRecord;
 use crate::estimate::covariance;
 use crate::ident::linalg;
 use crate::optimise;
-use crate::sim::{SimError, StateReset, TrimState};
+use crate::sim::{SimError, TrimState};
 use faer::Mat;
 
 /// A simulation worker: one simulator and the store of replays it shares with the other workers.
@@ -63,7 +63,7 @@ impl Worker {
     }
 
     /// Counts a simulation that took `seconds`.
-    fn ran(&mut self, seconds: f64) {
+    pub(super) fn ran(&mut self, seconds: f64) {
         self.sim_s += seconds;
         self.simulations += 1;
         self.shared_simulations.fetch_add(1, Ordering::Relaxed);
@@ -171,8 +171,9 @@ pub struct Weighted<'c> {
     pub case: &'c ReplayCase,
     /// Noise standard deviation per output column (same order as `case.outputs`).
     pub sigma: Vec<f64>,
-    /// Orthonormal basis of the residual directions the nuisance terms explain (see [`initial_state_columns`]);
-    /// the residual is projected off it, which estimates the nuisance terms jointly with every fit.
+    /// Orthonormal basis of the residual directions the nuisance terms explain (see
+    /// [`super::initial_state::initial_state_columns`]); the residual is projected off it, which estimates the
+    /// nuisance terms jointly with every fit.
     pub nuisance: &'c [Vec<f64>],
     /// The filter error method's innovations in place of the output error (turbulence; see
     /// `process_noise`): applied before the nuisance terms are projected off.
@@ -282,134 +283,6 @@ pub fn coarse<R>(
         };
         Ok(f(ws, &corrected))
     })
-}
-
-/// State perturbations whose output effect spans a segment's initial-state error: (roll, pitch, body rates,
-/// body velocities, altitude), each a small step of that state alone (SI).
-fn state_perturbations() -> Vec<StateReset> {
-    let one = |f: &dyn Fn(&mut StateReset)| {
-        let mut r = StateReset {
-            relative: true,
-            ..Default::default()
-        };
-        f(&mut r);
-        r
-    };
-    vec![
-        one(&|r| r.phi_rad = Some(0.01)),
-        one(&|r| r.theta_rad = Some(0.005)),
-        one(&|r| r.rates_rad_s = Some([0.005, 0.0, 0.0])),
-        one(&|r| r.rates_rad_s = Some([0.0, 0.005, 0.0])),
-        one(&|r| r.rates_rad_s = Some([0.0, 0.0, 0.005])),
-        one(&|r| r.uvw_m_s = Some([0.5, 0.0, 0.0])),
-        one(&|r| r.uvw_m_s = Some([0.0, 0.5, 0.0])),
-        one(&|r| r.uvw_m_s = Some([0.0, 0.0, 0.3])),
-        one(&|r| r.altitude_m = Some(3.0)),
-    ]
-}
-
-/// The nuisance terms of every fit: the state at the start of each of the case's segments (roll and pitch
-/// angles, body rates and velocities, altitude; `ReplayCase::segments`). Their effect on the noise-normalised
-/// residual is linearised once at the unextended model (one simulation per segment and state, in parallel on
-/// the workers, flown to the segment's end) and returned column by column (nine per segment, in segment order,
-/// then the heading's where it is compared: [`heading_columns`]);
-/// [`residuals`] projects their [`orthonormal_basis`] off. A column ends with its segment, as in multiple
-/// shooting: what a state error at one segment's start does after the next one starts is the response to a
-/// state error there, which the next segment's columns span (to first order; engine and actuator states are
-/// not among the nine). Estimating the initial
-/// state per segment keeps the slow modes' drift, grown from small state errors over a long record, from being
-/// taken for a cause (Jategaonkar, Flight Vehicle System Identification, 2nd ed., initial conditions as
-/// unknowns per maneuver; multiple shooting). Empty when the simulation cannot set its state mid-flight.
-pub fn initial_state_columns(
-    workers: &mut [Worker],
-    case: &ReplayCase,
-    sigma: &[f64],
-) -> Result<Vec<Vec<f64>>, SimError> {
-    if !workers.first().is_some_and(|w| w.sim.supports_resets()) {
-        return Ok(Vec::new());
-    }
-    let simulated =
-        at_sensitivity_rate(workers, case, |workers| state_columns(workers, case, sigma))?;
-    let heading = heading_columns(case, sigma);
-    if heading.is_empty() {
-        return Ok(simulated);
-    }
-    let per = simulated.len() / case.segments.len().max(1);
-    Ok(simulated
-        .chunks(per.max(1))
-        .zip(heading)
-        .flat_map(|(states, h)| states.iter().cloned().chain(std::iter::once(h)))
-        .collect())
-}
-
-/// Size of the heading step of [`heading_columns`], rad (the roll angle's step).
-const HEADING_STEP_RAD: f64 = 0.01;
-
-/// The heading at each segment's start, one column per segment: a step of [`HEADING_STEP_RAD`] moves the
-/// replayed heading by the step over that segment and nothing else (in the replay's still air no force or
-/// moment depends on heading), so the column is known without a simulation. Empty when heading is not compared.
-fn heading_columns(case: &ReplayCase, sigma: &[f64]) -> Vec<Vec<f64>> {
-    let Some(h) = case.outputs.iter().position(|o| o == super::replay::HEADING) else {
-        return Vec::new();
-    };
-    let len = case.len();
-    case.segments
-        .iter()
-        .enumerate()
-        .map(|(s, &b)| {
-            let end = case.segments.get(s + 1).copied().unwrap_or(len);
-            let mut col = vec![0.0; len * case.outputs.len()];
-            col[h * len + b..h * len + end].fill(HEADING_STEP_RAD / sigma[h]);
-            col
-        })
-        .collect()
-}
-
-/// [`initial_state_columns`] simulated at the workers' current rate.
-fn state_columns(
-    workers: &mut [Worker],
-    case: &ReplayCase,
-    sigma: &[f64],
-) -> Result<Vec<Vec<f64>>, SimError> {
-    let Some(first) = workers.first_mut() else {
-        return Ok(Vec::new());
-    };
-    let (base, _) = simulate(first, case, &[])?;
-    // (reset, end of its segment): the next segment's start, or the record's end.
-    let items: Vec<(StateReset, usize)> = case
-        .segments
-        .iter()
-        .enumerate()
-        .flat_map(|(s, &b)| {
-            let end = case.segments.get(s + 1).copied().unwrap_or(case.len());
-            state_perturbations()
-                .into_iter()
-                .map(move |r| (StateReset { step: b, ..r }, end))
-        })
-        .collect();
-    let columns = par_map(workers, &items, |wk, (reset, end)| {
-        let t0 = std::time::Instant::now();
-        let out = replay_with_resets(
-            wk.sim.as_mut(),
-            &case.head(*end),
-            &[],
-            std::slice::from_ref(reset),
-        );
-        wk.ran(t0.elapsed().as_secs_f64());
-        let (rec, _) = out?;
-        let mut col = Vec::with_capacity(case.len() * case.outputs.len());
-        for (c, name) in case.outputs.iter().enumerate() {
-            let (Some(y), Some(y0)) = (rec.column(name), base.column(name)) else {
-                return Err(SimError::Protocol(format!(
-                    "the simulation does not produce column {name}"
-                )));
-            };
-            col.extend(y.iter().zip(y0).map(|(a, b)| (a - b) / sigma[c]));
-            col.resize((c + 1) * case.len(), 0.0);
-        }
-        Ok(col)
-    });
-    columns.into_iter().collect()
 }
 
 fn cost(r: &[f64]) -> f64 {
