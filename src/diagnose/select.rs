@@ -316,9 +316,9 @@ fn rejection(
             c.criterion_delta, opts.bic_threshold
         ))
     } else if c.z <= opts.min_z {
-        Some(format!("|z| {:.1} ≤ {}", c.z, opts.min_z))
+        Some(format!("{NOT_SIGNIFICANT} {:.1} ≤ {}", c.z, opts.min_z))
     } else if rel <= opts.min_relative_reduction {
-        Some(format!("explains {:.1} % of the cost", 100.0 * rel))
+        Some(format!("{SMALL_SHARE} {:.1} % of the cost", 100.0 * rel))
     } else {
         None
     }
@@ -353,6 +353,10 @@ fn beaten_within_resolution(round: &[Candidate], c: &Candidate) -> Option<String
 
 /// The start of the rejection reason of a fitted change within the resolution of "no effect".
 const WITHIN_RESOLUTION: &str = "smaller than the resolution";
+/// How the reason of a candidate that the coloured-residual significance test turned down starts.
+pub(super) const NOT_SIGNIFICANT: &str = "|z|";
+/// How the reason of a candidate that explains too small a share of the cost starts.
+pub(super) const SMALL_SHARE: &str = "explains";
 
 /// The score test of one entry: the one-step Gauss–Newton estimate from "no effect" and its cost
 /// reduction, with the Cramér–Rao bound √(J/n)/√(sᵀs). On the quadratic model J(δ) = J + 2δ sᵀr + δ² sᵀs the

@@ -81,8 +81,8 @@ pub(in crate::diagnose) fn eliminate_backward<'e>(
     let tested = selected.iter().filter(|a| !held(a)).count();
     if tested == 0 {
         let r = residuals(&mut workers[0], w, selected).map_err(sim_err("replay"))?;
-        let c = crate::signal::sum_sq(&r);
-        return Ok(evaluated(c, effective_n(&r, w.case.len())));
+        *cost = crate::signal::sum_sq(&r);
+        return Ok(evaluated(*cost, effective_n(&r, w.case.len())));
     }
     progress.stage(what, tested + 1);
     let mut full: Vec<Active<'e>> = free_unless_held(selected, &held).collect();
