@@ -344,8 +344,8 @@ fn beaten_within_resolution(round: &[Candidate], c: &Candidate) -> Option<String
         .min_by(|a, b| a.criterion_delta.total_cmp(&b.criterion_delta))?;
     (best.criterion_delta < c.criterion_delta).then(|| {
         format!(
-            "{} on {} at {:.4}, within its resolution {:.3} of no effect, explains the record better \
-             (ΔBIC {:.1} against {:.1}): the record is explained by a model that is right within its resolution",
+            "{BEATEN_WITHIN_RESOLUTION}: {} on {} at {:.4}, within its resolution {:.3} of no effect \
+             (ΔBIC {:.1} against {:.1})",
             best.effect, best.target, best.value, best.resolution, best.criterion_delta, c.criterion_delta
         )
     })
@@ -357,6 +357,10 @@ const WITHIN_RESOLUTION: &str = "smaller than the resolution";
 pub(super) const NOT_SIGNIFICANT: &str = "|z|";
 /// How the reason of a candidate that explains too small a share of the cost starts.
 pub(super) const SMALL_SHARE: &str = "explains";
+/// How the reason of a candidate that passed its own tests but lost to a fit within its resolution starts
+/// ([`beaten_within_resolution`]).
+pub(super) const BEATEN_WITHIN_RESOLUTION: &str =
+    "a model right within its resolution explains the record better";
 
 /// The score test of one entry: the one-step Gauss–Newton estimate from "no effect" and its cost
 /// reduction, with the Cramér–Rao bound √(J/n)/√(sᵀs). On the quadratic model J(δ) = J + 2δ sᵀr + δ² sᵀs the
