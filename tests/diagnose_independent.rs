@@ -199,7 +199,8 @@ fn pitch_damping_in_turbulence_is_named() {
 
 /// An a_z bias of 0.35 m/s² in light turbulence (case 13 of `cargo bench --bench diagnose_eval -- --seed 4
 /// --turbulence`, 45 s at 25 Hz). Output error names `Cm_alpha2` first, and the bias loses its round to a
-/// candidate within its resolution; the filter error refit drops `Cm_alpha2`, and the bias must take its place.
+/// candidate within its resolution; the filter error refit drops `Cm_alpha2`, and the bias, an alternative or a
+/// near miss of output error's, must take its place on the filter's innovations.
 #[test]
 fn dropped_effect_gives_way_to_its_alternative_in_turbulence() {
     let d = check_generated(
