@@ -28,10 +28,13 @@
 //! - Significant candidates that fit as well and whose sensitivities are nearly parallel to the chosen one's
 //!   form its ambiguity group.
 
+mod gates;
 mod identifiability;
 mod refine;
 pub use identifiability::profiled_information;
 use identifiability::{identifiable, Identifiable};
+use gates::{beaten_within_resolution, rejection};
+pub(super) use gates::{BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
 pub(super) use refine::{eliminate_backward, substitute_dropped, Replacement};
 use refine::{replace_ambiguous, Refiner};
 
@@ -269,98 +272,6 @@ impl RoundContext {
         }
     }
 }
-
-/// Why a fully fitted candidate is not significant (None: it is).
-fn rejection(
-    c: &Candidate,
-    e: &dyn Extension,
-    o: &FitOutcome,
-    base_cost: f64,
-    opts: &DiagnoseOptions,
-    mask: &[bool],
-) -> Option<String> {
-    let rel = 1.0 - o.cost_after / base_cost;
-    let spec = e.params()[0];
-    let resolution = c.resolution;
-    let at_bound = (c.value - spec.min).abs() <= 1e-9 * spec.min.abs().max(1.0)
-        || (c.value - spec.max).abs() <= 1e-9 * spec.max.abs().max(1.0);
-    // Cramér–Rao σ of the candidate with the other free parameters and the sensor offsets as nuisance terms.
-    let crb = match o.sensitivities.split_last() {
-        Some((s, others)) => {
-            let n = s.len() as f64;
-            let s2 = o.cost_after / (n - o.values.len() as f64).max(1.0);
-            let info = profiled_information(s, others, mask);
-            (s2 / info).sqrt()
-        }
-        None => f64::INFINITY,
-    }
-    .max(o.crb_std_errors.last().copied().unwrap_or(f64::INFINITY));
-    if at_bound {
-        // No interior optimum: the effect explains something else (a missing input, another effect).
-        Some(format!(
-            "value at the bound of its range [{}, {}]",
-            spec.min, spec.max
-        ))
-    } else if (c.value - spec.null).abs() < resolution {
-        Some(format!(
-            "{WITHIN_RESOLUTION} {resolution:.3} of the effect on this record"
-        ))
-    } else if 3.0 * crb > resolution {
-        Some(format!(
-            "not determined by the record (Cramér–Rao σ {crb:.3e} after the nuisance terms > a third of \
-             the resolution {resolution:.3})"
-        ))
-    } else if c.criterion_delta >= opts.bic_threshold {
-        Some(format!(
-            "ΔBIC {:.1} ≥ {}",
-            c.criterion_delta, opts.bic_threshold
-        ))
-    } else if c.z <= opts.min_z {
-        Some(format!("{NOT_SIGNIFICANT} {:.1} ≤ {}", c.z, opts.min_z))
-    } else if rel <= opts.min_relative_reduction {
-        Some(format!("{SMALL_SHARE} {:.1} % of the cost", 100.0 * rel))
-    } else {
-        None
-    }
-}
-
-/// Why a significant candidate `c` is not named although it passes its own tests (None: nothing beats it): a
-/// fully fitted candidate of the same round whose fitted change is within its own resolution of "no effect"
-/// explains the record better (a lower ΔBIC with as many parameters). The record is then explained at least as
-/// well by a model that is right within its resolution, and `c` took the place of a mismatch no entry names
-/// (a record's input timing, a small error spread over several terms): a derivative whose moment is small
-/// reaches a large factor from a small moment error. Among non-nested models with equal parameter counts BIC
-/// prefers the lower cost (Schwarz 1978; Burnham & Anderson, Model Selection and Multimodel Inference, §6.4).
-fn beaten_within_resolution(round: &[Candidate], c: &Candidate) -> Option<String> {
-    let within = |x: &&Candidate| {
-        x.full_fit
-            && x.rejected_because
-                .as_deref()
-                .is_some_and(|r| r.starts_with(WITHIN_RESOLUTION))
-    };
-    let best = round
-        .iter()
-        .filter(within)
-        .min_by(|a, b| a.criterion_delta.total_cmp(&b.criterion_delta))?;
-    (best.criterion_delta < c.criterion_delta).then(|| {
-        format!(
-            "{BEATEN_WITHIN_RESOLUTION}: {} on {} at {:.4}, within its resolution {:.3} of no effect \
-             (ΔBIC {:.1} against {:.1})",
-            best.effect, best.target, best.value, best.resolution, best.criterion_delta, c.criterion_delta
-        )
-    })
-}
-
-/// The start of the rejection reason of a fitted change within the resolution of "no effect".
-const WITHIN_RESOLUTION: &str = "smaller than the resolution";
-/// How the reason of a candidate that the coloured-residual significance test turned down starts.
-pub(super) const NOT_SIGNIFICANT: &str = "|z|";
-/// How the reason of a candidate that explains too small a share of the cost starts.
-pub(super) const SMALL_SHARE: &str = "explains";
-/// How the reason of a candidate that passed its own tests but lost to a fit within its resolution starts
-/// ([`beaten_within_resolution`]).
-pub(super) const BEATEN_WITHIN_RESOLUTION: &str =
-    "a model right within its resolution explains the record better";
 
 /// The score test of one entry: the one-step Gauss–Newton estimate from "no effect" and its cost
 /// reduction, with the Cramér–Rao bound √(J/n)/√(sᵀs). On the quadratic model J(δ) = J + 2δ sᵀr + δ² sᵀs the

@@ -1,8 +1,6 @@
 //! Unit tests of the selection's rules.
-use super::{
-    beaten_within_resolution, drop_below_resolution, profiled_information, score_test,
-    WITHIN_RESOLUTION,
-};
+use super::gates::WITHIN_RESOLUTION;
+use super::{beaten_within_resolution, drop_below_resolution, profiled_information, score_test};
 use crate::diagnose::extension::make;
 use crate::diagnose::search::Active;
 use crate::diagnose::{Candidate, NamedCause};
