@@ -33,14 +33,14 @@ fn state_perturbations() -> Vec<StateReset> {
 /// angles, body rates and velocities, altitude; `ReplayCase::segments`). Their effect on the noise-normalised
 /// residual is linearised once at the unextended model (one simulation per segment and state, in parallel on
 /// the workers, flown to the segment's end) and returned column by column (nine per segment, in segment order,
-/// then the heading's where it is compared: [`heading_columns`]);
-/// [`residuals`] projects their [`orthonormal_basis`] off. A column ends with its segment, as in multiple
-/// shooting: what a state error at one segment's start does after the next one starts is the response to a
-/// state error there, which the next segment's columns span (to first order; engine and actuator states are
-/// not among the nine). Estimating the initial
-/// state per segment keeps the slow modes' drift, grown from small state errors over a long record, from being
-/// taken for a cause (Jategaonkar, Flight Vehicle System Identification, 2nd ed., initial conditions as
-/// unknowns per maneuver; multiple shooting). Empty when the simulation cannot set its state mid-flight.
+/// then the heading's where it is compared: [`heading_columns`]); [`super::search::residuals`] projects their
+/// [`super::search::orthonormal_basis`] off. A column ends with its segment, as in multiple shooting: what a
+/// state error at one segment's start does after the next one starts is the response to a state error there,
+/// which the next segment's columns span (to first order; engine and actuator states are not among the nine).
+/// Estimating the initial state per segment keeps the slow modes' drift, grown from small state errors over a
+/// long record, from being taken for a cause (Jategaonkar, Flight Vehicle System Identification, 2nd ed.,
+/// initial conditions as unknowns per maneuver; multiple shooting). Empty when the simulation cannot set its
+/// state mid-flight.
 pub fn initial_state_columns(
     workers: &mut [Worker],
     case: &ReplayCase,
@@ -70,7 +70,11 @@ const HEADING_STEP_RAD: f64 = 0.01;
 /// replayed heading by the step over that segment and nothing else (in the replay's still air no force or
 /// moment depends on heading), so the column is known without a simulation. Empty when heading is not compared.
 fn heading_columns(case: &ReplayCase, sigma: &[f64]) -> Vec<Vec<f64>> {
-    let Some(h) = case.outputs.iter().position(|o| o == super::replay::HEADING) else {
+    let Some(h) = case
+        .outputs
+        .iter()
+        .position(|o| o == super::replay::HEADING)
+    else {
         return Vec::new();
     };
     let len = case.len();

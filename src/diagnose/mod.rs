@@ -279,8 +279,8 @@ pub fn diagnose(
     progress.stage("trim", 0);
     let mut p = prepare::prepare(first, train, valid)?;
     progress.stage("segment initial states", 0);
-    let columns =
-        initial_state::initial_state_columns(workers, &p.case, &p.sigma).map_err(sim_err("replay"))?;
+    let columns = initial_state::initial_state_columns(workers, &p.case, &p.sigma)
+        .map_err(sim_err("replay"))?;
     let (columns, relaxed_weights) =
         relax::relax(&mut workers[0], &mut p, columns, opts.relax_weights)?;
     let process_noise = if opts.process_noise {

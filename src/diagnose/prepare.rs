@@ -22,7 +22,8 @@ pub struct Prepared {
     pub skipped: Vec<Skipped>,
     /// Conditions that limit what the verdict can be trusted for.
     pub warnings: Vec<String>,
-    /// The nuisance terms of the training record's fits (`initial_state::initial_state_columns`, orthonormalised; set by `diagnose`).
+    /// The nuisance terms of the training record's fits (`initial_state::initial_state_columns`,
+    /// orthonormalised; set by `diagnose`).
     pub nuisance: Vec<Vec<f64>>,
     /// The filter error method's filter on the training record's residuals when it flew in turbulence
     /// (`process_noise::estimate`; set by `diagnose`).

@@ -246,7 +246,10 @@ const NEAR_MISS_Z_SHARE: f64 = 0.8;
 fn near_misses(named: &[NamedCause], candidates: &[Candidate], min_z: f64) -> Vec<(String, f64)> {
     let key = |effect: &str, target: &str| format!("{effect}/{target}");
     let mut latest: Vec<&Candidate> = Vec::new();
-    for c in candidates.iter().filter(|c| c.full_fit && c.value.is_finite()) {
+    for c in candidates
+        .iter()
+        .filter(|c| c.full_fit && c.value.is_finite())
+    {
         match latest
             .iter_mut()
             .find(|l| l.effect == c.effect && l.target == c.target)

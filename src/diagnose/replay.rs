@@ -23,8 +23,8 @@ pub const INPUTS: [(&str, &str); 4] = [
 
 /// Output columns compared between data and simulation (those present in both). Heading is compared as a
 /// continuous angle (the record's is unwrapped, see [`HEADING`]); its value at each segment's start is a
-/// nuisance term like the rest of the state (`initial_state::initial_state_columns`), so what it adds is the turn
-/// rate: a replay banked by a φ-sensor bias turns at g·tanφ/V, which the r gyro reads like its own bias.
+/// nuisance term like the rest of the state (`initial_state::initial_state_columns`), so what it adds is the
+/// turn rate: a replay banked by a φ-sensor bias turns at g·tanφ/V, which the r gyro reads like its own bias.
 pub const OUTPUTS: [&str; 13] = [
     "phi_rad",
     "theta_rad",

@@ -31,10 +31,10 @@
 mod gates;
 mod identifiability;
 mod refine;
-pub use identifiability::profiled_information;
-use identifiability::{identifiable, Identifiable};
 use gates::{beaten_within_resolution, rejection};
 pub(super) use gates::{BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
+pub use identifiability::profiled_information;
+use identifiability::{identifiable, Identifiable};
 pub(super) use refine::{eliminate_backward, substitute_dropped, Replacement};
 use refine::{replace_ambiguous, Refiner};
 

@@ -66,7 +66,10 @@ pub(in crate::diagnose) fn rejection(
 /// (a record's input timing, a small error spread over several terms): a derivative whose moment is small
 /// reaches a large factor from a small moment error. Among non-nested models with equal parameter counts BIC
 /// prefers the lower cost (Schwarz 1978; Burnham & Anderson, Model Selection and Multimodel Inference, §6.4).
-pub(in crate::diagnose) fn beaten_within_resolution(round: &[Candidate], c: &Candidate) -> Option<String> {
+pub(in crate::diagnose) fn beaten_within_resolution(
+    round: &[Candidate],
+    c: &Candidate,
+) -> Option<String> {
     let within = |x: &&Candidate| {
         x.full_fit
             && x.rejected_because
