@@ -33,7 +33,7 @@ fn state_perturbations() -> Vec<StateReset> {
 /// angles, body rates and velocities, altitude; `ReplayCase::segments`). Their effect on the noise-normalised
 /// residual is linearised once at the unextended model (one simulation per segment and state, in parallel on
 /// the workers, flown to the segment's end) and returned column by column (nine per segment, in segment order,
-/// then the heading's where it is compared: [`heading_columns`]); [`super::search::residuals`] projects their
+/// then the heading's where it is compared: `heading_columns`); [`super::search::residuals`] projects their
 /// [`super::search::orthonormal_basis`] off. A column ends with its segment, as in multiple shooting: what a
 /// state error at one segment's start does after the next one starts is the response to a state error there,
 /// which the next segment's columns span (to first order; engine and actuator states are not among the nine).
