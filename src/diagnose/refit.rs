@@ -6,8 +6,7 @@
 //! the gusts' response (Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., §5.1). Once the causes
 //! are named, the extended model's residual holds the gusts and the noise only, so the process noise is
 //! estimated from it ([`super::process_noise::estimate`]) and, when the likelihood finds it, the named
-//! effects are refitted jointly on the filter's innovations. There output error's near misses, and the sensor
-//! effects whose information output error's gust-relaxed weights left too small to identify, are tested again.
+//! effects are refitted jointly on the filter's innovations.
 
 use super::process_noise::{self, ProcessNoise};
 use super::progress::Progress;
@@ -31,15 +30,7 @@ pub fn refit_in_turbulence(
     progress: &Progress,
 ) -> Result<Option<ProcessNoise>, DiagnoseError> {
     let mut found = None;
-    // Output error's near misses, then the sensor effects its information could not identify (from their null
-    // values): one group, of which the best that passes every test on the innovations is named.
-    let mut near = near_misses(&sel.named, &sel.candidates, opts.min_z);
-    near.extend(
-        sel.weak
-            .catalogue
-            .iter()
-            .map(|e| (e.key(), e.params()[0].null)),
-    );
+    let near = near_misses(&sel.named, &sel.candidates, opts.min_z);
     // A second pass only after a substitution: the process noise was estimated from the residual of a model
     // with an effect that has gone or come, so it is estimated again from the new model's residual and the
     // refit repeated once.
@@ -103,10 +94,8 @@ pub fn refit_in_turbulence(
             candidates,
             entries,
             alternatives,
-            weak,
-            unidentifiable,
+            ..
         } = sel;
-        let entries = entries.joined(weak);
         // Without the share of the cost a named effect must explain: that gate guards output error against its
         // coloured residual, and the innovations are white but for what the lag window still finds; their cost is
         // mostly the gusts' own, so a hidden `Cn_beta` ×1.46 at z 20.7 and ΔBIC −162 explains only 1.5 % of it.
@@ -176,12 +165,6 @@ pub fn refit_in_turbulence(
         }
         // The refit may move an effect named by output error back to "no effect": it goes, as after any joint fit.
         drop_below_resolution(selected, named, candidates);
-        // A sensor effect the innovations identified is no longer one the record cannot identify.
-        unidentifiable.retain(|u| {
-            !named
-                .iter()
-                .any(|n| n.effect == u.effect && n.target == u.target)
-        });
         found = Some(report);
         if !substituted {
             break;

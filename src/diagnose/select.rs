@@ -62,11 +62,6 @@ pub struct Selection<'e> {
     /// The identifiable catalogue entries, each with its resolution on the record and its sensor-offset mask
     /// (what a later stage needs to test a named effect as the selection did).
     pub entries: Entries<'e>,
-    /// The sensor effects among the unidentifiable entries (with a finite Cramér–Rao bound): output error's
-    /// information about them is what its residual weights leave, and in gusts those weights are the gusts'
-    /// response. The filter error refit tests them on its innovations, where the same identifiability rule is
-    /// applied to the filter's own bound.
-    pub weak: Entries<'e>,
 }
 
 /// The identifiable catalogue entries with their resolution on the record and their channel masks.
@@ -80,25 +75,6 @@ pub struct Entries<'e> {
 }
 
 impl<'e> Entries<'e> {
-    /// These entries followed by `more`'s.
-    pub(super) fn joined(&self, more: &Entries<'e>) -> Entries<'e> {
-        Entries {
-            catalogue: self
-                .catalogue
-                .iter()
-                .chain(&more.catalogue)
-                .copied()
-                .collect(),
-            resolution: self
-                .resolution
-                .iter()
-                .chain(&more.resolution)
-                .copied()
-                .collect(),
-            masks: self.masks.iter().chain(&more.masks).cloned().collect(),
-        }
-    }
-
     /// A backward-elimination context on `workers` and the weighting `w`.
     pub(super) fn refiner<'a>(
         &'a self,
@@ -416,7 +392,6 @@ pub fn select<'e>(
         resolution,
         masks,
         skipped: unidentifiable,
-        weak,
     } = search::coarse(workers, &w, &[], |ws, cw| {
         identifiable(ws, cw, p, opts, progress)
     })
@@ -698,7 +673,6 @@ pub fn select<'e>(
             resolution,
             masks,
         },
-        weak,
     })
 }
 

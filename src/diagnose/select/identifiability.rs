@@ -6,7 +6,6 @@ use super::super::prepare::Prepared;
 use super::super::progress::Progress;
 use super::super::search::{null_sensitivity, par_map, residuals, Weighted, Worker};
 use super::super::{sim_err, DiagnoseError, DiagnoseOptions, Skipped};
-use super::Entries;
 
 /// Fisher information about the parameter with sensitivity `s` once the nuisance terms are estimated with it:
 /// ‖(1 − P) s‖², P the projection onto the `others` columns and onto an offset on every channel whose `mask`
@@ -70,16 +69,14 @@ pub(super) fn offset_mask(
 }
 
 /// What the identifiability stage hands the selection: the entries the record can identify, their
-/// sensitivities at the unextended model, their resolution on this record and their nuisance masks; the
-/// entries it cannot identify, with the reason; and of those the sensor effects, which the filter's innovations
-/// may identify in gusts (`weak`, see [`Selection::weak`](super::Selection::weak)).
+/// sensitivities at the unextended model, their resolution on this record and their nuisance masks; and the
+/// entries it cannot identify, with the reason.
 pub(super) struct Identifiable<'e> {
     pub(super) entries: Vec<&'e dyn Extension>,
     pub(super) sensitivities: Vec<Vec<f64>>,
     pub(super) resolution: Vec<f64>,
     pub(super) masks: Vec<Vec<bool>>,
     pub(super) skipped: Vec<Skipped>,
-    pub(super) weak: Entries<'e>,
 }
 
 /// The catalogue entries the record can identify: Cramér–Rao bound 1/√I, from the information after the
@@ -139,11 +136,6 @@ pub(super) fn identifiable<'e>(
         resolution: Vec::new(),
         masks: Vec::new(),
         skipped: Vec::new(),
-        weak: Entries {
-            catalogue: Vec::new(),
-            resolution: Vec::new(),
-            masks: Vec::new(),
-        },
     };
     for ((((e, s), i), res), mask) in entries
         .into_iter()
@@ -155,11 +147,6 @@ pub(super) fn identifiable<'e>(
         let crb = 1.0 / i.sqrt();
         let determined = 3.0 * crb <= res; // false for a NaN bound too
         if !determined {
-            if crb.is_finite() && e.effect().starts_with("sensor_") {
-                out.weak.catalogue.push(e);
-                out.weak.resolution.push(res);
-                out.weak.masks.push(mask);
-            }
             out.skipped.push(Skipped {
                 effect: e.effect().into(),
                 target: e.target().into(),
