@@ -160,6 +160,10 @@ pub struct Candidate {
     pub round: usize,
     /// Fully fitted (true) or only screened by the score test.
     pub full_fit: bool,
+    /// Leave-one-segment-out cross-validation of the fitted change on the training record: the cost it
+    /// removes on each held-out segment when its size is estimated from the others, over the cost it removes
+    /// there in the fit (`None` where no segment can be held out).
+    pub held_out_share: Option<f64>,
 }
 
 /// A named cause (docs/diagnose.md `named_cause`).

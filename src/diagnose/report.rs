@@ -115,6 +115,7 @@ fn candidates_section(d: &Diagnosis) -> Section {
             "std error",
             "ΔBIC",
             "|z|",
+            "held-out share",
             "validation gain",
             "verdict",
         ],
@@ -128,6 +129,9 @@ fn candidates_section(d: &Diagnosis) -> Section {
                     f(c.std_error),
                     format!("{:.1}", c.criterion_delta),
                     format!("{:.1}", c.z),
+                    c.held_out_share
+                        .map(|h| format!("{h:.2}"))
+                        .unwrap_or_default(),
                     c.validation_gain
                         .map(|g| format!("{:.1} %", 100.0 * g))
                         .unwrap_or_default(),

@@ -163,3 +163,156 @@ pub fn effective_n(r: &[f64], m: usize) -> f64 {
         })
         .sum()
 }
+
+/// Least share of the change's weight Σ dᵀd that the other segments must carry for a segment to be held out
+/// in [`held_out_share`]: a segment the others barely inform is not tested.
+const HELD_OUT_MIN_REST: f64 = 0.25;
+
+/// Least share of the change's weight that a held-out segment must carry to count.
+const HELD_OUT_MIN_OWN: f64 = 0.05;
+
+/// Leave-one-segment-out cross-validation of a fitted change (Stone 1974; Allen's PRESS): the residual moves
+/// from `r_base` (the model before) to `r_fit` (after), channel-major, `len` samples per channel, the record
+/// split at `segments` (sample indices of the segment starts after the first). Along that change,
+/// r(t) = r_base + t d with d = r_fit − r_base, each segment g is held out in turn: t is estimated from the
+/// others, t₋g = −Σ_{h≠g} d_hᵀ r_h / Σ_{h≠g} d_hᵀ d_h, and the cost it removes on g, ‖r_g‖² − ‖r_g + t₋g d_g‖²,
+/// is summed. Returned: that held-out reduction over the in-sample one (t = 1) on the same segments, 1 for a
+/// change the segments agree on, ≤ 0 for one that fits a single segment's departure (a drift, a gust) and
+/// makes the others worse. `None` when no segment can be held out (an effect one maneuver alone excites).
+pub fn held_out_share(
+    r_base: &[f64],
+    r_fit: &[f64],
+    segments: &[usize],
+    len: usize,
+) -> Option<f64> {
+    if len == 0 || r_base.len() != r_fit.len() || r_base.len() % len != 0 {
+        return None;
+    }
+    let bounds: Vec<(usize, usize)> = std::iter::once(0)
+        .chain(segments.iter().copied())
+        .zip(segments.iter().copied().chain(std::iter::once(len)))
+        .filter(|(b, e)| b < e)
+        .collect();
+    // per segment: dᵀd, dᵀr
+    let sums: Vec<(f64, f64)> = bounds
+        .iter()
+        .map(|&(b, e)| {
+            let (mut dd, mut dr) = (0.0, 0.0);
+            for c in 0..r_base.len() / len {
+                for k in c * len + b..c * len + e {
+                    let d = r_fit[k] - r_base[k];
+                    dd += d * d;
+                    dr += d * r_base[k];
+                }
+            }
+            (dd, dr)
+        })
+        .collect();
+    let (total_dd, total_dr) = sums
+        .iter()
+        .fold((0.0, 0.0), |(a, b), &(dd, dr)| (a + dd, b + dr));
+    if total_dd <= 0.0 {
+        return None;
+    }
+    let (mut held_out, mut in_sample) = (0.0, 0.0);
+    for &(dd, dr) in &sums {
+        let rest = total_dd - dd;
+        if rest < HELD_OUT_MIN_REST * total_dd || dd < HELD_OUT_MIN_OWN * total_dd {
+            continue;
+        }
+        let t = -(total_dr - dr) / rest;
+        held_out += -(2.0 * t * dr + t * t * dd);
+        in_sample += -(2.0 * dr + dd);
+    }
+    (in_sample > 0.0).then(|| held_out / in_sample)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::held_out_share;
+
+    /// Two channels of 300 samples, segments starting at 100 and 200; `f(channel, k)`.
+    fn series(f: impl Fn(usize, usize) -> f64) -> Vec<f64> {
+        (0..2)
+            .flat_map(|c| (0..300).map(move |k| (c, k)))
+            .map(|(c, k)| f(c, k))
+            .collect()
+    }
+
+    fn wiggle(c: usize, k: usize) -> f64 {
+        ((k as f64) * 0.37 + c as f64).sin()
+    }
+
+    #[test]
+    fn a_change_every_segment_agrees_on_keeps_its_whole_gain() {
+        // the base misses the same signature everywhere; the fit removes it
+        let base = series(|c, k| 2.0 * wiggle(c, k));
+        let fit = series(|_, _| 0.0);
+        let share = held_out_share(&base, &fit, &[100, 200], 300).expect("testable");
+        assert!((share - 1.0).abs() < 1e-12, "{share}");
+    }
+
+    #[test]
+    fn a_change_that_fits_one_segment_and_spoils_the_others_gains_nothing_held_out() {
+        // segment 1 departs by +2 w, the others not; the fit moves all three by −w (the compromise)
+        let base = series(|c, k| if k < 100 { 2.0 * wiggle(c, k) } else { 0.0 });
+        let fit = series(|c, k| base_minus(c, k));
+        fn base_minus(c: usize, k: usize) -> f64 {
+            let b = if k < 100 { 2.0 * wiggle(c, k) } else { 0.0 };
+            b - 0.7 * wiggle(c, k)
+        }
+        let share = held_out_share(&base, &fit, &[100, 200], 300).expect("testable");
+        assert!(share < 0.0, "{share}");
+    }
+
+    #[test]
+    fn a_change_one_segment_alone_carries_cannot_be_held_out() {
+        let base = series(|c, k| {
+            if (100..200).contains(&k) {
+                wiggle(c, k)
+            } else {
+                0.0
+            }
+        });
+        let fit = series(|_, _| 0.0);
+        assert_eq!(held_out_share(&base, &fit, &[100, 200], 300), None);
+    }
+
+    #[test]
+    fn the_held_out_share_matches_a_direct_leave_one_out() {
+        // pseudo-random residuals and change; three segments of unequal length
+        let mut state = 12345u64;
+        let mut rnd = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (len, segments) = (250, [80usize, 170]);
+        let base: Vec<f64> = (0..2 * len).map(|_| rnd()).collect();
+        let fit: Vec<f64> = base.iter().map(|b| 0.6 * b + 0.3 * rnd()).collect();
+        // direct: per held-out segment, t by the parabola through three evaluations of the others' cost
+        let seg = |k: usize| segments.iter().filter(|&&b| k % len >= b).count();
+        let cost = |t: f64, keep: &dyn Fn(usize) -> bool| -> f64 {
+            (0..2 * len)
+                .filter(|&k| keep(seg(k)))
+                .map(|k| (base[k] + t * (fit[k] - base[k])).powi(2))
+                .sum()
+        };
+        let (mut held, mut fitted) = (0.0, 0.0);
+        for g in 0..3 {
+            let others = |s: usize| s != g;
+            let (c0, c1, c2) = (cost(-1.0, &others), cost(0.0, &others), cost(1.0, &others));
+            let t = 0.5 * (c0 - c2) / (c0 - 2.0 * c1 + c2);
+            let own = |s: usize| s == g;
+            held += cost(0.0, &own) - cost(t, &own);
+            fitted += cost(0.0, &own) - cost(1.0, &own);
+        }
+        let share = held_out_share(&base, &fit, &segments, len).expect("testable");
+        assert!(
+            (share - held / fitted).abs() < 1e-9,
+            "{share} vs {}",
+            held / fitted
+        );
+    }
+}

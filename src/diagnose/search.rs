@@ -308,6 +308,8 @@ pub struct FitOutcome {
     pub sensitivities: Vec<Vec<f64>>,
     /// Simulations run.
     pub evaluations: usize,
+    /// The noise-normalised residual at the fitted values (empty where no fit ran).
+    pub residual: Vec<f64>,
 }
 
 /// Residual sensitivities ∂r/∂θ of the `free` parameters by forward differences from `r` (a
@@ -580,6 +582,7 @@ fn fit_from(
         n_eff,
         sensitivities: cols,
         evaluations,
+        residual: r,
     })
 }
 

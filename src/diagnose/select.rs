@@ -269,6 +269,7 @@ impl RoundContext {
             rejected_because: None,
             round: self.round,
             full_fit,
+            held_out_share: None,
         }
     }
 }
@@ -302,6 +303,7 @@ fn score_test(e: &dyn Extension, s: &[f64], r: &[f64], cost: f64, n_eff: f64) ->
         n_eff,
         sensitivities: Vec::new(),
         evaluations: 0,
+        residual: Vec::new(),
     }
 }
 
@@ -507,10 +509,10 @@ pub fn select<'e>(
         // Significance of each fully fitted candidate.
         let mut sig: Vec<(usize, f64, usize)> = Vec::new(); // (index in top, cost, index in candidates)
         let first = candidates.len();
-        for (t, r) in full.iter().enumerate() {
+        for (t, outcome) in full.iter().enumerate() {
             let i = pool[top[t]];
             let e = catalogue[i];
-            let (o, _) = match r {
+            let (o, _) = match outcome {
                 Ok(fitted) => fitted,
                 Err(err) => {
                     // Listed with the score test's estimate and why the fit stopped, not left out.
@@ -521,6 +523,8 @@ pub fn select<'e>(
                 }
             };
             let mut c = ctx.candidate(e, o, true, resolution[i]);
+            c.held_out_share =
+                super::residual::held_out_share(&r, &o.residual, &w.case.segments, w.case.len());
             c.rejected_because = rejection(&c, e, o, base_cost, opts, &masks[i]);
             if c.rejected_because.is_none() {
                 sig.push((t, o.cost_after, candidates.len()));

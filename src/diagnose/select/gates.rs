@@ -54,6 +54,13 @@ pub(in crate::diagnose) fn rejection(
         Some(format!("{NOT_SIGNIFICANT} {:.1} ≤ {}", c.z, opts.min_z))
     } else if rel <= opts.min_relative_reduction {
         Some(format!("{SMALL_SHARE} {:.1} % of the cost", 100.0 * rel))
+    } else if let Some(share) = c.held_out_share.filter(|&h| h <= 0.0) {
+        // The record's own hold-out: the change fits some maneuvers at the others' expense (a drift, a gust
+        // in one segment), and estimated from the other segments it makes each held-out one no better.
+        Some(format!(
+            "{NOT_HELD_OUT}: sized from the other segments it removes no cost from the held-out ones \
+             (held-out share {share:.2})"
+        ))
     } else {
         None
     }
@@ -95,6 +102,8 @@ pub(in crate::diagnose) const WITHIN_RESOLUTION: &str = "smaller than the resolu
 pub(in crate::diagnose) const NOT_SIGNIFICANT: &str = "|z|";
 /// How the reason of a candidate that explains too small a share of the cost starts.
 pub(in crate::diagnose) const SMALL_SHARE: &str = "explains";
+/// Start of the rejection of a fit that the record's segments do not agree on.
+pub(in crate::diagnose) const NOT_HELD_OUT: &str = "not confirmed by the held-out segments";
 /// How the reason of a candidate that passed its own tests but lost to a fit within its resolution starts
 /// ([`beaten_within_resolution`]).
 pub(in crate::diagnose) const BEATEN_WITHIN_RESOLUTION: &str =

@@ -162,6 +162,7 @@ fn evaluated(cost: f64, n_eff: f64) -> FitOutcome {
         n_eff,
         sensitivities: Vec::new(),
         evaluations: 1,
+        residual: Vec::new(),
     }
 }
 

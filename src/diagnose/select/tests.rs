@@ -23,6 +23,7 @@ fn accepted(effect: &str, target: &str, value: f64, resolution: f64) -> Candidat
         rejected_because: None,
         round: 0,
         full_fit: true,
+        held_out_share: None,
     }
 }
 
@@ -152,4 +153,43 @@ fn a_score_test_step_beyond_the_range_is_held_at_the_bound() {
     let o = score_test(gain.as_ref(), &s, &r, 1.0, 4.0);
     assert!((o.values[0] - 0.5).abs() < 1e-12, "{}", o.values[0]);
     assert!(o.cost_after.abs() < 1e-12, "{}", o.cost_after);
+}
+
+#[test]
+fn a_change_the_held_out_segments_do_not_confirm_is_not_named() {
+    use super::gates::{rejection, NOT_HELD_OUT};
+    use crate::diagnose::search::FitOutcome;
+    use crate::diagnose::DiagnoseOptions;
+    let no_coefficients: Vec<String> = Vec::new();
+    let gain = make("control_effectiveness", "elevator", &no_coefficients).unwrap();
+    // a well-determined, significant fit: one parameter, a sensitivity of 10 on 400 samples
+    let o = FitOutcome {
+        cost_before: 1000.0,
+        cost_after: 500.0,
+        values: vec![1.4],
+        std_errors: vec![0.01],
+        crb_std_errors: vec![0.01],
+        n_eff: 400.0,
+        sensitivities: vec![vec![10.0; 400]],
+        evaluations: 5,
+        residual: Vec::new(),
+    };
+    let mut c = accepted("control_effectiveness", "elevator", 1.4, 0.1);
+    c.cost_before = 1000.0;
+    c.cost_after = 500.0;
+    let opts = DiagnoseOptions::default();
+    let mask = vec![false; 1];
+    for (share, named) in [
+        (None, true),
+        (Some(0.9), true),
+        (Some(0.0), false),
+        (Some(-0.8), false),
+    ] {
+        c.held_out_share = share;
+        let why = rejection(&c, gain.as_ref(), &o, 1000.0, &opts, &mask);
+        assert_eq!(why.is_none(), named, "{share:?}: {why:?}");
+        if let Some(why) = why {
+            assert!(why.starts_with(NOT_HELD_OUT), "{why}");
+        }
+    }
 }
