@@ -13,12 +13,12 @@ fn flightid(args: &[&str]) -> Output {
         .unwrap()
 }
 
-fn scratch(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("flightid-aero-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
+/// `text` written to `name` in a fresh temporary directory (removed when the handle drops).
+fn scratch(name: &str, text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join(name);
     std::fs::write(&p, text).unwrap();
-    p
+    (dir, p)
 }
 
 fn assert_bad_input(out: &Output, needle: &str) {
@@ -38,9 +38,9 @@ fn identified(den: &str, extra: &str) -> String {
 
 #[test]
 fn default_run_prints_tables_1_and_3_and_writes_json() {
-    let dir = std::env::temp_dir().join(format!("flightid-aero-cli-run-{}", std::process::id()));
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let json = dir.join("out.json");
-    std::fs::create_dir_all(&dir).unwrap();
     let out = flightid(&[
         "derivatives",
         "--aircraft",
@@ -109,14 +109,14 @@ fn unknown_derivative_name_is_bad_input() {
 #[test]
 fn transfer_function_of_the_wrong_order_is_bad_input() {
     // A 2nd-order θ/δe (short period only) cannot be matched to the 4-state longitudinal model.
-    let p = scratch("second_order.json", &identified("[1.0, 7.2, 37.0]", ""));
+    let (_dir, p) = scratch("second_order.json", &identified("[1.0, 7.2, 37.0]", ""));
     let out = flightid(&["derivatives", "--from", p.to_str().unwrap()]);
     assert_bad_input(&out, "needs degree 4");
 }
 
 #[test]
 fn missing_mass_field_is_bad_input() {
-    let p = scratch(
+    let (_dir, p) = scratch(
         "no_inertia.json",
         &identified(
             "[1.0, 7.15, 38.3, 2.27, 1.70]",
@@ -129,7 +129,7 @@ fn missing_mass_field_is_bad_input() {
 
 #[test]
 fn non_positive_wing_area_is_bad_input() {
-    let p = scratch(
+    let (_dir, p) = scratch(
         "no_area.json",
         &identified(
             "[1.0, 7.15, 38.3, 2.27, 1.70]",
@@ -142,7 +142,7 @@ fn non_positive_wing_area_is_bad_input() {
 
 #[test]
 fn unsupported_transfer_function_is_bad_input() {
-    let p = scratch(
+    let (_dir, p) = scratch(
         "q.json",
         r#"{"input": "elevator_rad", "output": "q_rad_s", "result": {"tf": {"num": [1.0], "den": [1.0, 1.0]}}}"#,
     );

@@ -12,26 +12,30 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 fn flightid() -> Command {
     Command::new(env!("CARGO_BIN_EXE_flightid"))
 }
 
-/// Two turbulent records of seed 1 and their map, airframe and truth, in a fresh directory of the test `tag`.
-fn generated(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("flightid-hfb-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+/// Two turbulent records of seed 1 and their map, airframe and truth, in a fresh temporary directory of the
+/// test `tag` (removed when the returned handle drops).
+fn generated(tag: &str) -> tempfile::TempDir {
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!("flightid-hfb-{tag}-"))
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     let python = flightid::sim::env::python().expect("the project's Python environment");
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_hfb_records.py");
     common::run_ok(
         Command::new(python)
             .arg(script)
             .args(["--seed", "1", "--records", "2", "--turb-ms", "1.0", "--out"])
-            .arg(&dir),
+            .arg(dir),
     );
-    dir
+    tmp
 }
 
 fn data_args(dir: &Path) -> Vec<std::ffi::OsString> {
@@ -74,14 +78,15 @@ fn errors(
 /// held speed derivatives, a lost thrust moment or a wrong density fail.
 #[test]
 fn built_in_model_finds_the_hfb320_derivatives_in_turbulence_once_the_speed_check_frees_c_mv() {
-    let dir = generated("derivatives");
+    let tmp = generated("derivatives");
+    let dir = tmp.path();
     let truth = &common::read_json(&dir.join("hfb.truth.json"))["flightid_equivalent"];
     for (method, tolerance) in [("oe", 0.08), ("fem", 0.05)] {
         let out = dir.join(format!("{method}.json"));
         common::run_ok(
             flightid()
                 .arg("derivatives")
-                .args(data_args(&dir))
+                .args(data_args(dir))
                 .arg("--airframe")
                 .arg(dir.join("hfb.airframe.toml"))
                 .args(["--method", method, "--json"])
@@ -121,7 +126,8 @@ fn built_in_model_finds_the_hfb320_derivatives_in_turbulence_once_the_speed_chec
 /// eleven within 2 %, C_mα, C_mq, C_mδe, C_Lα within 1 %.
 #[test]
 fn a_model_written_the_books_way_is_fitted_by_filter_error_through_a_column_map() {
-    let dir = generated("estimate");
+    let tmp = generated("estimate");
+    let dir = tmp.path();
     let truth = common::read_json(&dir.join("hfb.truth.json"));
     let out = dir.join("estimate.json");
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/hfb320_longitudinal.toml");
@@ -130,7 +136,7 @@ fn a_model_written_the_books_way_is_fitted_by_filter_error_through_a_column_map(
             .arg("estimate")
             .arg("--model")
             .arg(model)
-            .args(data_args(&dir))
+            .args(data_args(dir))
             .args(["--method", "fem", "--json"])
             .arg(&out),
     );
