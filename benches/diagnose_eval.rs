@@ -5,10 +5,12 @@
 //! (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
-//! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--out DIR]`
+//! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--without COLUMNS] [--out DIR]`
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
 //! - `--noise-weights`: weight every channel by its sensor noise only (`flightid diagnose --noise-weights`).
+//! - `--without alpha_rad,beta_rad,ax_m_s2,ay_m_s2,az_m_s2`: records that leave those sensor columns out (a log
+//!   without vanes or accelerometers); no effect is hidden on them.
 //! - the mix is stratified by case index (i mod 4 = 0 clean, 3 two or three effects, else one: 40 cases give
 //!   10 clean, 20 single, 10 multiple); `--random-mix` draws it by chance (a quarter clean, a quarter multiple).
 //! - `--clean`: every case clean (the acceptance's maneuver sequence, lengths 30–90 s).
@@ -38,6 +40,7 @@ struct Args {
     noise_weights: bool,
     out: PathBuf,
     first: usize,
+    without: String,
 }
 
 fn args() -> Args {
@@ -52,6 +55,7 @@ fn args() -> Args {
         noise_weights: false,
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
+        without: String::new(),
     };
     let v: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -62,6 +66,7 @@ fn args() -> Args {
             "--seed" => a.seed = next(i).parse().unwrap_or(1),
             "--first" => a.first = next(i).parse().unwrap_or(0),
             "--out" => a.out = PathBuf::from(next(i)),
+            "--without" => a.without = next(i),
             "--turbulence" => {
                 a.turbulence = true;
                 i += 1;
@@ -184,6 +189,9 @@ fn generate(a: &Args) {
         .stderr(std::process::Stdio::null());
     if a.turbulence {
         cmd.arg("--turbulence");
+    }
+    if !a.without.is_empty() {
+        cmd.args(["--without", &a.without]);
     }
     if !a.random_mix {
         cmd.arg("--stratified");

@@ -20,6 +20,7 @@ Hidden effects and how they are made:
 
 Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--turbulence] [--clean-share 0.25] [--stratified] [--first K]
        [--effects JSON] [--duration S | --min-duration S --max-duration S] [--plan NAME|random] [--max-noise L]
+       [--without COLUMNS]
 Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema).
 """
 
@@ -343,12 +344,13 @@ CATALOGUE = (
 )
 
 
-def draw_effects(rng, n):
+def draw_effects(rng, n, unlogged=()):
+    """n distinct effects from CATALOGUE; none on a sensor in `unlogged` (a column the records leave out)."""
     effects, used = [], set()
     while len(effects) < n:
         eff, target, (lo, hi), both, null = CATALOGUE[rng.integers(len(CATALOGUE))]
         key = (eff if eff not in ("input_delay", "actuator_lag", "control_effectiveness") else "signal", target)
-        if key in used or (eff, target) in used:
+        if key in used or (eff, target) in used or target in unlogged:
             continue
         used.add(key)
         used.add((eff, target))
@@ -380,7 +382,15 @@ def main():
                     help="maneuver plan (default: the four maneuvers in sequence; random: one plan per case)")
     ap.add_argument("--max-noise", type=float, default=1.0,
                     help="highest noise level (multiple of the level-1 noise; the level is drawn from 0.5 up)")
+    ap.add_argument("--without", default="",
+                    help="comma-separated sensor columns the records leave out (a log without them, e.g. "
+                         "alpha_rad,beta_rad,ax_m_s2,ay_m_s2,az_m_s2: no vanes, no accelerometers); no effect is "
+                         "drawn on them")
     args = ap.parse_args()
+    unlogged = {c for c in args.without.split(",") if c}
+    unknown = unlogged - {c for c, _, _ in LOGGED}
+    if unknown:
+        ap.error(f"--without names columns the generator does not log: {', '.join(sorted(unknown))}")
     os.makedirs(args.out, exist_ok=True)
     root = tempfile.mkdtemp(prefix="gen-diag-")
     private_aircraft(root)
@@ -402,7 +412,7 @@ def main():
                 n = 0 if u < args.clean_share else (1 if u < 1 - args.multi_share else int(rng.integers(2, 4)))
                 if args.stratified:
                     n = {0: 0, 3: int(rng.integers(2, 4))}.get(i % 4, 1)
-                effects = draw_effects(rng, n)
+                effects = draw_effects(rng, n, unlogged)
             cond = {
                 "altitude_ft": float(rng.uniform(2000, 8000)), "speed_kts": float(rng.uniform(85, 115)),
                 "heading_deg": float(rng.uniform(0, 360)), "latitude_deg": float(rng.uniform(-60, 60)),
@@ -422,6 +432,7 @@ def main():
                 rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation,
                            PLANS[plan] if plan else None)
                 cols, data = sensors(rows, effects, noise_level, rng)
+                cols = [c for c in cols if c not in unlogged]
                 write_csv(os.path.join(args.out, f"case_{i:03d}_{part}.csv"), cols, data,
                           {"generator": "gen_diagnose_records.py (JSBSim c172x, own API)", "case": i})
             with open(os.path.join(args.out, f"case_{i:03d}_truth.json"), "w") as f:
