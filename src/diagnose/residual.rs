@@ -185,7 +185,7 @@ pub fn held_out_share(
     segments: &[usize],
     len: usize,
 ) -> Option<f64> {
-    if len == 0 || r_base.len() != r_fit.len() || r_base.len() % len != 0 {
+    if len == 0 || r_base.len() != r_fit.len() || !r_base.len().is_multiple_of(len) {
         return None;
     }
     let bounds: Vec<(usize, usize)> = std::iter::once(0)
@@ -256,7 +256,7 @@ mod tests {
     fn a_change_that_fits_one_segment_and_spoils_the_others_gains_nothing_held_out() {
         // segment 1 departs by +2 w, the others not; the fit moves all three by −w (the compromise)
         let base = series(|c, k| if k < 100 { 2.0 * wiggle(c, k) } else { 0.0 });
-        let fit = series(|c, k| base_minus(c, k));
+        let fit = series(base_minus);
         fn base_minus(c: usize, k: usize) -> f64 {
             let b = if k < 100 { 2.0 * wiggle(c, k) } else { 0.0 };
             b - 0.7 * wiggle(c, k)

@@ -54,15 +54,15 @@ pub(in crate::diagnose) fn rejection(
         Some(format!("{NOT_SIGNIFICANT} {:.1} ≤ {}", c.z, opts.min_z))
     } else if rel <= opts.min_relative_reduction {
         Some(format!("{SMALL_SHARE} {:.1} % of the cost", 100.0 * rel))
-    } else if let Some(share) = c.held_out_share.filter(|&h| h <= 0.0) {
+    } else {
         // The record's own hold-out: the change fits some maneuvers at the others' expense (a drift, a gust
         // in one segment), and estimated from the other segments it makes each held-out one no better.
-        Some(format!(
-            "{NOT_HELD_OUT}: sized from the other segments it removes no cost from the held-out ones \
-             (held-out share {share:.2})"
-        ))
-    } else {
-        None
+        c.held_out_share.filter(|&h| h <= 0.0).map(|share| {
+            format!(
+                "{NOT_HELD_OUT}: sized from the other segments it removes no cost from the held-out ones \
+                 (held-out share {share:.2})"
+            )
+        })
     }
 }
 
