@@ -236,7 +236,8 @@ const NEAR_MISS_Z_SHARE: f64 = 0.8;
 /// Output error's near misses, the best first by ΔBIC, at most [`NEAR_MISSES_MAX`], each with its latest value:
 /// the unnamed candidates whose latest full fit passed every test but the coloured-residual significance
 /// (|z| > `min_z`, missed by less than [`NEAR_MISS_Z_SHARE`] of it) or the share of the cost, or passed them all
-/// and lost to a fit within its resolution of no effect.
+/// and lost to a fit within its resolution of no effect — and whose change the held-out segments confirm
+/// (`held_out_share` above zero where it is known; see `residual::held_out_share`).
 /// In gusts these tests count the gusts' response against an effect: it colours the residual, which widens
 /// the sandwich standard errors, it is most of the cost, and a small change of a derivative that bends the
 /// replay towards it fits better than the right effect. A hidden φ-sensor scale ×1.11 reached z 4.9 at
@@ -269,6 +270,8 @@ fn near_misses(named: &[NamedCause], candidates: &[Candidate], min_z: f64) -> Ve
                         || r.starts_with(SMALL_SHARE)
                         || r.starts_with(BEATEN_WITHIN_RESOLUTION)
                 })
+                // a change the record's own segments do not confirm is no near miss
+                && c.held_out_share.is_none_or(|h| h > 0.0)
         })
         .collect();
     near.sort_by(|a, b| a.criterion_delta.total_cmp(&b.criterion_delta));
