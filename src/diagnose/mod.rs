@@ -162,7 +162,7 @@ pub struct Candidate {
     pub full_fit: bool,
     /// Leave-one-segment-out cross-validation of the fitted change on the training record: the cost it
     /// removes on each held-out segment when its size is estimated from the others, over the cost it removes
-    /// there in the fit (`None` where no segment can be held out).
+    /// there in the fit (`None` where no segment can be held out, and for the fits after forward selection).
     pub held_out_share: Option<f64>,
 }
 

@@ -254,7 +254,7 @@ mod tests {
 
     #[test]
     fn a_change_that_fits_one_segment_and_spoils_the_others_gains_nothing_held_out() {
-        // segment 1 departs by +2 w, the others not; the fit moves all three by −w (the compromise)
+        // segment 1 departs by +2 w, the others not; the fit moves all three by −0.7 w (the compromise)
         let base = series(|c, k| if k < 100 { 2.0 * wiggle(c, k) } else { 0.0 });
         let fit = series(base_minus);
         fn base_minus(c: usize, k: usize) -> f64 {
