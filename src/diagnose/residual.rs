@@ -173,7 +173,8 @@ const HELD_OUT_MIN_OWN: f64 = 0.05;
 
 /// Leave-one-segment-out cross-validation of a fitted change (Stone 1974; Allen's PRESS): the residual moves
 /// from `r_base` (the model before) to `r_fit` (after), channel-major, `len` samples per channel, the record
-/// split at `segments` (sample indices of the segment starts after the first). Along that change,
+/// split at `segments` (sample indices of the segment starts, `ReplayCase::segments`; the one at 0 may be left
+/// out). Along that change,
 /// r(t) = r_base + t d with d = r_fit − r_base, each segment g is held out in turn: t is estimated from the
 /// others, t₋g = −Σ_{h≠g} d_hᵀ r_h / Σ_{h≠g} d_hᵀ d_h, and the cost it removes on g, ‖r_g‖² − ‖r_g + t₋g d_g‖²,
 /// is summed. Returned: that held-out reduction over the in-sample one (t = 1) on the same segments, 1 for a
@@ -188,6 +189,7 @@ pub fn held_out_share(
     if len == 0 || r_base.len() != r_fit.len() || !r_base.len().is_multiple_of(len) {
         return None;
     }
+    // [start, end) of every segment; a start listed at 0 gives an empty first pair, dropped
     let bounds: Vec<(usize, usize)> = std::iter::once(0)
         .chain(segments.iter().copied())
         .zip(segments.iter().copied().chain(std::iter::once(len)))
@@ -309,6 +311,8 @@ mod tests {
             fitted += cost(0.0, &own) - cost(1.0, &own);
         }
         let share = held_out_share(&base, &fit, &segments, len).expect("testable");
+        // the same with the first segment's start listed, as `ReplayCase::segments` lists it
+        assert_eq!(held_out_share(&base, &fit, &[0, 80, 170], len), Some(share));
         assert!(
             (share - held / fitted).abs() < 1e-9,
             "{share} vs {}",
