@@ -6,7 +6,7 @@ An independent generator: it drives JSBSim through its own Python API (not fligh
 
   NAME_lon1.csv, NAME_lon2.csv, NAME_lat1.csv, NAME_lat2.csv   the records (foreign column names and units:
         deg, deg/s, ft, kts, g, psf, lbf), logged at --log-hz from a --sim-hz simulation, with sensor noise,
-        biases, an IMU and an α/β vane away from the CG, a time skew on the vanes, and light Dryden turbulence;
+        biases, an IMU and an α/β vane away from the CG, a time skew on the vanes, and light Dryden turbulence (its own realisation per --seed);
   NAME.airframe.toml     mass, inertia, geometry, thrust line and sensor positions (the airframe description);
   NAME.columns.toml      the column map onto the flight-data schema;
   NAME.truth.json        JSBSim's own derivatives about the CG at the trim the records start from
@@ -532,6 +532,9 @@ def main():
             ac["atmosphere/turb-type"] = 3
             ac["atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps"] = 15.0
             ac["atmosphere/turbulence/milspec/severity"] = 1
+            # The seed's own gust realisation: FGWinds draws from one random sequence per FGFDMExec whose seed
+            # is 0 unless set, so without this every seed would fly through the same gusts.
+            ac["atmosphere/randomseed"] = int(np.random.default_rng((args.seed, 0x6757)).integers(1, 2**31 - 1))
         written = []
         base = ac.state()
         offsets = {s: ac[f"gen/{s}-offset-rad"] for s in SURFACES}

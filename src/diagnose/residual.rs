@@ -132,21 +132,22 @@ pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
-/// `Σ_c Σ_i Σ_j s_c[i] R_c(|i−j|) s_c[j]ᵀ` (row-major p × p) over the output channels c, with R_c the
-/// Bartlett-tapered autocorrelation of channel c's residual over the lags where it is correlated
-/// ([`covariance::lag_weights`], the estimation core's window; channel-major vectors of `m` samples each; the
-/// channels are taken as mutually uncorrelated). A window fitted to the residual matters in gusts: their
-/// response stays correlated over the phugoid and Dutch-roll periods, and a fixed one-second window made the
-/// standard errors of the effects that absorb it several times too small.
+/// `Σ_c Σ_d Σ_i Σ_j s_c[i] R_cd(i−j) s_d[j]ᵀ` (row-major p × p) over the output channels c, d, with R_cd the
+/// Bartlett-tapered cross-correlation of the channels' residuals over the lags where they are correlated
+/// ([`covariance::cross_lag_weighted_products`], the estimation core's window; channel-major vectors of `m`
+/// samples each). A window fitted to the residual matters in gusts: their response stays correlated over the
+/// phugoid and Dutch-roll periods, and a fixed one-second window made the standard errors of the effects that
+/// absorb it several times too small. So do the cross-correlations: a gust moves the vanes, the rates and the
+/// accelerometers together, and channels taken as independent count it once per channel.
 pub fn coloured_products(cols: &[Vec<f64>], r: &[f64], m: usize) -> Vec<f64> {
-    let p = cols.len();
-    let mut total = vec![0.0; p * p];
-    for (c, rc) in r.chunks(m.max(1)).enumerate() {
-        let slices: Vec<&[f64]> = cols.iter().map(|s| &s[c * m..c * m + rc.len()]).collect();
-        let w = covariance::lag_weighted_products(&slices, &covariance::lag_weights(rc));
-        total.iter_mut().zip(w).for_each(|(t, v)| *t += v);
-    }
-    total
+    let m = m.max(1);
+    let channels: Vec<&[f64]> = r.chunks(m).collect();
+    let col_refs: Vec<Vec<&[f64]>> = channels
+        .iter()
+        .enumerate()
+        .map(|(c, rc)| cols.iter().map(|s| &s[c * m..c * m + rc.len()]).collect())
+        .collect();
+    covariance::cross_lag_weighted_products(&col_refs, &channels)
 }
 
 /// Effective number of independent residuals: the sum over channels of

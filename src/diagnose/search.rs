@@ -5,8 +5,9 @@
 //! standard errors from the Cramér–Rao bound s² (SᵀS)⁻¹ (Morelli & Klein, Aircraft System Identification,
 //! 2nd ed., §6.2–6.3, eqs. 6.19–6.27). Modelling error leaves coloured residuals, for which the Cramér–Rao
 //! bound is far too optimistic; the reported standard errors are therefore the estimation core's
-//! coloured-residual bound (SᵀS)⁻¹ [Σ_c Σ_i Σ_j s_i R_c(i−j) s_jᵀ] (SᵀS)⁻¹ (Morelli & Klein §6.6, eq. 6.86)
-//! with the estimation core's lag window fitted to each output channel c (`covariance::lag_weights`).
+//! coloured-residual bound (SᵀS)⁻¹ [Σ_c Σ_d Σ_i Σ_j s_c,i R_cd(i−j) s_d,jᵀ] (SᵀS)⁻¹ (Morelli & Klein §6.6,
+//! eq. 6.86) with the channels' cross-correlations and the estimation core's lag window
+//! (`covariance::cross_lag_weighted_products`).
 //! Selection: BIC = n ln(J/n) + k ln n (Schwarz 1978) with the effective number of independent residuals n_eff,
 //! forward selection.
 //!

@@ -11,7 +11,13 @@
 //!
 //! with the residual autocorrelation `R_vv` estimated from the residuals and summed over the lags
 //! where they are actually correlated, weighted by a Bartlett window (Newey & West 1987) so the
-//! result stays positive semidefinite. Outputs and records are treated as mutually uncorrelated.
+//! result stays positive semidefinite.
+//!
+//! [`cross_lag_weighted_products`] keeps the whole matrix `R_vv(l)` of eq. 6.86, the outputs'
+//! cross-correlations included: turbulence drives the α or β vane, the rates and the accelerometers
+//! together, and summing each output's information as if it were independent of the others counted
+//! the same gusts several times (σ 2–6 times smaller than the scatter over gust realisations). Records
+//! are treated as mutually uncorrelated.
 
 use num_complex::Complex64;
 use realfft::RealFftPlanner;
@@ -28,14 +34,123 @@ pub fn lag_weights(r: &[f64]) -> Vec<f64> {
     if len < 2 {
         return vec![sum_sq(r) / len.max(1) as f64];
     }
-    let cap = (len / 10).max(1).min(len - 1);
-    let acf = autocorrelation(r, cap);
+    let acf = autocorrelation(r, lag_cap(len));
+    bartlett_taper(&acf, lag_window(&acf, len))
+}
+
+/// The longest lag window for a series of `len` ≥ 2 samples: N/10.
+fn lag_cap(len: usize) -> usize {
+    (len / 10).max(1).min(len - 1)
+}
+
+/// The lag window L of [`lag_weights`] from the sample autocorrelation `acf` (lags 0 … the cap) of a
+/// series of `len` samples: twice the first lag inside the 99 % white-noise band, at most the cap.
+fn lag_window(acf: &[f64], len: usize) -> usize {
+    let cap = acf.len() - 1;
     let r0 = acf[0].max(f64::MIN_POSITIVE);
     let bound = 2.58 / (len as f64).sqrt();
     let decay = (1..=cap)
         .find(|&l| (acf[l] / r0).abs() < bound)
         .unwrap_or(cap);
-    bartlett_taper(&acf, (2 * decay).min(cap))
+    (2 * decay).min(cap)
+}
+
+/// `W = Σ_i Σ_j Σ_a Σ_b x_a,i R_ab(i−j) x_b,jᵀ` (p × p, row-major; Morelli & Klein eq. 6.86 with the whole
+/// residual correlation matrix): `cols[a]` are the p sensitivity columns of output a (each of length N,
+/// weighted by 1/√R_aa), `residuals[a]` its residuals (weighted alike), and `R_ab(l) = (1/N) Σ_k
+/// v_a(k+l) v_b(k)` the sample cross-correlation, Bartlett-tapered over one lag window for all the
+/// outputs (the longest of [`lag_weights`]' windows), so that the matrix sequence, and W, stay positive
+/// semidefinite (Newey & West 1987).
+///
+/// By convolution and Parseval on series zero-padded to `M ≥ N + L`:
+/// `W_ij = (1/M) Σ_f Σ_a conj(X̂_a,i(f)) Σ_b K̂_ab(f) X̂_b,j(f)`, `K_ab(l) = w(l) R_ab(l)` for |l| ≤ L laid
+/// out circularly (`R_ab(−l) = R_ba(l)`); every bin but DC and Nyquist counts twice (conjugate symmetry).
+pub fn cross_lag_weighted_products(cols: &[Vec<&[f64]>], residuals: &[&[f64]]) -> Vec<f64> {
+    let m = residuals.len();
+    let p = cols.first().map_or(0, Vec::len);
+    let len = residuals.first().map_or(0, |r| r.len());
+    let mut w = vec![0.0; p * p];
+    if m == 0 || p == 0 || len < 2 {
+        return w;
+    }
+    let cap = lag_cap(len);
+    let max_lag = residuals
+        .iter()
+        .map(|r| lag_window(&autocorrelation(r, cap), len))
+        .max()
+        .unwrap_or(0);
+    let size = (len + max_lag).next_power_of_two().max(2);
+    let half = size / 2;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let v_hat: Vec<Vec<Complex64>> = residuals
+        .iter()
+        .map(|r| real_spectrum(&mut planner, r, size))
+        .collect();
+    // K̂_ab from the cross-correlations at lags −L … L; K_ba(l) = K_ab(−l), so K̂_ba = conj(K̂_ab)
+    let inverse = planner.plan_fft_inverse(size);
+    let mut k_hat = vec![Vec::new(); m * m];
+    for a in 0..m {
+        for b in a..m {
+            let mut cross: Vec<Complex64> = v_hat[a]
+                .iter()
+                .zip(&v_hat[b])
+                .map(|(x, y)| x * y.conj())
+                .collect();
+            // a real sequence's spectrum has real DC and Nyquist bins; drop the round-off
+            cross[0].im = 0.0;
+            cross[half].im = 0.0;
+            let mut corr = vec![0.0; size];
+            inverse
+                .process(&mut cross, &mut corr)
+                .expect("inverse FFT of a cross spectrum");
+            let norm = size as f64 * len as f64;
+            let mut kernel = vec![0.0; size];
+            for l in 0..=max_lag {
+                let taper = 1.0 - l as f64 / (max_lag as f64 + 1.0);
+                kernel[l] = taper * corr[l] / norm;
+                if l > 0 {
+                    kernel[size - l] = taper * corr[size - l] / norm;
+                }
+            }
+            k_hat[a * m + b] = real_spectrum(&mut planner, &kernel, size);
+            if b > a {
+                k_hat[b * m + a] = k_hat[a * m + b].iter().map(|z| z.conj()).collect();
+            }
+        }
+    }
+    let x_hat: Vec<Vec<Vec<Complex64>>> = cols
+        .iter()
+        .map(|c| {
+            c.iter()
+                .map(|col| real_spectrum(&mut planner, col, size))
+                .collect()
+        })
+        .collect();
+    let mut z = vec![Complex64::new(0.0, 0.0); m * p];
+    for f in 0..=half {
+        let g = if f == 0 || f == half { 1.0 } else { 2.0 } / size as f64;
+        for a in 0..m {
+            for j in 0..p {
+                z[a * p + j] = (0..m).map(|b| k_hat[a * m + b][f] * x_hat[b][j][f]).sum();
+            }
+        }
+        for a in 0..m {
+            for i in 0..p {
+                let xi = x_hat[a][i][f].conj();
+                for j in 0..p {
+                    w[i * p + j] += g * (xi * z[a * p + j]).re;
+                }
+            }
+        }
+    }
+    for i in 0..p {
+        for j in i + 1..p {
+            let v = 0.5 * (w[i * p + j] + w[j * p + i]);
+            w[i * p + j] = v;
+            w[j * p + i] = v;
+        }
+    }
+    w
 }
 
 /// The Bartlett-tapered autocorrelation `(1 − l/(L+1)) R(l)`, l = 0 … L = `max_lag` (Newey & West
@@ -176,7 +291,10 @@ pub fn lag_weighted_products(cols: &[&[f64]], acf: &[f64]) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::{autocorrelation, bartlett_taper, effective_samples, lag_weighted_products};
+    use super::{
+        autocorrelation, bartlett_taper, cross_lag_weighted_products, effective_samples, lag_cap,
+        lag_weighted_products, lag_weights, lag_window,
+    };
 
     /// Deterministic pseudo-random numbers in [−0.5, 0.5) (xorshift64).
     fn noise(count: usize) -> Vec<f64> {
@@ -246,6 +364,93 @@ mod tests {
                 let scale = (slow[a * p + a] * slow[b * p + b]).sqrt();
                 assert!((f - d).abs() <= 1e-12 * scale, "W[{a}][{b}]: {f} vs {d}");
             }
+        }
+    }
+
+    #[test]
+    fn cross_products_equal_the_double_sum_over_outputs_and_lags() {
+        // three outputs whose residuals share a coloured component (as gusts make them), p = 4
+        let (len, p, m) = (211, 4, 3);
+        let common = {
+            let mut c = noise(len);
+            for k in 1..len {
+                c[k] += 0.9 * c[k - 1];
+            }
+            c
+        };
+        let own = noise(m * len);
+        let residuals: Vec<Vec<f64>> = (0..m)
+            .map(|a| {
+                (0..len)
+                    .map(|k| {
+                        own[a * len + k] + [1.0, -0.5, 0.8][a] * common[(k + 2 * a).min(len - 1)]
+                    })
+                    .collect()
+            })
+            .collect();
+        let s = noise(m * p * len + 7);
+        let cols: Vec<Vec<Vec<f64>>> = (0..m)
+            .map(|a| {
+                (0..p)
+                    .map(|j| (0..len).map(|k| s[(a * p + j) * len + k + a]).collect())
+                    .collect()
+            })
+            .collect();
+        let col_refs: Vec<Vec<&[f64]>> = cols
+            .iter()
+            .map(|c| c.iter().map(Vec::as_slice).collect())
+            .collect();
+        let res_refs: Vec<&[f64]> = residuals.iter().map(Vec::as_slice).collect();
+        let fast = cross_lag_weighted_products(&col_refs, &res_refs);
+        // the definition: one window for all outputs, the longest
+        let lag = residuals
+            .iter()
+            .map(|r| lag_window(&autocorrelation(r, lag_cap(len)), len))
+            .max()
+            .unwrap();
+        assert!(lag > 2, "the test needs a window of several lags: {lag}");
+        let r_ab = |a: usize, b: usize, l: i64| -> f64 {
+            (0..len as i64)
+                .filter(|&k| (0..len as i64).contains(&(k + l)))
+                .map(|k| residuals[a][(k + l) as usize] * residuals[b][k as usize])
+                .sum::<f64>()
+                / len as f64
+        };
+        let mut slow = vec![0.0; p * p];
+        for a in 0..m {
+            for b in 0..m {
+                for l in -(lag as i64)..=lag as i64 {
+                    let w = (1.0 - l.unsigned_abs() as f64 / (lag as f64 + 1.0)) * r_ab(a, b, l);
+                    for k in 0..len as i64 {
+                        let j = k - l;
+                        if !(0..len as i64).contains(&j) {
+                            continue;
+                        }
+                        for i1 in 0..p {
+                            for i2 in 0..p {
+                                slow[i1 * p + i2] +=
+                                    cols[a][i1][k as usize] * w * cols[b][i2][j as usize];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        for i in 0..p {
+            for j in 0..p {
+                let (f, d) = (fast[i * p + j], slow[i * p + j]);
+                let scale = (slow[i * p + i] * slow[j * p + j]).sqrt();
+                assert!((f - d).abs() <= 1e-10 * scale, "W[{i}][{j}]: {f} vs {d}");
+            }
+        }
+        // one output: the single-output products
+        let single = lag_weighted_products(&col_refs[0], &lag_weights(&residuals[0]));
+        let one = cross_lag_weighted_products(&col_refs[..1], &res_refs[..1]);
+        for (a, b) in one.iter().zip(&single) {
+            assert!(
+                (a - b).abs() <= 1e-10 * single[0].abs().max(1e-300),
+                "{a} vs {b}"
+            );
         }
     }
 

@@ -96,14 +96,31 @@ pub(crate) fn gain(
     dt_s: f64,
 ) -> Result<Gain, SimError> {
     let (n, m) = (a.nrows(), c.nrows());
-    if q.iter().all(|v| *v == 0.0) {
-        return Ok(Gain {
+    let no_gain = || {
+        Ok(Gain {
             k: vec![vec![0.0; m]; n],
             kc_max: 0.0,
-        });
+        })
+    };
+    if q.iter().all(|v| *v == 0.0) && r.len() < m {
+        // before any innovation variance (the first simulation of a fit): no filter yet
+        return no_gain();
     }
     let qm = Mat::<f64>::from_fn(n, n, |i, j| if i == j { q[i] } else { 0.0 });
     let r_c = Mat::<f64>::from_fn(m, m, |i, j| if i == j { dt_s * r[i] } else { 0.0 });
+    if q.iter().all(|v| *v == 0.0) {
+        // Without process noise a stable model needs no correction (P = 0: the filter is the simulation).
+        // An unstable one does: the stabilising solution of the Riccati equation with Q → 0⁺ keeps a gain on
+        // the unstable modes (Kwakernaak & Sivan §4.4), so the gain, and the cost, jump at q = 0 if it is
+        // taken as 0 there. That jump stopped the fit at its first step (a p51d lateral model with its
+        // slightly divergent spiral, +0.02 /s).
+        let stable = a
+            .eigenvalues()
+            .is_ok_and(|ev: Vec<num_complex::Complex64>| ev.iter().all(|e| e.re < 0.0));
+        if stable {
+            return no_gain();
+        }
+    }
     let p = care_filter(a, c, &qm, &r_c).ok_or_else(|| {
         SimError::Failed("the filter's Riccati equation has no stabilising solution".into())
     })?;

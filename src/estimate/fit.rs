@@ -30,7 +30,7 @@ use faer::{Mat, Side};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::covariance::{lag_weighted_products, lag_weights, sandwich};
+use super::covariance::{cross_lag_weighted_products, sandwich};
 use super::fem;
 use super::layout::{Layout, Nuisance, NuisanceKind, RecordTerms};
 use super::model::{Model, Parameter, SimError, StateModel};
@@ -219,7 +219,8 @@ impl Estimate {
 
 /// Name of the covariance correction used (in results and reports).
 pub const COVARIANCE_METHOD: &str =
-    "Cramér-Rao bound with the coloured-residual correction of Morelli & Klein (1994), Bartlett lag window";
+    "Cramér-Rao bound with the coloured-residual correction of Morelli & Klein (1994) over the outputs' \
+     cross-correlations, Bartlett lag window";
 
 /// Fits `model` to `records` (jointly: one parameter vector, nuisance terms per record).
 ///
@@ -659,8 +660,13 @@ impl optimise::Problem for Relaxed<'_, '_> {
     }
 
     /// Filter error: a step whose gain breaks diag(KC) ≤ 1 is shortened towards φ (the
-    /// constraint is a boundary in q; halving keeps the direction).
+    /// constraint is a boundary in q; halving keeps the direction). When no shortened step holds
+    /// it (φ sits on the boundary and the step leans over it), the whole step is taken with its
+    /// process noise scaled back into the constraint: the model parameters then still move. Without
+    /// that, a start on the boundary ended the fit at its first iteration, though the step predicted
+    /// a decrease (the p51d's lateral records in three gust realisations of five).
     fn admit(&mut self, phi: &[f64], trial: &mut [f64]) -> bool {
+        let full = trial.to_vec();
         for _ in 0..8 {
             if self.problem.constraint_holds(trial) {
                 return true;
@@ -669,7 +675,9 @@ impl optimise::Problem for Relaxed<'_, '_> {
                 *t = p + 0.5 * (*t - p);
             }
         }
-        false
+        trial.copy_from_slice(&full);
+        self.problem.scale_into_constraint(trial);
+        self.problem.constraint_holds(trial)
     }
 
     /// The new R (Jategaonkar eq. 4.15); filter error: the process noise compensated for it.

@@ -175,24 +175,31 @@ impl Problem<'_> {
         warnings: &mut Vec<String>,
     ) -> (Vec<f64>, Vec<f64>) {
         let p = cols.len();
-        let (x, _) = self.weighted(cols, res, noise);
+        let (x, e) = self.weighted(cols, res, noise);
         let m: Mat<f64> = x.transpose() * &x;
         let minv = pseudo_inverse(&m, names, warnings);
-        // W = Σ_records Σ_outputs w_o · Σ_ij x_i R_vv(i−j) x_jᵀ over that output's weighted rows
+        // W = Σ_records Σ_ij x_iᵀ R_vv(i−j) x_j over each record's weighted rows, R_vv the outputs'
+        // whole correlation matrix (records mutually uncorrelated)
         let off = self.offsets();
         let mut w = vec![0.0; p * p];
         for (r, rec) in self.records.iter().enumerate() {
             let n = rec.len();
-            for (o, r_o) in noise.iter().enumerate() {
-                let start = off[r] + o * n;
-                let block: Vec<Vec<f64>> = (0..p)
-                    .map(|j| (0..n).map(|k| x[(start + k, j)]).collect())
-                    .collect();
-                let refs: Vec<&[f64]> = block.iter().map(Vec::as_slice).collect();
-                let wo = lag_weighted_products(&refs, &lag_weights(&res[r][o]));
-                for (acc, v) in w.iter_mut().zip(&wo) {
-                    *acc += v / r_o;
-                }
+            let rows = |o: usize| off[r] + o * n..off[r] + (o + 1) * n;
+            let blocks: Vec<Vec<Vec<f64>>> = (0..noise.len())
+                .map(|o| {
+                    (0..p)
+                        .map(|j| rows(o).map(|k| x[(k, j)]).collect())
+                        .collect()
+                })
+                .collect();
+            let col_refs: Vec<Vec<&[f64]>> = blocks
+                .iter()
+                .map(|b| b.iter().map(Vec::as_slice).collect())
+                .collect();
+            let res_refs: Vec<&[f64]> = (0..noise.len()).map(|o| &e[rows(o)]).collect();
+            let wr = cross_lag_weighted_products(&col_refs, &res_refs);
+            for (acc, v) in w.iter_mut().zip(&wr) {
+                *acc += v;
             }
         }
         let coloured = sandwich(&minv, &w, p);
