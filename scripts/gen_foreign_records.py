@@ -6,7 +6,8 @@ An independent generator: it drives JSBSim through its own Python API (not fligh
 
   NAME_lon1.csv, NAME_lon2.csv, NAME_lat1.csv, NAME_lat2.csv   the records (foreign column names and units:
         deg, deg/s, ft, kts, g, psf, lbf), logged at --log-hz from a --sim-hz simulation, with sensor noise,
-        biases, an IMU and an α/β vane away from the CG, a time skew on the vanes, and light Dryden turbulence (its own realisation per --seed);
+        biases, an IMU and an α/β vane away from the CG, a time skew on the vanes, and light Dryden turbulence
+        (its own realisation per --seed);
   NAME.airframe.toml     mass, inertia, geometry, thrust line and sensor positions (the airframe description);
   NAME.columns.toml      the column map onto the flight-data schema;
   NAME.truth.json        JSBSim's own derivatives about the CG at the trim the records start from

@@ -73,22 +73,19 @@ pub fn cross_lag_weighted_products(cols: &[Vec<&[f64]>], residuals: &[&[f64]]) -
     if m == 0 || p == 0 || len < 2 {
         return w;
     }
+    // one spectrum per residual, padded for lags up to the cap (N/10), serves both the window and the kernels
     let cap = lag_cap(len);
-    let max_lag = residuals
-        .iter()
-        .map(|r| lag_window(&autocorrelation(r, cap), len))
-        .max()
-        .unwrap_or(0);
-    let size = (len + max_lag).next_power_of_two().max(2);
+    let size = (len + cap).next_power_of_two().max(2);
     let half = size / 2;
+    let norm = size as f64 * len as f64;
     let mut planner = RealFftPlanner::<f64>::new();
     let v_hat: Vec<Vec<Complex64>> = residuals
         .iter()
         .map(|r| real_spectrum(&mut planner, r, size))
         .collect();
-    // K̂_ab from the cross-correlations at lags −L … L; K_ba(l) = K_ab(−l), so K̂_ba = conj(K̂_ab)
+    // N·R_ab(l) at circular index l (l ≥ 0) and size − l (l < 0), for a ≤ b
     let inverse = planner.plan_fft_inverse(size);
-    let mut k_hat = vec![Vec::new(); m * m];
+    let mut corr = vec![Vec::new(); m * m];
     for a in 0..m {
         for b in a..m {
             let mut cross: Vec<Complex64> = v_hat[a]
@@ -99,17 +96,31 @@ pub fn cross_lag_weighted_products(cols: &[Vec<&[f64]>], residuals: &[&[f64]]) -
             // a real sequence's spectrum has real DC and Nyquist bins; drop the round-off
             cross[0].im = 0.0;
             cross[half].im = 0.0;
-            let mut corr = vec![0.0; size];
+            let mut out = vec![0.0; size];
             inverse
-                .process(&mut cross, &mut corr)
+                .process(&mut cross, &mut out)
                 .expect("inverse FFT of a cross spectrum");
-            let norm = size as f64 * len as f64;
+            corr[a * m + b] = out;
+        }
+    }
+    let max_lag = (0..m)
+        .map(|a| {
+            let acf: Vec<f64> = corr[a * m + a][..=cap].iter().map(|v| v / norm).collect();
+            lag_window(&acf, len)
+        })
+        .max()
+        .unwrap_or(0);
+    // K̂_ab from the cross-correlations at lags −L … L; K_ba(l) = K_ab(−l), so K̂_ba = conj(K̂_ab)
+    let mut k_hat = vec![Vec::new(); m * m];
+    for a in 0..m {
+        for b in a..m {
+            let c = &corr[a * m + b];
             let mut kernel = vec![0.0; size];
             for l in 0..=max_lag {
                 let taper = 1.0 - l as f64 / (max_lag as f64 + 1.0);
-                kernel[l] = taper * corr[l] / norm;
+                kernel[l] = taper * c[l] / norm;
                 if l > 0 {
-                    kernel[size - l] = taper * corr[size - l] / norm;
+                    kernel[size - l] = taper * c[size - l] / norm;
                 }
             }
             k_hat[a * m + b] = real_spectrum(&mut planner, &kernel, size);
