@@ -676,6 +676,14 @@ pub fn output_error_report(
                 },
             );
         }
+        for (held_name, sd) in &est.considered {
+            notes.push(format!(
+                "{name}: {held_name} is held at 0 but the records cannot tell it from the other pitch \
+                 derivatives; the σ reported carries its physical range (0 ± {sd:.2}, from downwash lag), so \
+                 read C_mα, C_mq and C_mδe with that σ (free it with --free alphadot on records that \
+                 separate it)"
+            ));
+        }
         if !held.is_empty() {
             notes.push(format!("{name}: held (not estimated): {}", held.join(", ")));
         }

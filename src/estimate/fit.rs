@@ -193,6 +193,8 @@ pub struct Estimate {
     pub covariance_method: &'static str,
     /// Things the user should know (unidentifiable directions, parameters at bounds).
     pub warnings: Vec<String>,
+    /// Held parameters whose uncertainty the covariance carries ([`Parameter::considered`]): name and σ.
+    pub considered: Vec<(String, f64)>,
 }
 
 impl Estimate {
@@ -349,7 +351,12 @@ impl Problem<'_> {
 
     /// Model outputs (output biases added) of record `r` for φ.
     fn predict(&self, phi: &[f64], r: usize) -> Result<Vec<Vec<f64>>, SimError> {
-        let theta = self.layout.theta(phi);
+        self.predict_at(phi, &self.layout.theta(phi), r)
+    }
+
+    /// [`Problem::predict`] with the model parameters `theta` given (a held one perturbed).
+    fn predict_at(&self, phi: &[f64], theta: &[f64], r: usize) -> Result<Vec<Vec<f64>>, SimError> {
+        let theta = theta.to_vec();
         let terms = self.layout.record_terms(phi, r);
         let rec = &self.records[r];
         let run = self.run(r, &terms);

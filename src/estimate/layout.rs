@@ -77,6 +77,8 @@ pub(crate) struct Layout {
     pub start: Vec<f64>,
     /// Typical magnitude of each entry (finite-difference steps, convergence).
     pub scale: Vec<f64>,
+    /// Held parameters with an uncertainty the covariance carries: (index into θ, σ).
+    pub consider: Vec<(usize, f64)>,
     n_inputs: usize,
     n_outputs: usize,
     /// Initial states of each record as given.
@@ -251,6 +253,12 @@ impl Layout {
         }
         Ok(Layout {
             theta_start: parameters.iter().map(|p| p.value).collect(),
+            consider: parameters
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.fixed)
+                .filter_map(|(i, p)| p.consider_std.filter(|s| *s > 0.0).map(|s| (i, s)))
+                .collect(),
             free,
             slots,
             lower,

@@ -32,6 +32,9 @@ pub struct Parameter {
     pub upper: f64,
     /// Held at `value`, not estimated.
     pub fixed: bool,
+    /// For a held parameter whose value is not known exactly: its standard deviation about `value`, carried
+    /// into the free parameters' covariance as a consider parameter ([`Parameter::considered`]).
+    pub consider_std: Option<f64>,
 }
 
 impl Parameter {
@@ -43,6 +46,7 @@ impl Parameter {
             lower: f64::NEG_INFINITY,
             upper: f64::INFINITY,
             fixed: false,
+            consider_std: None,
         }
     }
 
@@ -51,6 +55,19 @@ impl Parameter {
         Parameter {
             fixed: true,
             ..Parameter::free(name, value)
+        }
+    }
+
+    /// The same held parameter with an uncertainty σ about its value that the free parameters' covariance
+    /// carries (consider covariance: Bierman, *Factorization Methods for Discrete Sequential Estimation*,
+    /// §VI.4; Tapley, Schutz & Born, *Statistical Orbit Determination*, §6.3). Holding a term the records
+    /// cannot separate from the free ones (C_mα̇ beside C_mα and C_mq) moves those by ∂φ̂/∂c per unit of
+    /// its error, ∂φ̂/∂c = −(SᵀR⁻¹S)⁻¹ SᵀR⁻¹ s_c with s_c its sensitivity column, and the covariance
+    /// reported becomes P + σ² (∂φ̂/∂c)(∂φ̂/∂c)ᵀ. The estimates themselves do not change.
+    pub fn considered(self, std: f64) -> Parameter {
+        Parameter {
+            consider_std: Some(std),
+            ..self
         }
     }
 

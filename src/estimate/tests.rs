@@ -338,3 +338,55 @@ fn with_process_noise_the_filter_error_method_finds_the_truth() {
         "{m_de:?}"
     );
 }
+
+#[test]
+fn a_considered_held_parameter_widens_the_others_by_their_refit_shift() {
+    // Consider covariance: holding M_α at a value in error by δ moves each free estimate by d δ, and the
+    // variance added is σ_c² d². d is checked against two refits with M_α held at its truth and at truth + δ
+    // (to 10 %: the refits also re-estimate the noise variances that weight them).
+    let rec = record("a", 0.02, [0.0, 0.0], [0.002, 0.005], [0.0, 0.0], 21);
+    let held = |value: f64, consider: Option<f64>| {
+        let mut p = start();
+        p[2] = Parameter::fixed("M_alpha", value);
+        if let Some(sd) = consider {
+            p[2] = p[2].clone().considered(sd);
+        }
+        fit(
+            &short_period(),
+            &p,
+            std::slice::from_ref(&rec),
+            &Nuisance::default(),
+            &Options::default(),
+        )
+        .unwrap()
+    };
+    let (delta, sd) = (0.01, 0.4);
+    let base = held(TRUTH[2], None);
+    let moved = held(TRUTH[2] + delta, None);
+    let considered = held(TRUTH[2], Some(sd));
+    assert_eq!(considered.considered, vec![("M_alpha".to_string(), sd)]);
+    for ((b, m), c) in base
+        .parameters
+        .iter()
+        .zip(&moved.parameters)
+        .zip(&considered.parameters)
+    {
+        assert_eq!(
+            b.value, c.value,
+            "{}: considering changes no estimate",
+            b.name
+        );
+        if b.fixed {
+            continue;
+        }
+        let d = (m.value - b.value) / delta;
+        let added = c.std_error_white.powi(2) - b.std_error_white.powi(2);
+        let expected = (sd * d).powi(2);
+        assert!(
+            (added - expected).abs() < 0.1 * expected + 1e-12,
+            "{}: added variance {added:.3e}, refit shift gives {expected:.3e}",
+            b.name
+        );
+        assert!(c.std_error > b.std_error, "{}", b.name);
+    }
+}

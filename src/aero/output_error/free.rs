@@ -80,6 +80,19 @@ pub(super) const LON_HELD: [&str; 10] = [
 ];
 pub(super) const LAT_HELD: [&str; 4] = ["tau_beta_s", "CY_p", "CY_r", "CY_da"];
 
+/// σ of a held C_mα̇ as a fraction of |C_mq| (the start value, which carries C_mα̇ with it), carried into the
+/// covariance as a consider parameter ([`Parameter::considered`]). In level flight, to first order,
+/// α̇ = q + Z_α α + Z_δe δe + Z_V V̂ (the gravity term varies only with sin γ₀), so C_mα̇ α̇ c̄/2V is a
+/// combination of the other regressors and the records cannot separate it (Klein & Morelli §3.5). Held at
+/// 0, it leaves C_mq + C_mα̇ in C_mq, C_mα + C_mα̇ Z_α c̄/2V in C_mα and C_mδe + C_mα̇ Z_δe c̄/2V in C_mδe. On
+/// the JSBSim c310 (C_mα̇ −12.7, C_mq −80, Z_α −1.5 /s, c̄/2V 0.0097 s) that is +0.19 on C_mα (19 %): it came
+/// out 12–16 % high in still air and 15–22 % high in light turbulence, by equation error and output error
+/// alike, and no fit of these records can mend it. Downwash lag at the tail makes C_mα̇ = C_mq,tail dε/dα,
+/// with dε/dα from 0 to about 0.6 on conventional aircraft, i.e. C_mα̇ between 0 and 0.4 (C_mq + C_mα̇);
+/// 0.2 |C_mq| as one σ about the held 0 spans that band at 2σ, and the σ reported for C_mα, C_mq and C_mδe
+/// then says how far they could be off if the aircraft has the α̇ term it physically would.
+const CM_ALPHADOT_CONSIDER: f64 = 0.2;
+
 /// Start value and free flag of every parameter of a model (module doc), with the choices applied.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn parameters(
@@ -109,7 +122,11 @@ pub(super) fn parameters(
         }
     }
     let mut held_still = Vec::new();
-    let params = names
+    let cm_q = starts
+        .get("Cm_q")
+        .copied()
+        .or_else(|| fallback.get("Cm_q").copied());
+    let params: Vec<Parameter> = names
         .iter()
         .map(|&n| {
             let value = starts
@@ -130,6 +147,8 @@ pub(super) fn parameters(
                 p
             } else if keeps_start && !still.contains(n) {
                 Parameter { fixed: true, ..p }
+            } else if let Some(cm_q) = cm_q.filter(|_| n == "Cm_alphadot") {
+                Parameter::fixed(n, 0.0).considered(CM_ALPHADOT_CONSIDER * cm_q.abs())
             } else {
                 Parameter::fixed(n, 0.0)
             }

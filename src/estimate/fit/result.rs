@@ -13,7 +13,14 @@ impl Problem<'_> {
         let mut warnings = Vec::new();
         let names: Vec<String> = (0..p).map(|j| self.free_name(j)).collect();
         let (cov_white, cov) = match self.jacobian(&sol.phi, &sol.predictions, true) {
-            Ok(cols) => self.covariances(&cols, &res, &sol.noise, &names, &mut warnings),
+            Ok(cols) => {
+                let (mut white, mut coloured) =
+                    self.covariances(&cols, &res, &sol.noise, &names, &mut warnings);
+                let minv = white.clone();
+                let covs = [&mut white, &mut coloured];
+                self.add_considered(&sol, &cols, &minv, covs, &mut warnings);
+                (white, coloured)
+            }
             Err(e) => {
                 warnings.push(format!(
                     "no standard errors: a perturbed simulation failed ({e})"
@@ -142,6 +149,11 @@ impl Problem<'_> {
             wall_s: started.elapsed().as_secs_f64(),
             covariance_method: COVARIANCE_METHOD,
             warnings,
+            considered: layout
+                .consider
+                .iter()
+                .map(|&(i, sd)| (sig.parameters[i].clone(), sd))
+                .collect(),
         }
     }
 
@@ -160,6 +172,68 @@ impl Problem<'_> {
                 match s.record {
                     Some(r) => format!("{kind}:{}@{}", s.target, self.records[r].name),
                     None => format!("{kind}:{}", s.target),
+                }
+            }
+        }
+    }
+
+    /// Adds the held parameters' uncertainty to the covariances `covs` ([`Parameter::considered`]): for each,
+    /// its central-difference sensitivity column s_c at the estimate, d = −M⁻¹ SᵀR⁻¹ s_c (M⁻¹ = `minv`, the
+    /// white-residual inverse information), and P += σ² d dᵀ.
+    fn add_considered(
+        &self,
+        sol: &Solution,
+        cols: &[Vec<f64>],
+        minv: &[f64],
+        mut covs: [&mut Vec<f64>; 2],
+        warnings: &mut Vec<String>,
+    ) {
+        let p = cols.len();
+        let res = self.residuals(&sol.predictions);
+        let (x, _) = self.weighted(cols, &res, &sol.noise);
+        for &(i, sd) in &self.layout.consider {
+            let name = &self.model.signature().parameters[i];
+            let theta = self.layout.theta(&sol.phi);
+            let h = 1e-4 * theta[i].abs().max(sd);
+            let at = |delta: f64| {
+                let mut t = theta.clone();
+                t[i] += delta;
+                (0..self.records.len())
+                    .map(|r| self.predict_at(&sol.phi, &t, r))
+                    .collect::<Result<Vec<_>, _>>()
+            };
+            let (plus, minus) = match (at(h), at(-h)) {
+                (Ok(a), Ok(b)) => (a, b),
+                (Err(e), _) | (_, Err(e)) => {
+                    warnings.push(format!(
+                        "the uncertainty of the held {name} is not carried into the standard errors: a \
+                         perturbed simulation failed ({e})"
+                    ));
+                    continue;
+                }
+            };
+            let column: Vec<f64> = plus
+                .iter()
+                .zip(&minus)
+                .flat_map(|(a, b)| {
+                    a.iter()
+                        .zip(b)
+                        .flat_map(|(ao, bo)| ao.iter().zip(bo).map(|(u, v)| (u - v) / (2.0 * h)))
+                        .collect::<Vec<f64>>()
+                })
+                .collect();
+            let (xc, _) = self.weighted(&[column], &res, &sol.noise);
+            let xtc: Vec<f64> = (0..p)
+                .map(|j| (0..x.nrows()).map(|k| x[(k, j)] * xc[(k, 0)]).sum())
+                .collect();
+            let d: Vec<f64> = (0..p)
+                .map(|a| -(0..p).map(|b| minv[a * p + b] * xtc[b]).sum::<f64>())
+                .collect();
+            for cov in covs.iter_mut() {
+                for a in 0..p {
+                    for b in 0..p {
+                        cov[a * p + b] += sd * sd * d[a] * d[b];
+                    }
                 }
             }
         }
