@@ -60,8 +60,8 @@ impl Parameter {
 
     /// The same held parameter with an uncertainty σ about its value that the free parameters' covariance
     /// carries (consider covariance: Tapley, Schutz & Born, *Statistical Orbit Determination*, ch. 6).
-    /// Holding a term the records cannot separate from the free ones (C_mα̇ beside C_mα and C_mq) moves those by ∂φ̂/∂c per unit of
-    /// its error, ∂φ̂/∂c = −(SᵀR⁻¹S)⁻¹ SᵀR⁻¹ s_c with s_c its sensitivity column, and the covariance
+    /// Holding a term the records cannot separate from the free ones (C_mα̇ beside C_mα and C_mq) moves
+    /// those by ∂φ̂/∂c per unit of its error, ∂φ̂/∂c = −(SᵀR⁻¹S)⁻¹ SᵀR⁻¹ s_c with s_c its sensitivity column, and the covariance
     /// reported becomes P + σ² (∂φ̂/∂c)(∂φ̂/∂c)ᵀ. The estimates themselves do not change.
     pub fn considered(self, std: f64) -> Parameter {
         Parameter {
