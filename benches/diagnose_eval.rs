@@ -5,10 +5,13 @@
 //! (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
-//! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--without COLUMNS] [--out DIR]`
+//! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--backward-elimination] [--without COLUMNS]
+//! [--out DIR]`
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
 //! - `--noise-weights`: weight every channel by its sensor noise only (`flightid diagnose --noise-weights`).
+//! - `--backward-elimination`: after forward selection, test every named effect again against the model without
+//!   it (`flightid diagnose --backward-elimination`).
 //! - `--without alpha_rad,beta_rad,ax_m_s2,ay_m_s2,az_m_s2`: records that leave those sensor columns out (a log
 //!   without vanes or accelerometers); no effect is hidden on them.
 //! - the mix is stratified by case index (i mod 4 = 0 clean, 3 two or three effects, else one: 40 cases give
@@ -38,6 +41,7 @@ struct Args {
     random_mix: bool,
     process_noise: bool,
     noise_weights: bool,
+    backward_elimination: bool,
     out: PathBuf,
     first: usize,
     without: String,
@@ -53,6 +57,7 @@ fn args() -> Args {
         random_mix: false,
         process_noise: false,
         noise_weights: false,
+        backward_elimination: false,
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
         without: String::new(),
@@ -94,6 +99,11 @@ fn args() -> Args {
             }
             "--noise-weights" => {
                 a.noise_weights = true;
+                i += 1;
+                continue;
+            }
+            "--backward-elimination" => {
+                a.backward_elimination = true;
                 i += 1;
                 continue;
             }
@@ -239,6 +249,7 @@ fn main() {
             progress: false,
             process_noise: a.process_noise,
             relax_weights: !a.noise_weights,
+            backward_elimination: a.backward_elimination,
             ..Default::default()
         };
         let d = match diagnose(&mut workers, &train, Some(&valid), &opts) {
