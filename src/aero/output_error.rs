@@ -71,26 +71,39 @@ pub struct LongitudinalModel {
     outputs: Vec<LonOutput>,
     /// Whether input 1 is `thrust_n` (else the density is input 1 and T = 0).
     thrust: bool,
+    /// With the vertical gust states ([`fm::VerticalGust`]): their scale length L_w, m.
+    gust_scale_m: Option<f64>,
 }
 
 impl LongitudinalModel {
-    /// The model with these outputs; inputs `elevator_rad`, (`thrust_n`), `density_kg_m3`.
-    pub fn new(constants: Constants, outputs: Vec<LonOutput>, thrust: bool) -> Self {
+    /// The model with these outputs; inputs `elevator_rad`, (`thrust_n`), `density_kg_m3`; with the vertical
+    /// gust states after the four flight states when `gust_scale_m` is given (for the filter error method).
+    pub fn new(
+        constants: Constants,
+        outputs: Vec<LonOutput>,
+        thrust: bool,
+        gust_scale_m: Option<f64>,
+    ) -> Self {
         let mut inputs = vec!["elevator_rad".to_string()];
         if thrust {
             inputs.push("thrust_n".into());
         }
         inputs.push(DENSITY.into());
+        let mut states: Vec<String> = LONGITUDINAL_STATES.map(String::from).to_vec();
+        if gust_scale_m.is_some() {
+            states.extend(fm::VerticalGust::STATES.map(String::from));
+        }
         LongitudinalModel {
             constants,
             signature: Signature {
                 parameters: LONGITUDINAL_PARAMETERS.map(String::from).to_vec(),
-                states: LONGITUDINAL_STATES.map(String::from).to_vec(),
+                states,
                 inputs,
                 outputs: outputs.iter().map(|o| o.column().to_string()).collect(),
             },
             outputs,
             thrust,
+            gust_scale_m,
         }
     }
 
@@ -109,7 +122,11 @@ impl StateModel for LongitudinalModel {
     }
 
     fn derivatives(&self, theta: &[f64], x: &[f64], u: &[f64], dx: &mut [f64]) {
-        dx.copy_from_slice(&fm::longitudinal(&self.constants, theta, x, &self.inputs(u)).dx);
+        let e = fm::longitudinal(&self.constants, theta, x, &self.inputs(u));
+        dx[..4].copy_from_slice(&e.dx);
+        if let Some(scale_m) = self.gust_scale_m {
+            dx[4..6].copy_from_slice(&fm::VerticalGust::derivatives(&self.constants, scale_m, x));
+        }
     }
 
     fn outputs(&self, theta: &[f64], x: &[f64], u: &[f64], y: &mut [f64]) {
@@ -337,6 +354,8 @@ fn fit_longitudinal(
     }
     let outputs =
         outputs_in_every_record(&LonOutput::ALL, LonOutput::column, records, "longitudinal")?;
+    let gust_scale_m = (setup.options.method == Method::Fem)
+        .then(|| fm::VerticalGust::scale_length_m(mean_over_records(records, "altitude_m")));
     let mut recs = Vec::new();
     for (name, raw) in records {
         let why = "the longitudinal model's states";
@@ -356,7 +375,11 @@ fn fit_longitudinal(
                             .into(),
                 }),
             };
-        let x0 = vec![v0, alpha0, theta0, first("q_rad_s").unwrap_or(0.0)];
+        let mut x0 = vec![v0, alpha0, theta0, first("q_rad_s").unwrap_or(0.0)];
+        if gust_scale_m.is_some() {
+            // the gust starts calm; the filter's first corrections find it
+            x0.extend([0.0; 2]);
+        }
         let n = raw.len();
         let mut inputs =
             vec![need(name, raw, "elevator_rad", "the longitudinal model's input")?.to_vec()];
@@ -421,9 +444,13 @@ fn fit_longitudinal(
         setup.options,
         notes,
     );
-    let model = LongitudinalModel::new(constants, outputs.clone(), thrust);
+    let model = LongitudinalModel::new(constants, outputs.clone(), thrust, gust_scale_m);
     let bias = [LonOutput::Q, LonOutput::Ax, LonOutput::Az, LonOutput::Qdot];
-    let nuisance = states_and_biases(&outputs, &bias);
+    let mut nuisance = states_and_biases(&outputs, &bias);
+    if gust_scale_m.is_some() {
+        // the atmosphere's process noise: the vertical gust, and the horizontal one on the airspeed
+        nuisance.process_noise = Some(vec![0, 4]);
+    }
     fit_model(&model, &params, &recs, &nuisance, setup.options, constants)
 }
 
@@ -513,6 +540,17 @@ fn fit_lateral(
     ];
     let nuisance = states_and_biases(&outputs, &bias);
     fit_model(&model, &params, &recs, &nuisance, setup.options, constants)
+}
+
+/// Mean of `column` over every sample of the records that carry it (`None` when none does).
+fn mean_over_records(records: &[&(String, data::FlightRecord)], column: &str) -> Option<f64> {
+    let values: Vec<f64> = records
+        .iter()
+        .filter_map(|(_, r)| r.column(column))
+        .flat_map(|c| c.iter().copied())
+        .filter(|v| v.is_finite())
+        .collect();
+    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
 }
 
 /// Runs the core on one model.

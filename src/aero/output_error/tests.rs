@@ -121,7 +121,7 @@ fn recovers(extra: &[(&str, f64)], free: &[&str], check: &[&str]) {
             _ => 0.0,
         })
         .collect();
-    let model = LongitudinalModel::new(c, LonOutput::ALL[..6].to_vec(), true);
+    let model = LongitudinalModel::new(c, LonOutput::ALL[..6].to_vec(), true, None);
     let n = 600;
     let time_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.02).collect();
     let mut records = Vec::new();
@@ -217,4 +217,30 @@ fn free_lists_name_groups_and_holds() {
     assert!(c[0].free && !c[1].free && c[2].free);
     let e = parse_free(&["Cm_bogus".into()]).unwrap_err();
     assert!(e.contains("Cm_bogus"), "{e}");
+}
+
+#[test]
+fn the_vertical_gust_states_give_the_dryden_rotary_term_and_scale_length() {
+    // q_g = s/(1 + τ_q s) α_g: after a step of α_g the lag ξ follows over τ_q = 4b/(πV) and q_g decays from
+    // α_g/τ_q as e^(−t/τ_q); MIL-F-8785C's L_w: the altitude below 1000 ft, 1750 ft above 2000 ft.
+    use crate::aero::flight_models::VerticalGust;
+    let c = constants();
+    let v = 60.0;
+    let tau = 4.0 * c.geometry.span_m / (std::f64::consts::PI * v);
+    let dt = tau / 2000.0;
+    let mut x = [v, 0.05, 0.05, 0.0, 0.01, 0.0];
+    let q0 = VerticalGust::of(&c, &x).q_rad_s;
+    assert!((q0 - 0.01 / tau).abs() < 1e-12 * q0.abs(), "{q0}");
+    for _ in 0..2000 {
+        let d = VerticalGust::derivatives(&c, 1e12, &x);
+        x[4] += dt * d[0];
+        x[5] += dt * d[1];
+    }
+    let q1 = VerticalGust::of(&c, &x).q_rad_s;
+    assert!((q1 / q0 - (-1.0_f64).exp()).abs() < 1e-3, "{}", q1 / q0);
+    assert_eq!(VerticalGust::of(&c, &x[..4]).q_rad_s, 0.0);
+    let ft = 0.3048;
+    assert!((VerticalGust::scale_length_m(Some(500.0 * ft)) - 500.0 * ft).abs() < 1e-9);
+    assert!((VerticalGust::scale_length_m(Some(6000.0 * ft)) - 1750.0 * ft).abs() < 1e-9);
+    assert!((VerticalGust::scale_length_m(None) - 1750.0 * ft).abs() < 1e-9);
 }
