@@ -27,12 +27,14 @@
 //! Vertical turbulence, for the filter error method (Dryden form of MIL-F-8785C §3.7; Jategaonkar §5.1: a
 //! process-noise model of the atmosphere): two more states, the gust's angle of attack α_g and a lag ξ of it,
 //! α̇_g = −α_g V/L_w (white process noise drives it), ξ̇ = (α_g − ξ)/τ_q, τ_q = 4b/(πV). The aerodynamics see
-//! α + α_g and the pitch-rate gust q + q_g, q_g = (α_g − ξ)/τ_q, i.e. q_g = s/(1 + τ_q s) α_g, the rotary term
-//! MIL-F-8785C derives from the same vertical gust; α̇, γ and the kinematics stay inertial; the vane reads
-//! α + α_g. Without q_g, the rotary gust (JSBSim's milspec turbulence, std 0.0056 rad/s on the c310 in light
-//! turbulence, a quarter of a ±0.1 doublet's pitch rate) enters C_mq q̂ as a disturbance that white process
-//! noise on q does not describe, and filter error put C_mδe 18–21 % and C_mq 14–19 % low on five gusty c310
-//! records; with it C_mδe came within 1.5–5.5 %. The opposite sign of q_g left C_mδe 13–17 % off.
+//! α + α_g and the pitch-rate gust q + q_g, q_g = k_q (α_g − ξ)/τ_q, i.e. k_q s/(1 + τ_q s) α_g, the rotary
+//! term MIL-F-8785C derives from the same vertical gust; α̇, γ and the kinematics stay inertial; the vane
+//! reads α + α_g. The gain k_q (`gust_q_gain`) is estimated: whether the gust's pitch rate reaches the
+//! aerodynamics, and with which sign, is the atmosphere's and the airframe's, not the model's to assume.
+//! JSBSim's milspec turbulence has it (std 0.0056 rad/s on the c310 in light turbulence, a quarter of a
+//! ±0.1 doublet's pitch rate); without it, filter error put C_mδe 18–21 % and C_mq 14–19 % low on five gusty
+//! c310 records, with k_q = 1 held C_mδe came within 1.5–5.5 %, and k_q = −1 left it 13–17 % off. A record
+//! generated without it (`scripts/gen_hfb_records.py`) gave C_mq 17 % off with k_q = 1 held.
 //!
 //! Lateral-directional (Klein & Morelli eq. 3.38–3.40 with I_xz; V, α, θ, q measured, taken as inputs;
 //! p̂ = p b/(2V), r̂ = r b/(2V)):
@@ -48,7 +50,7 @@ use super::airframe::SensorPositions;
 use super::params::{Geometry, MassProperties};
 
 /// Longitudinal model parameters, in θ order.
-pub const LONGITUDINAL_PARAMETERS: [&str; 19] = [
+pub const LONGITUDINAL_PARAMETERS: [&str; 20] = [
     "CL_0",
     "CL_alpha",
     "CL_q",
@@ -68,6 +70,7 @@ pub const LONGITUDINAL_PARAMETERS: [&str; 19] = [
     "tau_alpha_s",
     "CL_alpha2",
     "Cm_alpha2",
+    "gust_q_gain",
 ];
 
 /// Lateral-directional model parameters, in θ order.
@@ -140,6 +143,7 @@ mod lon {
     pub const TAU: usize = 16;
     pub const CLA2: usize = 17;
     pub const CMA2: usize = 18;
+    pub const KQG: usize = 19;
 }
 
 /// The inputs the longitudinal equations read at one instant.
@@ -166,7 +170,7 @@ pub struct LonEval {
 pub fn longitudinal(c: &Constants, theta: &[f64], x: &[f64], u: &LonInputs) -> LonEval {
     use lon::*;
     let (v, alpha_inertial, pitch, q_inertial) = (x[0].max(1.0), x[1], x[2], x[3]);
-    let gust = VerticalGust::of(c, x);
+    let gust = VerticalGust::of(c, theta, x);
     // what the aerodynamics see (module doc); the kinematics below keep the inertial α and q
     let (alpha, q) = (alpha_inertial + gust.alpha_rad, q_inertial + gust.q_rad_s);
     let (m, s, cbar) = (c.mass.mass_kg, c.geometry.wing_area_m2, c.geometry.chord_m);
@@ -215,7 +219,7 @@ pub fn longitudinal(c: &Constants, theta: &[f64], x: &[f64], u: &LonInputs) -> L
 pub struct VerticalGust {
     /// Gust angle of attack α_g, rad.
     pub alpha_rad: f64,
-    /// Pitch-rate gust q_g = (α_g − ξ)/τ_q, rad/s (0 without a span).
+    /// Pitch-rate gust q_g = k_q (α_g − ξ)/τ_q, rad/s (0 without a span).
     pub q_rad_s: f64,
 }
 
@@ -223,15 +227,20 @@ impl VerticalGust {
     /// The gust states' names, after [`LONGITUDINAL_STATES`].
     pub const STATES: [&'static str; 2] = ["gust_alpha_rad", "gust_alpha_lag_rad"];
 
-    /// The gust at state `x` (zero when `x` has only the four flight states).
-    pub fn of(c: &Constants, x: &[f64]) -> VerticalGust {
+    /// The gust at state `x` (zero when `x` has only the four flight states), k_q = θ's `gust_q_gain`.
+    pub fn of(c: &Constants, theta: &[f64], x: &[f64]) -> VerticalGust {
         if x.len() < 6 {
             return VerticalGust::default();
         }
         let tau = Self::rotary_lag_s(c, x[0]);
+        let gain = theta.get(lon::KQG).copied().unwrap_or(0.0);
         VerticalGust {
             alpha_rad: x[4],
-            q_rad_s: if tau > 0.0 { (x[4] - x[5]) / tau } else { 0.0 },
+            q_rad_s: if tau > 0.0 {
+                gain * (x[4] - x[5]) / tau
+            } else {
+                0.0
+            },
         }
     }
 
@@ -328,7 +337,7 @@ impl LonOutput {
         match self {
             LonOutput::Airspeed => x[0],
             LonOutput::Alpha => {
-                x[1] + VerticalGust::of(c, x).alpha_rad
+                x[1] + VerticalGust::of(c, theta, x).alpha_rad
                     - q * c.sensors.alpha_vane_m[0] / v
                     - theta[lon::TAU] * e.dx[1]
             }

@@ -54,7 +54,7 @@ use checks::{
     side_force_rate_check, skew_check, speed_check, AxisFitter, Check, ALPHADOT, CURVATURE,
     SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
-use free::{equation_error_starts, parameters, LAT_HELD, LON_HELD};
+use free::{equation_error_starts, parameters, GUST_Q_GAIN, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
 
 /// The modes of one axis's model at θ (the flight-model constants and the reference condition given).
@@ -435,7 +435,7 @@ fn fit_longitudinal(
     if !outputs.contains(&LonOutput::Alpha) {
         still.insert("tau_alpha_s");
     }
-    let params = parameters(
+    let mut params = parameters(
         &LONGITUDINAL_PARAMETERS,
         &LON_HELD,
         &starts,
@@ -444,6 +444,16 @@ fn fit_longitudinal(
         setup.options,
         notes,
     );
+    let user_chose_gain = setup
+        .options
+        .free
+        .iter()
+        .any(|c| c.names.contains(&GUST_Q_GAIN));
+    if gust_scale_m.is_some() && !user_chose_gain {
+        if let Some(p) = params.iter_mut().find(|p| p.name == GUST_Q_GAIN) {
+            *p = Parameter::free(GUST_Q_GAIN, 0.5);
+        }
+    }
     let model = LongitudinalModel::new(constants, outputs.clone(), thrust, gust_scale_m);
     let bias = [LonOutput::Q, LonOutput::Ax, LonOutput::Az, LonOutput::Qdot];
     let mut nuisance = states_and_biases(&outputs, &bias);
@@ -691,6 +701,16 @@ pub fn output_error_report(
         let sigma_known = !no_sigma(f);
         let mut held = Vec::new();
         for p in &est.parameters {
+            if p.name == GUST_Q_GAIN {
+                if !p.fixed {
+                    notes.push(format!(
+                        "{name}: rotary gust gain k_q = {:.2} ± {:.2} (1: the pitch-rate gust of MIL-F-8785C \
+                         from the vertical gust; 0: none reaches the aerodynamics)",
+                        p.value, p.std_error
+                    ));
+                }
+                continue;
+            }
             if p.name.starts_with("tau_") {
                 if !p.fixed {
                     notes.push(format!(

@@ -66,7 +66,7 @@ pub fn parse_free(entries: &[String]) -> Result<Vec<FreeChoice>, String> {
 }
 
 /// Parameters held by default (module doc); every other parameter of the axis starts free.
-pub(super) const LON_HELD: [&str; 10] = [
+pub(super) const LON_HELD: [&str; 11] = [
     "tau_alpha_s",
     "CL_q",
     "CL_alphadot",
@@ -77,7 +77,12 @@ pub(super) const LON_HELD: [&str; 10] = [
     "Cm_V",
     "CL_alpha2",
     "Cm_alpha2",
+    GUST_Q_GAIN,
 ];
+
+/// The gain of the rotary gust in the filter error method's vertical gust (`flight_models` module doc): held
+/// at 0 (output error has no gust), freed by filter error unless `--free` names it.
+pub(super) const GUST_Q_GAIN: &str = "gust_q_gain";
 pub(super) const LAT_HELD: [&str; 4] = ["tau_beta_s", "CY_p", "CY_r", "CY_da"];
 
 /// σ of a held C_mα̇ as a fraction of |C_mq| (the start value, which carries C_mα̇ with it), carried into the

@@ -221,7 +221,7 @@ fn free_lists_name_groups_and_holds() {
 
 #[test]
 fn the_vertical_gust_states_give_the_dryden_rotary_term_and_scale_length() {
-    // q_g = s/(1 + τ_q s) α_g: after a step of α_g the lag ξ follows over τ_q = 4b/(πV) and q_g decays from
+    // q_g = k_q s/(1 + τ_q s) α_g (k_q = 1 here): after a step of α_g the lag ξ follows over τ_q = 4b/(πV) and q_g decays from
     // α_g/τ_q as e^(−t/τ_q); MIL-F-8785C's L_w: the altitude below 1000 ft, 1750 ft above 2000 ft.
     use crate::aero::flight_models::VerticalGust;
     let c = constants();
@@ -229,16 +229,20 @@ fn the_vertical_gust_states_give_the_dryden_rotary_term_and_scale_length() {
     let tau = 4.0 * c.geometry.span_m / (std::f64::consts::PI * v);
     let dt = tau / 2000.0;
     let mut x = [v, 0.05, 0.05, 0.0, 0.01, 0.0];
-    let q0 = VerticalGust::of(&c, &x).q_rad_s;
+    let mut theta = vec![0.0; LONGITUDINAL_PARAMETERS.len()];
+    theta[LONGITUDINAL_PARAMETERS.len() - 1] = 1.0;
+    let q0 = VerticalGust::of(&c, &theta, &x).q_rad_s;
     assert!((q0 - 0.01 / tau).abs() < 1e-12 * q0.abs(), "{q0}");
     for _ in 0..2000 {
         let d = VerticalGust::derivatives(&c, 1e12, &x);
         x[4] += dt * d[0];
         x[5] += dt * d[1];
     }
-    let q1 = VerticalGust::of(&c, &x).q_rad_s;
+    let q1 = VerticalGust::of(&c, &theta, &x).q_rad_s;
     assert!((q1 / q0 - (-1.0_f64).exp()).abs() < 1e-3, "{}", q1 / q0);
-    assert_eq!(VerticalGust::of(&c, &x[..4]).q_rad_s, 0.0);
+    assert_eq!(VerticalGust::of(&c, &theta, &x[..4]).q_rad_s, 0.0);
+    theta[LONGITUDINAL_PARAMETERS.len() - 1] = 0.0;
+    assert_eq!(VerticalGust::of(&c, &theta, &x).q_rad_s, 0.0);
     let ft = 0.3048;
     assert!((VerticalGust::scale_length_m(Some(500.0 * ft)) - 500.0 * ft).abs() < 1e-9);
     assert!((VerticalGust::scale_length_m(Some(6000.0 * ft)) - 1750.0 * ft).abs() < 1e-9);
