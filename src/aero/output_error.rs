@@ -54,7 +54,7 @@ use checks::{
     side_force_rate_check, skew_check, speed_check, AxisFitter, Check, ALPHADOT, CURVATURE,
     SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
-use free::{equation_error_starts, parameters, GUST_Q_GAIN, LAT_HELD, LON_HELD};
+use free::{equation_error_starts, parameters, GUST_Q_GAIN, GUST_Q_GAIN_BOUND, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
 
 /// The modes of one axis's model at θ (the flight-model constants and the reference condition given).
@@ -451,7 +451,7 @@ fn fit_longitudinal(
         .any(|c| c.names.contains(&GUST_Q_GAIN));
     if gust_scale_m.is_some() && !user_chose_gain {
         if let Some(p) = params.iter_mut().find(|p| p.name == GUST_Q_GAIN) {
-            *p = Parameter::free(GUST_Q_GAIN, 0.5);
+            *p = Parameter::free(GUST_Q_GAIN, 0.5).bounded(-GUST_Q_GAIN_BOUND, GUST_Q_GAIN_BOUND);
         }
     }
     let model = LongitudinalModel::new(constants, outputs.clone(), thrust, gust_scale_m);

@@ -83,6 +83,11 @@ pub(super) const LON_HELD: [&str; 11] = [
 /// The gain of the rotary gust in the filter error method's vertical gust (`flight_models` module doc): held
 /// at 0 (output error has no gust), freed by filter error unless `--free` names it.
 pub(super) const GUST_Q_GAIN: &str = "gust_q_gain";
+
+/// |k_q| at most this: MIL-F-8785C's rotary gust has gain 1; on an airframe whose C_mq is small (the p51d:
+/// −10 against the c310's −80) the records barely determine k_q, and unbounded it ran off to 9–95 (σ up to
+/// 120), taking the shape of other unmodelled motion.
+pub(super) const GUST_Q_GAIN_BOUND: f64 = 1.5;
 pub(super) const LAT_HELD: [&str; 4] = ["tau_beta_s", "CY_p", "CY_r", "CY_da"];
 
 /// σ of a held C_mα̇ as a fraction of |C_mq| (the start value, which carries C_mα̇ with it), carried into the
