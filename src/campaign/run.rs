@@ -171,6 +171,23 @@ pub fn run_case<S: Simulator>(
     attempt_case(sim, spec, methods, case).0
 }
 
+/// The result of `case` with nothing measured yet: status `failed`, with `error` when known. [`attempt_case`]
+/// fills it in as the case gets further.
+fn failed_result(spec: &CampaignSpec, case: &CaseSpec, error: Option<String>) -> CaseResult {
+    CaseResult {
+        case: case.clone(),
+        rate_hz: spec.rate_hz,
+        duration_s: spec.duration_s,
+        start_s: spec.start_s,
+        definition_sha256: store::definition_sha256(spec, case),
+        status: "failed".into(),
+        error,
+        trim_alpha_rad: None,
+        trim_airspeed_m_s: None,
+        identifications: Vec::new(),
+    }
+}
+
 /// [`run_case`], and whether the case failed because the simulator process died ([`SimError::Crashed`]): such
 /// a case says nothing about the aircraft and is run again on a fresh process.
 fn attempt_case<S: Simulator>(
@@ -179,18 +196,7 @@ fn attempt_case<S: Simulator>(
     methods: &[Method],
     case: &CaseSpec,
 ) -> (CaseResult, bool) {
-    let mut result = CaseResult {
-        case: case.clone(),
-        rate_hz: spec.rate_hz,
-        duration_s: spec.duration_s,
-        start_s: spec.start_s,
-        definition_sha256: store::definition_sha256(spec, case),
-        status: "failed".into(),
-        error: None,
-        trim_alpha_rad: None,
-        trim_airspeed_m_s: None,
-        identifications: Vec::new(),
-    };
+    let mut result = failed_result(spec, case, None);
     let trim = match sim.trim(&TrimPoint::level(case.altitude_ft, case.speed_kts)) {
         Ok(t) => t,
         Err(e) => {
@@ -358,18 +364,7 @@ pub fn run_campaign(
                             }
                             r
                         }
-                        Err(e) => CaseResult {
-                            case: (*case).clone(),
-                            rate_hz: spec.rate_hz,
-                            duration_s: spec.duration_s,
-                            start_s: spec.start_s,
-                            definition_sha256: store::definition_sha256(spec, case),
-                            status: "failed".into(),
-                            error: Some(format!("simulator: {e}")),
-                            trim_alpha_rad: None,
-                            trim_airspeed_m_s: None,
-                            identifications: vec![],
-                        },
+                        Err(e) => failed_result(spec, case, Some(format!("simulator: {e}"))),
                     };
                     if let Err(e) = store::write_result(out, &result) {
                         fail(e);

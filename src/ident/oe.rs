@@ -29,15 +29,32 @@ use faer::Mat;
 
 const MAX_ITER: usize = 100;
 
-/// Simulated output for parameters `theta` = [num (m+1), a_1..a_n].
-fn sim(theta: &[f64], m: usize, u: &[f64], dt_s: f64, delay_s: f64) -> Vec<f64> {
-    let num = &theta[..=m];
+/// The numerator and monic denominator of `theta` = [num (m+1), a_1..a_n].
+fn num_den(theta: &[f64], m: usize) -> (&[f64], Vec<f64>) {
     let mut den = vec![1.0];
     den.extend_from_slice(&theta[m + 1..]);
+    (&theta[..=m], den)
+}
+
+/// Simulated output for parameters `theta` = [num (m+1), a_1..a_n].
+fn sim(theta: &[f64], m: usize, u: &[f64], dt_s: f64, delay_s: f64) -> Vec<f64> {
+    let (num, den) = num_den(theta, m);
     simulate(num, &den, u, dt_s, delay_s)
 }
 
-/// Sensitivity matrix (N × p, row-major) at `theta`; a last column for τ when `with_delay`.
+/// How [`sensitivities`] differentiates the simulated output with respect to `[num…, a…]`.
+#[derive(Clone, Copy)]
+enum Differentiation {
+    /// By filtering (module docs): fast, for the Levenberg–Marquardt steps.
+    Filtered,
+    /// By central differences of the exact simulation: for the covariance, where the
+    /// small-eigenvalue directions of `SᵀS` (the slow modes) need the sensitivities to full
+    /// precision.
+    CentralDifference,
+}
+
+/// Sensitivity matrix (N × p, row-major) at `theta`: the columns of `[num…, a…]` by `how`, and a
+/// last column for τ (a central difference in both cases) when `with_delay`.
 fn sensitivities(
     theta: &[f64],
     m: usize,
@@ -45,86 +62,81 @@ fn sensitivities(
     dt_s: f64,
     delay_s: f64,
     with_delay: bool,
+    how: Differentiation,
 ) -> Vec<f64> {
-    let num = &theta[..=m];
-    let mut den = vec![1.0];
-    den.extend_from_slice(&theta[m + 1..]);
-    let n = den.len() - 1;
-    let a2 = poly_mul(&den, &den);
-    let svf = Svf::new(&a2, dt_s, Hold::Zoh { delay_s });
-    let xi = svf.run(u);
-    let len = u.len();
-    let p = m + 1 + n + usize::from(with_delay);
-    let mut s = vec![0.0; len * p];
-    // ∂ŷ/∂b (num index c ↔ s^{m−c}): s^{m−c} A ξ
-    for c in 0..=m {
-        let mut poly = den.clone();
-        poly.extend(std::iter::repeat_n(0.0, m - c));
-        let col = xi.combine(&poly);
-        for k in 0..len {
-            s[k * p + c] = col[k];
-        }
-    }
-    // ∂ŷ/∂a_i = −s^{n−i} B ξ
-    for i in 1..=n {
-        let mut poly: Vec<f64> = num.iter().map(|b| -b).collect();
-        poly.extend(std::iter::repeat_n(0.0, n - i));
-        let col = xi.combine(&poly);
-        for k in 0..len {
-            s[k * p + m + i] = col[k];
-        }
-    }
+    let mut columns = match how {
+        Differentiation::Filtered => filtered_columns(theta, m, u, dt_s, delay_s),
+        Differentiation::CentralDifference => fd_columns(theta, m, u, dt_s, delay_s),
+    };
     if with_delay {
-        let h = 0.1 * dt_s;
-        let (lo, hi) = if delay_s > h {
-            (delay_s - h, delay_s + h)
-        } else {
-            (delay_s, delay_s + h)
-        };
-        let y_lo = sim(theta, m, u, dt_s, lo);
-        let y_hi = sim(theta, m, u, dt_s, hi);
-        for k in 0..len {
-            s[k * p + p - 1] = (y_hi[k] - y_lo[k]) / (hi - lo);
+        columns.push(delay_column(theta, m, u, dt_s, delay_s));
+    }
+    let p = columns.len();
+    let mut s = vec![0.0; u.len() * p];
+    for (j, col) in columns.iter().enumerate() {
+        for (k, v) in col.iter().enumerate() {
+            s[k * p + j] = *v;
         }
     }
     s
 }
 
-/// Central-difference sensitivities of the exact simulation (N × p, row-major); used for the
-/// covariance, where the small-eigenvalue directions of `SᵀS` (the slow modes) need the
-/// sensitivities to full precision.
-fn fd_sensitivities(
-    theta: &[f64],
-    m: usize,
-    u: &[f64],
-    dt_s: f64,
-    delay_s: f64,
-    with_delay: bool,
-) -> Vec<f64> {
-    let np = theta.len();
-    let p = np + usize::from(with_delay);
-    let len = u.len();
+/// `∂ŷ/∂b` and `∂ŷ/∂a` by filtering, one column per parameter of `theta`.
+fn filtered_columns(theta: &[f64], m: usize, u: &[f64], dt_s: f64, delay_s: f64) -> Vec<Vec<f64>> {
+    let (num, den) = num_den(theta, m);
+    let n = den.len() - 1;
+    let a2 = poly_mul(&den, &den);
+    let svf = Svf::new(&a2, dt_s, Hold::Zoh { delay_s });
+    let xi = svf.run(u);
+    // ∂ŷ/∂b (num index c ↔ s^{m−c}): s^{m−c} A ξ
+    let d_num = (0..=m).map(|c| {
+        let mut poly = den.clone();
+        poly.extend(std::iter::repeat_n(0.0, m - c));
+        xi.combine(&poly)
+    });
+    // ∂ŷ/∂a_i = −s^{n−i} B ξ
+    let d_den = (1..=n).map(|i| {
+        let mut poly: Vec<f64> = num.iter().map(|b| -b).collect();
+        poly.extend(std::iter::repeat_n(0.0, n - i));
+        xi.combine(&poly)
+    });
+    d_num.chain(d_den).collect()
+}
+
+/// Central-difference sensitivities of the exact simulation, one column per parameter of `theta`.
+fn fd_columns(theta: &[f64], m: usize, u: &[f64], dt_s: f64, delay_s: f64) -> Vec<Vec<f64>> {
     let scale = theta.iter().fold(0.0_f64, |a, t| a.max(t.abs()));
-    let mut s = vec![0.0; len * p];
-    for j in 0..np {
-        let h = 1e-6 * theta[j].abs().max(1e-6 * scale).max(1e-12);
-        let mut tp = theta.to_vec();
-        let mut tm = theta.to_vec();
-        tp[j] += h;
-        tm[j] -= h;
-        let yp = sim(&tp, m, u, dt_s, delay_s);
-        let ym = sim(&tm, m, u, dt_s, delay_s);
-        for k in 0..len {
-            s[k * p + j] = (yp[k] - ym[k]) / (2.0 * h);
-        }
-    }
-    if with_delay {
-        let d = sensitivities(theta, m, u, dt_s, delay_s, true);
-        for k in 0..len {
-            s[k * p + p - 1] = d[k * p + p - 1];
-        }
-    }
-    s
+    (0..theta.len())
+        .map(|j| {
+            let h = 1e-6 * theta[j].abs().max(1e-6 * scale).max(1e-12);
+            let mut tp = theta.to_vec();
+            let mut tm = theta.to_vec();
+            tp[j] += h;
+            tm[j] -= h;
+            let yp = sim(&tp, m, u, dt_s, delay_s);
+            let ym = sim(&tm, m, u, dt_s, delay_s);
+            yp.iter()
+                .zip(&ym)
+                .map(|(a, b)| (a - b) / (2.0 * h))
+                .collect()
+        })
+        .collect()
+}
+
+/// `∂ŷ/∂τ` by a central difference (one-sided when τ is within the step of zero).
+fn delay_column(theta: &[f64], m: usize, u: &[f64], dt_s: f64, delay_s: f64) -> Vec<f64> {
+    let h = 0.1 * dt_s;
+    let (lo, hi) = if delay_s > h {
+        (delay_s - h, delay_s + h)
+    } else {
+        (delay_s, delay_s + h)
+    };
+    let y_lo = sim(theta, m, u, dt_s, lo);
+    let y_hi = sim(theta, m, u, dt_s, hi);
+    y_hi.iter()
+        .zip(&y_lo)
+        .map(|(a, b)| (a - b) / (hi - lo))
+        .collect()
 }
 
 /// `SᵀS` and `Sᵀr`.
@@ -229,7 +241,15 @@ impl optimise::Problem for OutputError<'_> {
         let (model, delay_s) = self.model_and_delay(x);
         let p = x.len() - 1;
         let s = with_offset_column(
-            &sensitivities(model, self.m, self.u, self.dt_s, delay_s, self.with_delay),
+            &sensitivities(
+                model,
+                self.m,
+                self.u,
+                self.dt_s,
+                delay_s,
+                self.with_delay,
+                Differentiation::Filtered,
+            ),
             p,
         );
         Ok(Some(optimise::Linearised {
@@ -294,20 +314,19 @@ pub(crate) fn oe(
     let delay_s = if with_delay { min.x[np] } else { start.delay_s };
     let c = min.x[p];
     // covariance at the optimum, from central-difference sensitivities of the exact simulation
-    let s = with_offset_column(
-        &fd_sensitivities(&theta, m, u, dt_s, delay_s, with_delay),
-        p,
+    let s = sensitivities(
+        &theta,
+        m,
+        u,
+        dt_s,
+        delay_s,
+        with_delay,
+        Differentiation::CentralDifference,
     );
-    let r = problem.residuals(&min.x);
-    let (mmat, _) = normal(&s, &r, pf);
-    let cov = inverse(&mmat, pf).map(|minv| {
-        let full = coloured_covariance(&s, &r, &minv, pf);
-        (0..p * p).map(|k| full[(k / p) * pf + k % p]).collect()
-    });
-    let mut den = vec![1.0];
-    den.extend_from_slice(&theta[m + 1..]);
+    let cov = marginal_covariance(&s, &problem.residuals(&min.x), p);
+    let (num, den) = num_den(&theta, m);
     Ok(ContinuousModel {
-        num: theta[..=m].to_vec(),
+        num: num.to_vec(),
         den,
         delay_s,
         y_bias: c,
@@ -330,11 +349,14 @@ pub(crate) fn covariance(
     let m = model.num.len() - 1;
     let mut theta = model.num.clone();
     theta.extend_from_slice(&model.den[1..]);
-    let p = theta.len();
-    let pf = p + 1;
-    let s = with_offset_column(
-        &fd_sensitivities(&theta, m, u, dt_s, model.delay_s, false),
-        p,
+    let s = sensitivities(
+        &theta,
+        m,
+        u,
+        dt_s,
+        model.delay_s,
+        false,
+        Differentiation::CentralDifference,
     );
     let y_hat = sim(&theta, m, u, dt_s, model.delay_s);
     let r: Vec<f64> = y
@@ -342,9 +364,18 @@ pub(crate) fn covariance(
         .zip(&y_hat)
         .map(|(a, b)| a - b - model.y_bias)
         .collect();
-    let (mmat, _) = normal(&s, &r, pf);
+    marginal_covariance(&s, &r, theta.len())
+}
+
+/// The coloured-residual covariance ([`coloured_covariance`]) of the `p` model parameters whose
+/// sensitivities are `s` (N × p, row-major), with the output offset `c` estimated beside them and
+/// marginalised out; `None` when `SᵀS` is singular.
+fn marginal_covariance(s: &[f64], r: &[f64], p: usize) -> Option<Vec<f64>> {
+    let pf = p + 1;
+    let s = with_offset_column(s, p);
+    let (mmat, _) = normal(&s, r, pf);
     inverse(&mmat, pf).map(|minv| {
-        let full = coloured_covariance(&s, &r, &minv, pf);
+        let full = coloured_covariance(&s, r, &minv, pf);
         (0..p * p).map(|k| full[(k / p) * pf + k % p]).collect()
     })
 }
