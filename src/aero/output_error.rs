@@ -28,6 +28,12 @@
 //!   are held (at 0, or a zero term at its equation-error value); the structure checks (`checks.rs`) free them
 //!   on evidence. A surface no record moves has its derivatives held at 0.
 //!
+//! - **Filter error** adds to the longitudinal model the vertical gust states of [`super::flight_models`]
+//!   (α_g and the rotary q_g, gain `gust_q_gain` estimated within ±1.5) with process noise on α_g and V; the
+//!   lateral model keeps process noise on every state.
+//! - **A held C_mα̇** is a consider parameter, 0 ± 0.2 |C_mq| (`free.rs`): the records cannot separate it from
+//!   C_mα, C_mq and C_mδe, and their σ carry it.
+//!
 //! Modes (short period, phugoid; Dutch roll, roll, spiral) are the eigenvalues of the model's Jacobian at the
 //! mean flight condition, with σ by first-order propagation of the estimates' covariance through
 //! central-difference derivatives of the eigenvalues (Jategaonkar §4.17; [`super::measured::modes_with_uncertainty`]).
