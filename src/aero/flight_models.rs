@@ -24,7 +24,7 @@
 //! a_z = (−q̄S C_D sin α − q̄S C_L cos α − T sin ε)/m − q̇ x − q² z (IMU at (x, y, z));
 //! α_vane = α − q x_v/V − τ_α α̇ (vane at x_v; τ_α its time skew, first order).
 //!
-//! Vertical turbulence, for the filter error method (Dryden form of MIL-F-8785C §3.7; Jategaonkar §5.1: a
+//! Vertical turbulence, for the filter error method (Dryden form of MIL-F-8785C §3.7; Jategaonkar ch. 5: a
 //! process-noise model of the atmosphere): two more states, the gust's angle of attack α_g and a lag ξ of it,
 //! α̇_g = −α_g V/L_w (white process noise drives it), ξ̇ = (α_g − ξ)/τ_q, τ_q = 4b/(πV). The aerodynamics see
 //! α + α_g and the pitch-rate gust q + q_g, q_g = k_q (α_g − ξ)/τ_q, i.e. k_q s/(1 + τ_q s) α_g, the rotary
