@@ -60,7 +60,7 @@ use checks::{
     side_force_rate_check, skew_check, speed_check, AxisFitter, Check, ALPHADOT, CURVATURE,
     SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
-use free::{equation_error_starts, parameters, GUST_Q_GAIN, GUST_Q_GAIN_BOUND, LAT_HELD, LON_HELD};
+use free::{equation_error_starts, parameters, GUST_Q_GAIN, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
 
 /// The modes of one axis's model at θ (the flight-model constants and the reference condition given).
@@ -429,6 +429,7 @@ fn fit_longitudinal(
         ("Cm_alpha", cm_alpha),
         ("Cm_q", -10.0),
         ("Cm_de", cm_de),
+        (GUST_Q_GAIN, 0.5),
         (
             "Cm_0",
             -(cm_alpha * cond.alpha_rad + cm_de * cond.elevator_rad),
@@ -441,25 +442,21 @@ fn fit_longitudinal(
     if !outputs.contains(&LonOutput::Alpha) {
         still.insert("tau_alpha_s");
     }
-    let mut params = parameters(
+    // filter error estimates the rotary gust's gain; output error has no gust to hold it for
+    let held: Vec<&str> = LON_HELD
+        .iter()
+        .copied()
+        .filter(|&n| gust_scale_m.is_none() || n != GUST_Q_GAIN)
+        .collect();
+    let params = parameters(
         &LONGITUDINAL_PARAMETERS,
-        &LON_HELD,
+        &held,
         &starts,
         &fallback,
         &still,
         setup.options,
         notes,
     );
-    let user_chose_gain = setup
-        .options
-        .free
-        .iter()
-        .any(|c| c.names.contains(&GUST_Q_GAIN));
-    if gust_scale_m.is_some() && !user_chose_gain {
-        if let Some(p) = params.iter_mut().find(|p| p.name == GUST_Q_GAIN) {
-            *p = Parameter::free(GUST_Q_GAIN, 0.5).bounded(-GUST_Q_GAIN_BOUND, GUST_Q_GAIN_BOUND);
-        }
-    }
     let model = LongitudinalModel::new(constants, outputs.clone(), thrust, gust_scale_m);
     let bias = [LonOutput::Q, LonOutput::Ax, LonOutput::Az, LonOutput::Qdot];
     let mut nuisance = states_and_biases(&outputs, &bias);

@@ -81,7 +81,8 @@ pub(super) const LON_HELD: [&str; 11] = [
 ];
 
 /// The gain of the rotary gust in the filter error method's vertical gust (`flight_models` module doc): held
-/// at 0 (output error has no gust), freed by filter error unless `--free` names it.
+/// at 0 (output error has no gust); filter error leaves it out of the held set (start 0.5), and `--free`
+/// can hold it.
 pub(super) const GUST_Q_GAIN: &str = "gust_q_gain";
 
 /// |k_q| at most this: MIL-F-8785C's rotary gust has gain 1; on an airframe whose C_mq is small (the p51d:
@@ -147,6 +148,8 @@ pub(super) fn parameters(
             let mut p = Parameter::free(n, value);
             if n.starts_with("tau_") {
                 p = p.bounded(-0.25, 0.25);
+            } else if n == GUST_Q_GAIN {
+                p = p.bounded(-GUST_Q_GAIN_BOUND, GUST_Q_GAIN_BOUND);
             }
             let is_free = free.contains(n) && !still.contains(n);
             if free.contains(n) && still.contains(n) {

@@ -188,12 +188,15 @@ impl Problem<'_> {
         mut covs: [&mut Vec<f64>; 2],
         warnings: &mut Vec<String>,
     ) {
+        if self.layout.consider.is_empty() {
+            return;
+        }
         let p = cols.len();
         let res = self.residuals(&sol.predictions);
         let (x, _) = self.weighted(cols, &res, &sol.noise);
+        let theta = self.layout.theta(&sol.phi);
         for &(i, sd) in &self.layout.consider {
             let name = &self.model.signature().parameters[i];
-            let theta = self.layout.theta(&sol.phi);
             let h = 1e-4 * theta[i].abs().max(sd);
             let at = |delta: f64| {
                 let mut t = theta.clone();
