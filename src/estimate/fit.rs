@@ -356,14 +356,13 @@ impl Problem<'_> {
 
     /// [`Problem::predict`] with the model parameters `theta` given (a held one perturbed).
     fn predict_at(&self, phi: &[f64], theta: &[f64], r: usize) -> Result<Vec<Vec<f64>>, SimError> {
-        let theta = theta.to_vec();
         let terms = self.layout.record_terms(phi, r);
         let rec = &self.records[r];
         let run = self.run(r, &terms);
         if self.method == Method::Fem {
-            return self.filter(phi, &theta, &terms, &run);
+            return self.filter(phi, theta, &terms, &run);
         }
-        let mut y = self.model.simulate(&theta, &terms.x0, &run)?;
+        let mut y = self.model.simulate(theta, &terms.x0, &run)?;
         let outputs = &self.model.signature().outputs;
         if y.len() != outputs.len() || y.iter().any(|c| c.len() != rec.len()) {
             return Err(SimError::Failed(format!(
