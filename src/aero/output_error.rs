@@ -47,14 +47,15 @@ use super::flight_models::{
 };
 use super::measured::{
     air_data, dimensional, lateral_modes_at, longitudinal_modes_at, model_constants,
-    modes_with_uncertainty, moved_to_cg, records_exciting, reference_condition, AirData,
-    AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, ReferenceCondition,
+    modes_with_uncertainty, moved_to_cg, reference_condition, AirData, AxisChoice, Estimate,
+    MeasuredError, MeasuredReport, ModeEstimate, ReferenceCondition,
 };
 use crate::data::{self, Channel, G0_M_S2};
 use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signature, StateModel};
 
 mod checks;
 mod free;
+mod records;
 use checks::{
     alphadot_check, beta_skew_check, curvature_check, process_noise_note, run_checks,
     side_force_rate_check, skew_check, speed_check, AxisFitter, Check, ALPHADOT, CURVATURE,
@@ -62,6 +63,10 @@ use checks::{
 };
 use free::{equation_error_starts, parameters, GUST_Q_GAIN, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
+use records::{
+    core_record, derivatives_of_still_surfaces, mean_over_records, need, outputs_in_every_record,
+    records_for, states_and_biases,
+};
 
 /// The modes of one axis's model at θ (the flight-model constants and the reference condition given).
 type ModesAt = fn(&Constants, &ReferenceCondition, &[f64]) -> Vec<fm::NamedMode>;
@@ -223,30 +228,6 @@ pub struct OutputErrorOptions {
     pub alphadot: bool,
 }
 
-/// The records of one axis ([`records_exciting`]).
-fn records_for(
-    records: &[(String, data::FlightRecord)],
-    longitudinal: bool,
-) -> Vec<&(String, data::FlightRecord)> {
-    records_exciting(records, longitudinal)
-        .into_iter()
-        .map(|i| &records[i])
-        .collect()
-}
-
-/// The record's column, or a `MeasuredError::Record` naming it.
-fn need<'a>(
-    name: &str,
-    rec: &'a data::FlightRecord,
-    column: &str,
-    why: &str,
-) -> Result<&'a [f64], MeasuredError> {
-    rec.column(column).ok_or_else(|| MeasuredError::Record {
-        file: name.to_string(),
-        message: format!("no {column} column ({why})"),
-    })
-}
-
 /// What every fit of an axis reads besides its records: the air data per record, the airframe, the mean
 /// flight condition and the options.
 #[derive(Clone, Copy)]
@@ -257,89 +238,11 @@ struct FitSetup<'a> {
     options: &'a OutputErrorOptions,
 }
 
-/// The control derivatives held at 0 because no record moves their surface (module doc); `controls` pairs
-/// each control input with its derivatives.
-fn derivatives_of_still_surfaces(
-    records: &[&(String, data::FlightRecord)],
-    controls: &[(Channel, [&'static str; 3])],
-) -> BTreeSet<&'static str> {
-    let moves = |surface: Channel| {
-        records.iter().any(|(_, r)| {
-            r.column(surface)
-                .is_some_and(super::measured::surface_moves)
-        })
-    };
-    controls
-        .iter()
-        .filter(|(surface, _)| !moves(*surface))
-        .flat_map(|(_, derivatives)| *derivatives)
-        .collect()
-}
-
 /// The result of one axis's fit.
 struct AxisFit {
     estimate: estimate::Estimate,
     theta: Vec<f64>,
     constants: Constants,
-}
-
-/// The outputs of an axis that every record carries, or an error naming the columns the axis could use.
-fn outputs_in_every_record<O: Copy>(
-    all: &[O],
-    column: fn(O) -> &'static str,
-    records: &[&(String, data::FlightRecord)],
-    axis: &str,
-) -> Result<Vec<O>, MeasuredError> {
-    let outputs: Vec<O> = all
-        .iter()
-        .copied()
-        .filter(|&o| records.iter().all(|(_, r)| r.column(column(o)).is_some()))
-        .collect();
-    if outputs.is_empty() {
-        return Err(MeasuredError::Record {
-            file: super::measured::names_of(records.iter().copied()),
-            message: format!(
-                "no {axis} output column ({}) in every record",
-                all.iter()
-                    .map(|&o| column(o))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        });
-    }
-    Ok(outputs)
-}
-
-/// One record of the core: the given inputs and initial state, the measured `outputs` columns of `raw`.
-fn core_record(
-    name: &str,
-    raw: &data::FlightRecord,
-    inputs: Vec<Vec<f64>>,
-    outputs: &[&str],
-    initial_state: Vec<f64>,
-) -> Result<Record, MeasuredError> {
-    Ok(Record {
-        name: name.to_string(),
-        time_s: raw.time_s.clone(),
-        inputs,
-        outputs: outputs
-            .iter()
-            .map(|c| need(name, raw, c, "").map(<[f64]>::to_vec))
-            .collect::<Result<_, _>>()?,
-        initial_state,
-    })
-}
-
-/// Nuisance terms (module doc): every record's four initial states, and an additive bias on each output
-/// among `biased`.
-fn states_and_biases<O: PartialEq>(outputs: &[O], biased: &[O]) -> Nuisance {
-    Nuisance {
-        initial_state: (0..4).collect(),
-        output_bias: (0..outputs.len())
-            .filter(|&i| biased.contains(&outputs[i]))
-            .collect(),
-        ..Nuisance::default()
-    }
 }
 
 /// Fits the longitudinal model to the records (module doc).
@@ -553,17 +456,6 @@ fn fit_lateral(
     ];
     let nuisance = states_and_biases(&outputs, &bias);
     fit_model(&model, &params, &recs, &nuisance, setup.options, constants)
-}
-
-/// Mean of `column` over every sample of the records that carry it (`None` when none does).
-fn mean_over_records(records: &[&(String, data::FlightRecord)], column: &str) -> Option<f64> {
-    let values: Vec<f64> = records
-        .iter()
-        .filter_map(|(_, r)| r.column(column))
-        .flat_map(|c| c.iter().copied())
-        .filter(|v| v.is_finite())
-        .collect();
-    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
 }
 
 /// Runs the core on one model.
