@@ -57,6 +57,8 @@ G0 = 9.80665
 PSF = LBF / FT**2
 
 SURFACES = ("elevator", "aileron", "rudder")
+# Each surface and the suffix of its derivatives (Cm_de, Cl_da, Cn_dr, …).
+SURFACE_KEYS = (("elevator", "de"), ("aileron", "da"), ("rudder", "dr"))
 # What each surface's aero functions read, in order of preference.
 SURFACE_READS = {
     "elevator": ["fcs/elevator-pos-rad"],
@@ -109,22 +111,34 @@ def private_copy(name, workdir):
     aero = text[a0:a1]
     declared = []
     reads = {}
+    totals = []
     for surface in SURFACES:
         offset = f"gen/{surface}-offset-rad"
         for prop in SURFACE_READS[surface]:
             pat = re.compile(rf"<(property|p)>\s*{re.escape(prop)}\s*</\1>")
-            if not pat.search(aero):
+            # A table lookup names its variable in <independentVar>, which takes a property and not a
+            # function: such reads go through a pre-function of the aerodynamics (evaluated before the
+            # coefficients) that sums the deflection and the offset.
+            lookup = re.compile(rf"(<independentVar[^>]*>)\s*{re.escape(prop)}\s*(</independentVar>)")
+            if not pat.search(aero) and not lookup.search(aero):
                 continue
             summed = f"<sum><property>{prop}</property><property>{offset}</property></sum>"
             aero = pat.sub(summed, aero)
+            total = f"gen/{surface}-total-rad"
+            aero = lookup.sub(rf"\g<1>{total}\g<2>", aero)
+            totals.append(f'<function name="{total}">{summed}</function>')
             mag = prop.replace("fcs/", "fcs/mag-")
             aero = re.sub(rf"<(property|p)>\s*{re.escape(mag)}\s*</\1>", f"<abs>{summed}</abs>", aero)
+            mag_lookup = re.compile(rf"(<independentVar[^>]*>)\s*{re.escape(mag)}\s*(</independentVar>)")
+            if mag_lookup.search(aero):
+                aero = mag_lookup.sub(rf"\g<1>gen/mag-{surface}-total-rad\g<2>", aero)
+                totals.append(f'<function name="gen/mag-{surface}-total-rad"><abs>{summed}</abs></function>')
             reads[surface] = prop
             declared.append(f'<property value="0">{offset}</property>')
             break
         if surface not in reads:
             sys.exit(f"{name}: the aero model reads none of {SURFACE_READS[surface]}")
-    aero = aero.replace("<aerodynamics>", "<aerodynamics>\n" + "\n".join(declared), 1)
+    aero = aero.replace("<aerodynamics>", "<aerodynamics>\n" + "\n".join(declared + totals), 1)
     open(path, "w").write(text[:a0] + aero + text[a1:])
     adot = re.findall(r'<axis name="(\w+)">(.*?)</axis>', aero, flags=re.S)
     adot_functions = [(axis, f) for axis, body in adot
@@ -249,7 +263,8 @@ class Aircraft:
                     Cm=(f["moments/m-aero-lbsft"] - m_adot) / (qs * c), Cn=f["moments/n-aero-lbsft"] / (qs * b),
                     adot=f["aero/alphadot-rad_sec"], lift_adot=lift_adot / qs, m_adot=m_adot / (qs * c),
                     udot=f["accelerations/udot-ft_sec2"], wdot=f["accelerations/wdot-ft_sec2"],
-                    qdot=f["accelerations/qdot-rad_sec2"], thrust=self.thrust_lbf())
+                    qdot=f["accelerations/qdot-rad_sec2"], thrust=self.thrust_lbf(),
+                    surfaces={s: f[self.reads[s]] for s in SURFACES})
 
     def thrust_lbf(self):
         if not hasattr(self, "thrust_props"):
@@ -265,24 +280,30 @@ class Aircraft:
         b, c = f["metrics/bw-ft"], f["metrics/cbarw-ft"]
         b0 = self.aero_at(base, {}, offsets)
         d = {}
+        # Control derivatives first: a state derivative must hold the surfaces, and an aircraft whose FCS feeds
+        # back the state (the 737's yaw damper moves the rudder with r) moves them within run_ic. The
+        # surfaces' own contribution is taken off each state derivative below.
+        hs = 0.01
+        for s, key in SURFACE_KEYS:
+            up = self.aero_at(base, {}, {**offsets, s: offsets[s] + hs})
+            dn = self.aero_at(base, {}, {**offsets, s: offsets[s] - hs})
+            for coef in ("CL", "CD", "CY", "Cl", "Cm", "Cn"):
+                d[f"{coef}_{key}"] = (up[coef] - dn[coef]) / (2 * hs)
         h = 1e-3
         for var, key, scale in (("ic/alpha-rad", "alpha", 1.0), ("ic/beta-rad", "beta", 1.0),
                                 ("ic/p-rad_sec", "p", b / (2 * V)), ("ic/q-rad_sec", "q", c / (2 * V)),
                                 ("ic/r-rad_sec", "r", b / (2 * V))):
             up = self.aero_at(base, {var: base[var] + h}, offsets)
             dn = self.aero_at(base, {var: base[var] - h}, offsets)
+            moved = {s: (up["surfaces"][s] - dn["surfaces"][s]) / (2 * h) for s in SURFACES}
             for coef in ("CL", "CD", "CY", "Cl", "Cm", "Cn"):
-                d[f"{coef}_{key}"] = (up[coef] - dn[coef]) / (2 * h) / scale
+                by_fcs = sum(d[f"{coef}_{k}"] * moved[s]
+                             for s, k in SURFACE_KEYS)
+                d[f"{coef}_{key}"] = ((up[coef] - dn[coef]) / (2 * h) - by_fcs) / scale
             if key == "alpha" and abs(up["adot"]) > 1e-6 and self.adot_functions:
                 k = up["adot"] * c / (2 * V)
                 d["CL_alphadot"] = up["lift_adot"] / k
                 d["Cm_alphadot"] = up["m_adot"] / k
-        hs = 0.01
-        for s, key in (("elevator", "de"), ("aileron", "da"), ("rudder", "dr")):
-            up = self.aero_at(base, {}, {**offsets, s: offsets[s] + hs})
-            dn = self.aero_at(base, {}, {**offsets, s: offsets[s] - hs})
-            for coef in ("CL", "CD", "CY", "Cl", "Cm", "Cn"):
-                d[f"{coef}_{key}"] = (up[coef] - dn[coef]) / (2 * hs)
         d.setdefault("CL_alphadot", 0.0)
         d.setdefault("Cm_alphadot", 0.0)
         # back to the trimmed state (rates zero)
@@ -295,12 +316,14 @@ class Aircraft:
                                        qdot_rad_s2=b0["qdot"]))
         return d, cond
 
-    def truth_over_records(self, base, offsets, kinds, points=21):
+    def truth_over_records(self, base, offsets, kinds, control, points=21):
         """The α and β derivatives the records determine where the aero tables are not linear over the range
         flown: the least-squares slope of each coefficient over `points` quantiles of the true α (longitudinal
         records) or β (lateral records), every other state at the trim (equal weights: each quantile stands for
-        the same share of the samples)."""
+        the same share of the samples). The surfaces are held as in `truth`: what an FCS moves them by is taken
+        off through the control derivatives `control`."""
         out = {}
+        trim = self.aero_at(base, {}, offsets)["surfaces"]
         for angle, var, kind, coefs in (("alpha", "ic/alpha-rad", "lon", ("CL", "CD", "Cm")),
                                         ("beta", "ic/beta-rad", "lat", ("CY", "Cl", "Cn"))):
             flown = [x for k, x in zip(kinds, self.flown.get(angle, [])) if k.startswith(kind)]
@@ -309,7 +332,10 @@ class Aircraft:
             x = np.quantile(np.concatenate(flown), np.linspace(0.0, 1.0, points + 2)[1:-1])
             ys = [self.aero_at(base, {var: float(v)}, offsets) for v in x]
             for coef in coefs:
-                out[f"{coef}_{angle}"] = float(np.polyfit(x, [y[coef] for y in ys], 1)[0])
+                held = [y[coef] - sum(control[f"{coef}_{k}"] * (y["surfaces"][s] - trim[s])
+                                      for s, k in SURFACE_KEYS)
+                        for y in ys]
+                out[f"{coef}_{angle}"] = float(np.polyfit(x, held, 1)[0])
         self.aero_at(base, {}, offsets)
         return out
 
@@ -547,7 +573,7 @@ def main():
             write_csv(path, cols, [f"JSBSim {args.aircraft}, {kind}, {alt:g} ft, {spd:g} kts, seed {args.seed}",
                                    f"logged at {args.log_hz:g} Hz from a {args.sim_hz:g} Hz simulation"])
             written.append(path)
-        over_records = ac.truth_over_records(base, offsets, args.records.split(","))
+        over_records = ac.truth_over_records(base, offsets, args.records.split(","), truth)
     write_airframe(os.path.join(args.out, f"{args.aircraft}.airframe.toml"), af)
     write_columns(os.path.join(args.out, f"{args.aircraft}.columns.toml"))
     json.dump({"aircraft": args.aircraft, "flight_condition": cond, "derivatives": truth,
