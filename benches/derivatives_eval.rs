@@ -1,5 +1,5 @@
 //! Accuracy evaluation of `flightid derivatives` on records it never saw the making of:
-//! `scripts/gen_foreign_records.py` flies JSBSim aircraft (p51d, c310) through JSBSim's own Python API and logs
+//! `scripts/gen_foreign_records.py` flies JSBSim aircraft (p51d and c310 by default; pa28, 737 or any JSBSim aircraft with `--aircraft`) through JSBSim's own Python API and logs
 //! them as a data logger would (deg, ft, kts, g; noise, biases, sensors away from the CG, a vane skew, light
 //! turbulence), with JSBSim's own derivatives about the CG as the truth. For each aircraft × seed × method the
 //! release binary estimates the derivatives from the four records (both axes) and every target derivative is

@@ -65,7 +65,8 @@ SURFACE_READS = {
     "aileron": ["fcs/effective-aileron-pos", "fcs/left-aileron-pos-rad", "fcs/aileron-pos-rad"],
     "rudder": ["fcs/rudder-pos-rad"],
 }
-DEFAULTS = {"p51d": (6000.0, 200.0), "c310": (5000.0, 150.0)}
+# Trim altitude (ft) and true airspeed (kts) per aircraft; others fly at 6000 ft, 180 kts unless told.
+DEFAULTS = {"p51d": (6000.0, 200.0), "c310": (5000.0, 150.0), "pa28": (4000.0, 110.0), "737": (15000.0, 280.0)}
 
 
 @contextlib.contextmanager
