@@ -281,30 +281,33 @@ class Aircraft:
         b, c = f["metrics/bw-ft"], f["metrics/cbarw-ft"]
         b0 = self.aero_at(base, {}, offsets)
         d = {}
-        # Control derivatives first: a state derivative must hold the surfaces, and an aircraft whose FCS feeds
-        # back the state (the 737's yaw damper moves the rudder with r) moves them within run_ic. The
-        # surfaces' own contribution is taken off each state derivative below.
+        # A state derivative holds the surfaces: an aircraft whose FCS feeds back the state (the 737's yaw
+        # damper moves the rudder with r) moves them within run_ic, and what the surfaces moved by is taken
+        # off through the control derivatives. (The order of the run_ic calls is that of the records' first
+        # generator version: the engines keep their state through them, so it shapes the records.)
+        h = 1e-3
+        raw, moved = {}, {}
+        for var, key, scale in (("ic/alpha-rad", "alpha", 1.0), ("ic/beta-rad", "beta", 1.0),
+                                ("ic/p-rad_sec", "p", b / (2 * V)), ("ic/q-rad_sec", "q", c / (2 * V)),
+                                ("ic/r-rad_sec", "r", b / (2 * V))):
+            up = self.aero_at(base, {var: base[var] + h}, offsets)
+            dn = self.aero_at(base, {var: base[var] - h}, offsets)
+            moved[key] = {s: (up["surfaces"][s] - dn["surfaces"][s]) / (2 * h) for s in SURFACES}
+            for coef in ("CL", "CD", "CY", "Cl", "Cm", "Cn"):
+                raw[(coef, key, scale)] = (up[coef] - dn[coef]) / (2 * h)
+            if key == "alpha" and abs(up["adot"]) > 1e-6 and self.adot_functions:
+                k = up["adot"] * c / (2 * V)
+                d["CL_alphadot"] = up["lift_adot"] / k
+                d["Cm_alphadot"] = up["m_adot"] / k
         hs = 0.01
         for s, key in SURFACE_KEYS:
             up = self.aero_at(base, {}, {**offsets, s: offsets[s] + hs})
             dn = self.aero_at(base, {}, {**offsets, s: offsets[s] - hs})
             for coef in ("CL", "CD", "CY", "Cl", "Cm", "Cn"):
                 d[f"{coef}_{key}"] = (up[coef] - dn[coef]) / (2 * hs)
-        h = 1e-3
-        for var, key, scale in (("ic/alpha-rad", "alpha", 1.0), ("ic/beta-rad", "beta", 1.0),
-                                ("ic/p-rad_sec", "p", b / (2 * V)), ("ic/q-rad_sec", "q", c / (2 * V)),
-                                ("ic/r-rad_sec", "r", b / (2 * V))):
-            up = self.aero_at(base, {var: base[var] + h}, offsets)
-            dn = self.aero_at(base, {var: base[var] - h}, offsets)
-            moved = {s: (up["surfaces"][s] - dn["surfaces"][s]) / (2 * h) for s in SURFACES}
-            for coef in ("CL", "CD", "CY", "Cl", "Cm", "Cn"):
-                by_fcs = sum(d[f"{coef}_{k}"] * moved[s]
-                             for s, k in SURFACE_KEYS)
-                d[f"{coef}_{key}"] = ((up[coef] - dn[coef]) / (2 * h) - by_fcs) / scale
-            if key == "alpha" and abs(up["adot"]) > 1e-6 and self.adot_functions:
-                k = up["adot"] * c / (2 * V)
-                d["CL_alphadot"] = up["lift_adot"] / k
-                d["Cm_alphadot"] = up["m_adot"] / k
+        for (coef, key, scale), slope in raw.items():
+            by_fcs = sum(d[f"{coef}_{k}"] * moved[key][s] for s, k in SURFACE_KEYS)
+            d[f"{coef}_{key}"] = (slope - by_fcs) / scale
         d.setdefault("CL_alphadot", 0.0)
         d.setdefault("Cm_alphadot", 0.0)
         # back to the trimmed state (rates zero)

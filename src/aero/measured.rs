@@ -25,7 +25,7 @@ use crate::data::{self, G0_M_S2};
 
 mod air_data;
 mod modes;
-pub use air_data::{air_data, deskewed, moved_to_cg, standard_density_kg_m3, AirData};
+pub use air_data::{advanced, air_data, deskewed, moved_to_cg, standard_density_kg_m3, AirData};
 pub use modes::{
     lateral_modes_at, longitudinal_modes_at, model_constants, modes_with_uncertainty, theta_from,
     ModeEstimate,

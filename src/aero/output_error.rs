@@ -58,8 +58,8 @@ mod free;
 mod records;
 use checks::{
     alphadot_check, beta_skew_check, curvature_check, process_noise_note, run_checks,
-    side_force_rate_check, skew_check, speed_check, AxisFitter, Check, ALPHADOT, CURVATURE,
-    SIDE_RATES_AND_SKEW, SKEW, SPEED,
+    side_force_rate_check, skew_check, skew_taken_off, speed_check, AxisFitter, Check, ALPHADOT,
+    CURVATURE, SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
 use free::{equation_error_starts, parameters, GUST_Q_GAIN, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
@@ -585,6 +585,8 @@ pub fn output_error_report(
             options: &checked,
             ..setup
         };
+        let (f, deskew_note) = skew_taken_off(&recs, checked_setup, f, fit_axis)?;
+        notes.extend(deskew_note.map(|n| format!("{name}: {n}")));
         notes.extend(process_noise_note(name, &f, &recs, checked_setup, fit_axis));
         let (free, cov) = free_block(&f.estimate);
         let m = modes_with_uncertainty(&f.theta, &free, &cov, |t| modes_at(&f.constants, &cond, t));

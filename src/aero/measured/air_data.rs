@@ -146,15 +146,16 @@ pub fn deskewed(
         let Some(x) = rec.column(&e.column) else {
             continue;
         };
-        let t = &rec.time_s;
-        let shifted = t
-            .iter()
-            .map(|&ti| interpolate(t, x, ti + e.value))
-            .collect();
-        out.push_column(&e.column, shifted);
+        out.push_column(&e.column, advanced(&rec.time_s, x, e.value));
         skews.push((e.column.clone(), e.value));
     }
     (out, skews, refused)
+}
+
+/// The samples `x` (at times `t`) read `tau_s` later: x(t + τ) at every t, by linear interpolation, the ends
+/// held. Takes a time skew τ off a sensor that reads late.
+pub fn advanced(t: &[f64], x: &[f64], tau_s: f64) -> Vec<f64> {
+    t.iter().map(|&ti| interpolate(t, x, ti + tau_s)).collect()
 }
 
 /// Linear interpolation of (t, x) at `at`, holding the end values outside.
