@@ -25,7 +25,10 @@ use crate::data::{self, G0_M_S2};
 
 mod air_data;
 mod modes;
-pub use air_data::{advanced, air_data, deskewed, moved_to_cg, standard_density_kg_m3, AirData};
+pub use air_data::{
+    advanced, air_data, deskewed, moved_to_cg, skew_from_force_equation, standard_density_kg_m3,
+    AirData, FORCE_EQUATION_SKEWS,
+};
 pub use modes::{
     lateral_modes_at, longitudinal_modes_at, model_constants, modes_with_uncertainty, theta_from,
     ModeEstimate,
@@ -159,8 +162,8 @@ pub struct MeasuredEquationError {
     pub air: Vec<AirData>,
     /// Equations left out and why.
     pub skipped: Vec<(String, String)>,
-    /// Vane time skews removed before the regression: (record, column, skew s).
-    pub skews: Vec<(String, String, f64)>,
+    /// Vane time skews removed before the regression: (record, column, skew s, what found it).
+    pub skews: Vec<(String, String, f64, &'static str)>,
     /// Apparent vane lags the reconstruction found but that are longer than a data system's skew can be
     /// ([`data::skew_bound_s`]), left in: (record, column, lag s).
     pub refused_skews: Vec<(String, String, f64)>,
@@ -245,9 +248,7 @@ pub fn equation_error_measured(
             message,
         };
         let rec = moved_to_cg(raw, &airframe.sensors).map_err(|e| bad(e.to_string()))?;
-        let (rec, found, refused) = deskewed(&rec);
-        skews.extend(found.into_iter().map(|(c, v)| (name.clone(), c, v)));
-        refused_skews.extend(refused.into_iter().map(|(c, v)| (name.clone(), c, v)));
+        let (mut rec, found, refused) = deskewed(&rec);
         let thrust = if rec.column("thrust_n").is_some() {
             Some(airframe.thrust_line("a record with thrust_n")?)
         } else {
@@ -262,6 +263,37 @@ pub fn equation_error_measured(
             half_window: 3,
             ..EquationErrorOptions::default()
         };
+        // A skew the reconstruction did not find (it cannot beside gusts the vane reads and the kinematics do
+        // not), or refused as too long, is looked for in the force equation of the axis the record feeds.
+        let mut refused = refused;
+        for (vane, coefficient, source) in FORCE_EQUATION_SKEWS {
+            let feeds = if vane == data::Channel::Alpha {
+                wanted.contains(&"CL")
+            } else {
+                wanted.contains(&"CY")
+            };
+            if !feeds || found.iter().any(|(c, _)| c.as_str() == vane.name()) {
+                continue;
+            }
+            let fit = |r: &data::FlightRecord| {
+                let res =
+                    equation_error(&Channels::from_columns(r), &mass, &geometry, &options).ok()?;
+                res.equations
+                    .into_iter()
+                    .find(|e| e.coefficient == coefficient)
+            };
+            if let Some((shifted, tau_s)) = skew_from_force_equation(&rec, vane, fit) {
+                rec = shifted;
+                refused.retain(|(c, _)| c.as_str() != vane.name());
+                skews.push((name.clone(), vane.name().to_string(), tau_s, source));
+            }
+        }
+        skews.extend(
+            found
+                .into_iter()
+                .map(|(c, v)| (name.clone(), c, v, "flight-path reconstruction")),
+        );
+        refused_skews.extend(refused.into_iter().map(|(c, v)| (name.clone(), c, v)));
         let res = equation_error(&Channels::from_columns(&rec), &mass, &geometry, &options)
             .map_err(|e| match e {
                 AeroError::BadRecord(m) => bad(m),
@@ -600,9 +632,9 @@ pub fn equation_error_report(
         .iter()
         .map(|(c, why)| format!("{c} not estimated: {why}"))
         .collect();
-    for (rec, col, v) in &ee.skews {
+    for (rec, col, v, source) in &ee.skews {
         notes.push(format!(
-            "{rec}: {col} read {:.0} ms late (flight-path reconstruction); shifted back before the regression",
+            "{rec}: {col} read {:.0} ms late ({source}); shifted back before the regression",
             1000.0 * v
         ));
     }
