@@ -34,7 +34,7 @@ use super::error::DataError;
 use super::record::FlightRecord;
 use crate::signal::{std_dev, sum_sq};
 use fit::{coloured_residual_covariance, fit, invert, jacobian};
-use kinematics::{Data, Param, OUT_NAMES};
+use kinematics::{Data, Param, N_OUT, OUT_NAMES};
 
 /// Options of [`check_compatibility`].
 #[derive(Debug, Clone)]
@@ -239,8 +239,17 @@ pub fn check_compatibility(
     let translational = accel.is_some() && air.iter().all(Option::is_some);
     let psi = rec.column(Channel::Psi).map(crate::signal::unwrap_rad);
     let [v_m, a_m, b_m] = air;
-    let out: [Option<Vec<f64>>; 6] = if translational {
-        [v_m, a_m, b_m, Some(phi.to_vec()), Some(theta.to_vec()), psi]
+    let altitude = rec.column(Channel::Altitude).map(<[f64]>::to_vec);
+    let out: [Option<Vec<f64>>; N_OUT] = if translational {
+        [
+            v_m,
+            a_m,
+            b_m,
+            Some(phi.to_vec()),
+            Some(theta.to_vec()),
+            psi,
+            altitude,
+        ]
     } else {
         [
             None,
@@ -249,6 +258,7 @@ pub fn check_compatibility(
             Some(phi.to_vec()),
             Some(theta.to_vec()),
             psi,
+            None,
         ]
     };
     let data = Data {
@@ -274,7 +284,11 @@ pub fn check_compatibility(
         }
         params.extend((0..3).map(Param::Init));
     }
-    params.extend((3..6).filter(|&k| data.out[k].is_some()).map(Param::Init));
+    params.extend(
+        (3..N_OUT)
+            .filter(|&k| data.out[k].is_some())
+            .map(Param::Init),
+    );
 
     // Initial guess: zero instrument errors, initial state from the first measurements.
     let mut theta_p: Vec<f64> = params
@@ -306,12 +320,15 @@ pub fn check_compatibility(
                 data.out[3].clone(),
                 data.out[4].clone(),
                 data.out[5].clone(),
+                None,
             ],
         };
         let att_params: Vec<Param> = params
             .iter()
             .copied()
-            .filter(|p| matches!(p, Param::GyroBias(_)) || matches!(p, Param::Init(k) if *k >= 3))
+            .filter(|p| {
+                matches!(p, Param::GyroBias(_)) || matches!(p, Param::Init(k) if (3..6).contains(k))
+            })
             .collect();
         let start: Vec<f64> = att_params
             .iter()
@@ -411,7 +428,7 @@ pub fn check_compatibility(
     let fisher = result.fisher.clone();
     let r = result.residuals.clone();
     let (iterations, converged) = (result.iterations, result.converged);
-    let outputs: Vec<usize> = (0..6).filter(|&j| data.out[j].is_some()).collect();
+    let outputs: Vec<usize> = (0..N_OUT).filter(|&j| data.out[j].is_some()).collect();
     let np = params.len();
     // Cramér–Rao bounds at the solution, corrected for coloured residuals.
     let cov = match invert(&fisher, np) {

@@ -5,7 +5,7 @@
 use faer::linalg::solvers::DenseSolveCore;
 use faer::{Mat, Side};
 
-use super::kinematics::{residuals, Data, Param};
+use super::kinematics::{residuals, Data, Param, N_OUT};
 use crate::estimate::covariance;
 use crate::optimise;
 use crate::signal::sum_sq;
@@ -47,7 +47,7 @@ pub(super) struct Fit {
 /// the diagonal residual covariance is re-estimated from the residuals after every step (Klein &
 /// Morelli §6.2).
 pub(super) fn fit(data: &Data, params: &[Param], start: Vec<f64>, max_iterations: usize) -> Fit {
-    let outputs: Vec<usize> = (0..6).filter(|&j| data.out[j].is_some()).collect();
+    let outputs: Vec<usize> = (0..N_OUT).filter(|&j| data.out[j].is_some()).collect();
     let r = residuals(data, params, &start, &outputs);
     let np = params.len();
     let mut problem = Reconstruction {
