@@ -351,7 +351,10 @@ class Aircraft:
         return {
             "name": self.name,
             "mass_kg": f["inertia/mass-slugs"] * SLUG,
-            "inertia_kg_m2": {k: f[f"inertia/{k}-slugs_ft2"] * SLUG * FT**2 for k in ("ixx", "iyy", "izz", "ixz")},
+            # ixz as the airframe description takes it, ∫xz dm in body axes (Ixx ṗ − Ixz ṙ = L): JSBSim's
+            # inertia tensor holds its ixz where that tensor holds −Ixz, so the property has the other sign.
+            "inertia_kg_m2": {k: (-1.0 if k == "ixz" else 1.0) * f[f"inertia/{k}-slugs_ft2"] * SLUG * FT**2
+                              for k in ("ixx", "iyy", "izz", "ixz")},
             "wing": {"area_m2": f["metrics/Sw-sqft"] * FT**2, "span_m": f["metrics/bw-ft"] * FT,
                      "mac_m": f["metrics/cbarw-ft"] * FT},
             "thrust": {"inclination_rad": math.atan2(-fz, fx) if thrust > 0 else 0.0,

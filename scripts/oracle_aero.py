@@ -56,6 +56,8 @@ S = P('metrics/Sw-sqft') * FT**2; b = P('metrics/bw-ft') * FT; c = P('metrics/cb
 m = P('inertia/mass-slugs') * SLUG
 g = P('accelerations/gravity-ft_sec2') * FT
 I = {k: P(f'inertia/{k}-slugs_ft2') * SLUGFT2 for k in ['ixx', 'iyy', 'izz', 'ixz']}
+# ∫xz dm (Ixx ṗ − Ixz ṙ = L): JSBSim's property has the other sign (its tensor holds ixz where Ixz's is −Ixz)
+I['ixz'] = -I['ixz']
 theta0 = P('attitude/theta-rad')
 CL0 = P('forces/fwz-aero-lbs') * LBF / (qbar * S)
 CD0trim = P('forces/fwx-aero-lbs') * LBF / (qbar * S)

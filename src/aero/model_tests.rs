@@ -12,14 +12,15 @@ pub(crate) const CL_TRIM: f64 = 0.4716539073;
 pub(crate) const CD_TRIM: f64 = 0.04761057874;
 pub(crate) const G_M_S2: f64 = 9.810440323;
 
-/// Body-axis mass properties (JSBSim `inertia/*-slugs_ft2` after trim, converted to SI).
+/// Body-axis mass properties (JSBSim `inertia/*-slugs_ft2` after trim, converted to SI; ixz with the textbook
+/// sign, the property's negative).
 pub(crate) fn c172x_mass_body() -> MassProperties {
     MassProperties {
         mass_kg: 1124.909062,
         ixx_kg_m2: 2841.434964,
         iyy_kg_m2: 2040.522117,
         izz_kg_m2: 4271.422149,
-        ixz_kg_m2: 18.37788633,
+        ixz_kg_m2: -18.37788633,
     }
 }
 
@@ -160,7 +161,9 @@ fn c172x_paper_assumptions_cost_dutch_roll_damping() {
 #[test]
 fn c172x_oracle_model_modes_are_reproduced() {
     // The numpy prototype in scripts/oracle_aero.py ("lon full", "lat full + drag in Y") gives
-    // short period (6.116, 0.6746) and Dutch roll (2.1321, 0.1535); same equations, so 1e-3.
+    // short period (6.116, 0.6746) and Dutch roll (2.1349, 0.1573); same equations, so 1e-3. With Ixz of
+    // JSBSim's property sign (the textbook one is its negative) it gave (2.1321, 0.1535); the textbook sign
+    // matches JSBSim's own linearization, (2.1344, 0.1574).
     let (wn, zeta) = short_period(jsbsim_assumptions());
     assert!(
         rel(wn, 6.116) < 1e-3 && rel(zeta, 0.6746) < 1e-3,
@@ -168,7 +171,7 @@ fn c172x_oracle_model_modes_are_reproduced() {
     );
     let (wn, zeta) = dutch_roll(jsbsim_assumptions());
     assert!(
-        rel(wn, 2.1321) < 1e-3 && rel(zeta, 0.1535) < 1e-3,
+        rel(wn, 2.1349) < 1e-3 && rel(zeta, 0.1573) < 1e-3,
         "{wn} {zeta}"
     );
 }
@@ -294,7 +297,7 @@ fn c172x_cost_of_each_simplifying_assumption() {
         (0.01..0.02).contains(&(no_lift_rates[0] - all[0])),
         "{no_lift_rates:?}"
     );
-    // Treating JSBSim's wind-axis C_Yβ as stability-axis (no −C_D): Dutch-roll ζ −5 % instead of −2.5 %.
+    // Treating JSBSim's wind-axis C_Yβ as stability-axis (no −C_D): Dutch-roll ζ 2.5 % lower.
     let cy_stab = modal_errors(&c172x_model(Assumptions {
         side_force_in_wind_axes: false,
         ..base
@@ -303,12 +306,12 @@ fn c172x_cost_of_each_simplifying_assumption() {
         (-0.035..-0.02).contains(&(cy_stab[3] - all[3])),
         "{cy_stab:?}"
     );
-    // Body-axis lateral derivatives and inertia used as if stability-axis (α0 = 1.1°): Dutch-roll ζ −8 %.
+    // Body-axis lateral derivatives and inertia used as if stability-axis (α0 = 1.1°): Dutch-roll ζ −5.5 %.
     let mut body = c172x_model(base);
     body.mass = c172x_mass_body();
     body.derivatives = c172x_derivatives_body();
     let body = modal_errors(&body);
-    assert!(body[3] < -0.06, "{body:?}");
+    assert!(body[3] < -0.04, "{body:?}");
     // Neglecting thrust derivatives (constant thrust) halves the phugoid damping; a constant-power
     // propeller model brings it to −19 %. The phugoid is outside the acceptance, but θ/δe's low-order
     // coefficients carry it, so C_D0 backed out of θ/δe absorbs the missing thrust term.
@@ -318,12 +321,17 @@ fn c172x_cost_of_each_simplifying_assumption() {
         ..base
     }));
     assert!((-0.25..-0.1).contains(&power[5]), "{power:?}");
-    // I_xz coupling (stability-axis I_xz = −9 kg·m²) is worth 0.6 % of Dutch-roll ζ here.
+    // I_xz coupling (stability-axis I_xz = −46 kg·m²) is worth 3 % of Dutch-roll ζ here: with it the model's
+    // ζ is within 0.03 % of JSBSim's linearization (with JSBSim's property sign for I_xz it was 2.5 % off).
     let no_ixz = modal_errors(&c172x_model(Assumptions {
         ixz_coupling: false,
         ..base
     }));
-    assert!((no_ixz[3] - all[3]).abs() < 0.01, "{no_ixz:?}");
+    assert!(all[3].abs() < 0.005, "{all:?}");
+    assert!(
+        (-0.04..-0.02).contains(&(no_ixz[3] - all[3])),
+        "{no_ixz:?} {all:?}"
+    );
 }
 
 #[test]

@@ -369,7 +369,7 @@ pub struct Assumptions {
     /// (−50 %); constant power gives −19 %. Short period and Dutch roll are unaffected.
     pub thrust: ThrustModel,
     /// Keep the I_xz coupling terms c23, c32 of the lateral descriptor matrix (paper eq. 38–40).
-    /// c172x (stability-axis I_xz = −9 kg·m²): 0.6 % of Dutch-roll ζ.
+    /// c172x (stability-axis I_xz = −46 kg·m²): 3 % of Dutch-roll ζ.
     pub ixz_coupling: bool,
     /// Use γ0 = θ0 = 0 in the gravity and kinematic terms even when the flight condition says otherwise.
     pub level_flight: bool,

@@ -38,13 +38,15 @@ pub struct AeroTruth {
     pub rho_kg_m3: f64,
     /// Mass, kg.
     pub mass_kg: f64,
-    /// Moments and product of inertia, kg·m² (JSBSim's sign convention for `ixz`).
+    /// Roll inertia, kg·m².
     pub ixx_kg_m2: f64,
     /// Pitch inertia, kg·m².
     pub iyy_kg_m2: f64,
     /// Yaw inertia, kg·m².
     pub izz_kg_m2: f64,
-    /// Product of inertia, kg·m².
+    /// Product of inertia ∫xz dm in body axes, kg·m², as in Ixx ṗ − Ixz ṙ = L (Etkin & Reid; Stevens &
+    /// Lewis). JSBSim's `inertia/ixz-slugs_ft2` has the other sign: its inertia tensor holds that property where
+    /// the textbook tensor holds −Ixz (checked on the 737: Ixx ṗ − L = −19 106 ṙ with the property at +19 106).
     pub ixz_kg_m2: f64,
     /// Wing area, m².
     pub wing_area_m2: f64,
@@ -344,7 +346,7 @@ impl JsbsimSim {
             ixx_kg_m2: c("inertia/ixx-slugs_ft2") * SLUG_FT2_TO_KG_M2,
             iyy_kg_m2: c("inertia/iyy-slugs_ft2") * SLUG_FT2_TO_KG_M2,
             izz_kg_m2: c("inertia/izz-slugs_ft2") * SLUG_FT2_TO_KG_M2,
-            ixz_kg_m2: c("inertia/ixz-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+            ixz_kg_m2: -c("inertia/ixz-slugs_ft2") * SLUG_FT2_TO_KG_M2,
             wing_area_m2: s_ft2 * FT_TO_M * FT_TO_M,
             span_m: b_ft * FT_TO_M,
             chord_m: cbar_ft * FT_TO_M,
