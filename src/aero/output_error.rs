@@ -57,8 +57,8 @@ mod checks;
 mod free;
 mod records;
 use checks::{
-    alphadot_check, beta_skew_check, curvature_check, process_noise_note, run_checks,
-    side_force_rate_check, skew_check, skew_taken_off, speed_check, AxisFitter, Check, ALPHADOT,
+    alphadot_check, alphadot_terms, beta_skew_check, curvature_check, process_noise_note,
+    run_checks, side_force_rate_check, skew_check, skew_taken_off, speed_check, AxisFitter, Check,
     CURVATURE, SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
 use free::{equation_error_starts, parameters, GUST_Q_GAIN, LAT_HELD, LON_HELD};
@@ -545,7 +545,7 @@ pub fn output_error_report(
     // period), then the speed derivatives (phugoid)), the filter-error comparison and the modes.
     let lon_checks: &[(Check, &[&'static str])] = &[
         (skew_check, &SKEW),
-        (alphadot_check, &ALPHADOT),
+        (alphadot_check, alphadot_terms(options.method)),
         (speed_check, &SPEED),
         (curvature_check, &CURVATURE),
     ];

@@ -69,6 +69,19 @@ pub(super) const SPEED: [&str; 3] = ["CL_V", "CD_V", "Cm_V"];
 /// ρSc̄ C_Lα̇/(4m), 1.6 % on the c310. C_Lq, nearly collinear with it, takes the sum.
 pub(super) const ALPHADOT: [&str; 2] = ["Cm_alphadot", "CL_q"];
 
+/// The α̇ terms the α̇ check frees for filter error: C_mα̇ with C_Lα̇. The gust states keep C_Lα̇ from running
+/// off there, and C_Lq beside C_mα̇ did run off (c310, light turbulence: C_mα̇ +57 ± 31, C_mα of the wrong
+/// sign), while with C_Lα̇ the c310 gets C_mα̇ −13.3 ± 1.8 (JSBSim −12.7) and C_mq, C_mδe within 5 %.
+pub(super) const ALPHADOT_FEM: [&str; 2] = ["Cm_alphadot", "CL_alphadot"];
+
+/// The α̇ terms the α̇ check frees for `method`.
+pub(super) fn alphadot_terms(method: Method) -> &'static [&'static str] {
+    match method {
+        Method::Fem => &ALPHADOT_FEM,
+        _ => &ALPHADOT,
+    }
+}
+
 /// The fit of one axis ([`fit_longitudinal`], [`fit_lateral`]).
 pub(super) type AxisFitter = fn(
     &[&(String, data::FlightRecord)],
@@ -450,27 +463,28 @@ fn vane_skew_check(
 }
 
 /// When the α̇ terms were held by default: the same fit with C_mα̇ and C_Lq free (C_Lα̇ stays held:
-/// [`ALPHADOT`]). Downwash lag at a tail behind the wing makes C_mα̇ negative (Etkin & Reid §5.4; Klein &
+/// [`ALPHADOT`]; filter error frees C_Lα̇ instead, [`ALPHADOT_FEM`]). Downwash lag at a tail behind the wing makes C_mα̇ negative (Etkin & Reid §5.4; Klein &
 /// Morelli §3.5). The wider fit is adopted when C_mα̇ is negative and significant (|t| > 3) and the
 /// likelihood-ratio test passes at 1 % (2 ΔJ > χ²₂ = 9.21,
 /// Klein & Morelli §5.4; J is the negative log-likelihood); a positive value is another unmodelled effect
 /// taking the α̇ shape, and the terms stay held. Without an α vane, or when the wider fit does not converge,
 /// it only reports. When the user named the α̇ terms in `--free`, the check only
-/// reports. Returns the note and the adopted fit.
+/// reports. Returns the note and the adopted fit. Output error and filter error alike: filter error's C_mα̇
+/// ran off in gusts while its vane-skew term was biased ([`skew_taken_off`]); with the skew taken off the
+/// data it finds the c310's −13.3 ± 1.8 in light turbulence (JSBSim: −12.7) and the 737's −14.3 ± 0.9 (−16).
 pub(super) fn alphadot_check(
     records: &[&(String, data::FlightRecord)],
     setup: FitSetup,
     held: &AxisFit,
 ) -> Option<(String, Option<AxisFit>)> {
-    if setup.options.method != Method::Oe
-        || !held
-            .estimate
-            .parameter("Cm_alphadot")
-            .is_some_and(|p| p.fixed)
+    if !held
+        .estimate
+        .parameter("Cm_alphadot")
+        .is_some_and(|p| p.fixed)
     {
         return None;
     }
-    let w = wider_fit(records, setup, held, &ALPHADOT)?;
+    let w = wider_fit(records, setup, held, alphadot_terms(setup.options.method))?;
     let p = w.fit.estimate.parameter("Cm_alphadot")?;
     let t = p.value / p.std_error.max(f64::MIN_POSITIVE);
     // without an α vane the split between α̇ and q rests on the accelerometer alone: report, never adopt
@@ -480,11 +494,20 @@ pub(super) fn alphadot_check(
     let converged = w.converged && key_derivatives_plausible(held, &w.fit);
     let supported =
         p.value < 0.0 && t.abs() > 3.0 && 2.0 * w.drop > CHI2_2_1PCT && vane && converged;
+    let partner = if setup.options.method == Method::Fem {
+        ("C_Lα̇", "-alphadot")
+    } else {
+        ("C_Lq", "-alphadot,-CL_q")
+    };
+    let adopted = format!(
+        "negative, as downwash lag at a tail behind the wing makes it: C_mα̇ and {} are estimated (hold them \
+         with --free {})",
+        partner.0, partner.1
+    );
     let verdict = if supported && w.user_chose {
         "negative, as downwash lag at a tail behind the wing makes it; held as --free asks"
     } else if supported {
-        "negative, as downwash lag at a tail behind the wing makes it: C_mα̇ and C_Lq are estimated (hold \
-         them with --free -alphadot,-CL_q)"
+        adopted.as_str()
     } else if p.value < 0.0 && t.abs() > 3.0 && !(vane && converged) {
         "negative, but the wider fit is not trusted (no α vane, it did not converge, or it moved C_mα, C_mq or \
          C_mδe off their range): the α̇ terms stay held"
@@ -501,8 +524,8 @@ pub(super) fn alphadot_check(
         ""
     };
     let note = format!(
-        "longitudinal: with C_mα̇, C_Lq free the cost falls by {:.1} and C_mα̇ = {:.2} ± {:.2}: {verdict}{chosen}",
-        w.drop, p.value, p.std_error
+        "longitudinal: with C_mα̇, {} free the cost falls by {:.1} and C_mα̇ = {:.2} ± {:.2}: {verdict}{chosen}",
+        partner.0, w.drop, p.value, p.std_error
     );
     Some((note, (supported && !w.user_chose).then_some(w.fit)))
 }
