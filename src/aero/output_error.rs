@@ -31,8 +31,11 @@
 //! - **Filter error** adds to the longitudinal model the vertical gust states of [`super::flight_models`]
 //!   (α_g and the rotary q_g, gain `gust_q_gain` estimated within ±1.5) with process noise on α_g and V; the
 //!   lateral model keeps process noise on every state.
-//! - **A held C_mα̇** is a consider parameter, 0 ± 0.2 |C_mq| (`free.rs`): the records cannot separate it from
-//!   C_mα, C_mq and C_mδe, and their σ carry it.
+//! - **A held C_mα̇** is a consider parameter, 0 ± 0.2 |C_mq| (`free.rs`): where the records cannot separate it
+//!   from C_mα, C_mq and C_mδe, their σ carry it. The α̇ check frees it where they can (filter error in gusts,
+//!   once a vane skew is taken off the data: `checks.rs`).
+//! - **Filter error and a vane skew**: a skew the skew check adopted is taken off the vane's data and the fit
+//!   repeated with it held (`checks.rs`, `skew_taken_off`).
 //!
 //! Modes (short period, phugoid; Dutch roll, roll, spiral) are the eigenvalues of the model's Jacobian at the
 //! mean flight condition, with σ by first-order propagation of the estimates' covariance through
