@@ -238,29 +238,22 @@ pub fn check_compatibility(
         .map(|c| rec.column(c).map(<[f64]>::to_vec));
     let translational = accel.is_some() && air.iter().all(Option::is_some);
     let psi = rec.column(Channel::Psi).map(crate::signal::unwrap_rad);
-    let [v_m, a_m, b_m] = air;
+    // air data and altitude only with the translational kinematics
     let altitude = rec.column(Channel::Altitude).map(<[f64]>::to_vec);
-    let out: [Option<Vec<f64>>; N_OUT] = if translational {
-        [
-            v_m,
-            a_m,
-            b_m,
-            Some(phi.to_vec()),
-            Some(theta.to_vec()),
-            psi,
-            altitude,
-        ]
+    let ([v_m, a_m, b_m], altitude) = if translational {
+        (air, altitude)
     } else {
-        [
-            None,
-            None,
-            None,
-            Some(phi.to_vec()),
-            Some(theta.to_vec()),
-            psi,
-            None,
-        ]
+        ([None, None, None], None)
     };
+    let out: [Option<Vec<f64>>; N_OUT] = [
+        v_m,
+        a_m,
+        b_m,
+        Some(phi.to_vec()),
+        Some(theta.to_vec()),
+        psi,
+        altitude,
+    ];
     let data = Data {
         t: rec.time_s.clone(),
         gyro,
