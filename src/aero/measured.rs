@@ -248,7 +248,7 @@ pub fn equation_error_measured(
             message,
         };
         let rec = moved_to_cg(raw, &airframe.sensors).map_err(|e| bad(e.to_string()))?;
-        let (mut rec, found, refused) = deskewed(&rec);
+        let (mut rec, found, mut refused) = deskewed(&rec);
         let thrust = if rec.column("thrust_n").is_some() {
             Some(airframe.thrust_line("a record with thrust_n")?)
         } else {
@@ -265,7 +265,6 @@ pub fn equation_error_measured(
         };
         // A skew the reconstruction did not find (it cannot beside gusts the vane reads and the kinematics do
         // not), or refused as too long, is looked for in the force equation of the axis the record feeds.
-        let mut refused = refused;
         for (vane, coefficient, source) in FORCE_EQUATION_SKEWS {
             let feeds = if vane == data::Channel::Alpha {
                 wanted.contains(&"CL")
