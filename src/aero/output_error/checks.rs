@@ -469,10 +469,10 @@ fn vane_skew_check(
 /// Klein & Morelli §5.4; J is the negative log-likelihood); a positive value is another unmodelled effect
 /// taking the α̇ shape, and the terms stay held. Without an α vane, or when the wider fit does not converge,
 /// it only reports. When the user named the α̇ terms in `--free`, the check only
-/// reports. Returns the note and the adopted fit. Output error and filter error alike: filter error's C_mα̇
-/// ran off in gusts while its vane-skew term was biased ([`skew_taken_off`]); with the skew taken off the
-/// data it finds the c310's −13.3 ± 1.8 in light turbulence (JSBSim: −12.7) and the 737's −14.3 ± 0.9 (−16)
-/// (the values after the deskewed refit; the check's own wider fit, with the skew term, said −16.8 and −13.7).
+/// reports. Returns the note and the adopted fit. Output error and filter error alike: with a vane skew
+/// taken off the data ([`skew_taken_off`]) filter error finds the c310's −13.3 ± 1.8 in light turbulence
+/// (JSBSim: −12.7) and the 737's −14.3 ± 0.9 (−16); those are the values after the deskewed refit, and the
+/// check's own wider fit, with the skew term, said −16.8 and −13.7.
 pub(super) fn alphadot_check(
     records: &[&(String, data::FlightRecord)],
     setup: FitSetup,
