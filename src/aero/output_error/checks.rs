@@ -596,7 +596,8 @@ const VANE_SKEWS: [(&str, Channel); 2] = [
 /// exact for output error; filter error's α also moves with the process noise, whose share the term leaves
 /// unlagged, and the fit makes up for it in the lift and pitch derivatives. On pa28 records with a 30 ms skew
 /// (`scripts/gen_foreign_records.py`) filter error with the term put C_Lα 15–17 % and C_mα, C_mδe 9–16 % off;
-/// with its own 35 ms estimate taken off the data they come within 1.3 %.
+/// with its own 35 ms estimate taken off the data they come within 1.3 %. A refit that does not converge, or
+/// moves the key derivatives off their range ([`key_derivatives_plausible`]), is not taken.
 pub(super) fn skew_taken_off(
     records: &[&(String, data::FlightRecord)],
     setup: FitSetup,
@@ -651,6 +652,15 @@ pub(super) fn skew_taken_off(
             )
         })
         .collect();
+    // a refit that does not converge or runs off into another minimum is not taken (the guard of the checks)
+    if fit.estimate.stop != estimate::StopReason::Converged || !key_derivatives_plausible(&fem, &fit) {
+        let note = format!(
+            "filter error: the refit with the vane skew taken off the data ({}) did not converge or moved the \
+             key derivatives off their range; the model's skew term stays",
+            taken.join(", ")
+        );
+        return Ok((fem, Some(note)));
+    }
     let note = format!(
         "filter error: the vane skew it estimated is taken off the data ({}) and the fit repeated with it held: \
          the model's skew term follows only the model's own α̇ (β̇), not the part of the motion the process \
