@@ -653,7 +653,9 @@ pub(super) fn skew_taken_off(
         })
         .collect();
     // a refit that does not converge or runs off into another minimum is not taken (the guard of the checks)
-    if fit.estimate.stop != estimate::StopReason::Converged || !key_derivatives_plausible(&fem, &fit) {
+    if fit.estimate.stop != estimate::StopReason::Converged
+        || !key_derivatives_plausible(&fem, &fit)
+    {
         let note = format!(
             "filter error: the refit with the vane skew taken off the data ({}) did not converge or moved the \
              key derivatives off their range; the model's skew term stays",
