@@ -2,6 +2,8 @@
 //! recovers an injected pitch-rate bias and an angle-of-attack time skew, and finds nothing on
 //! clean data.
 
+mod common;
+
 use flightid::data::{check_compatibility, CheckOptions, CheckReport, FlightRecord};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -365,38 +367,28 @@ fn in_light_turbulence_the_alpha_bias_stays_a_sensor_bias_not_a_rotated_flight_p
     let dir = tempfile::tempdir().unwrap();
     let script =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_foreign_records.py");
-    let out = std::process::Command::new(python())
-        .arg(script)
-        .args([
-            "--aircraft",
-            "pa28",
-            "--seed",
-            "1",
-            "--records",
-            "lon1,lon2",
-            "--out",
-        ])
-        .arg(dir.path())
-        .output()
-        .expect("run the generator");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    common::run_ok(
+        std::process::Command::new(python())
+            .arg(script)
+            .args([
+                "--aircraft",
+                "pa28",
+                "--seed",
+                "1",
+                "--records",
+                "lon1,lon2",
+                "--out",
+            ])
+            .arg(dir.path()),
     );
     for rec in ["pa28_lon1.csv", "pa28_lon2.csv"] {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
-            .arg("check")
-            .arg(dir.path().join(rec))
-            .arg("--columns")
-            .arg(dir.path().join("pa28.columns.toml"))
-            .arg("--json")
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{rec}: {}",
-            String::from_utf8_lossy(&out.stderr)
+        let out = common::run_ok(
+            std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
+                .arg("check")
+                .arg(dir.path().join(rec))
+                .arg("--columns")
+                .arg(dir.path().join("pa28.columns.toml"))
+                .arg("--json"),
         );
         let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let alpha_bias = report["instrument"]

@@ -388,7 +388,8 @@ pub(super) fn skew_check(
     setup: FitSetup,
     held: &AxisFit,
 ) -> Option<(String, Option<AxisFit>)> {
-    vane_skew_check(records, setup, held, "tau_alpha_s", Channel::Alpha)
+    let (name, vane) = VANE_SKEWS[0];
+    vane_skew_check(records, setup, held, name, vane)
 }
 
 /// The same check for the β vane's skew τ_β on the lateral axis (β_vane = β + … − τ_β β̇): on the ATTAS
@@ -400,7 +401,8 @@ pub(super) fn beta_skew_check(
     setup: FitSetup,
     held: &AxisFit,
 ) -> Option<(String, Option<AxisFit>)> {
-    vane_skew_check(records, setup, held, "tau_beta_s", Channel::Beta)
+    let (name, vane) = VANE_SKEWS[1];
+    vane_skew_check(records, setup, held, name, vane)
 }
 
 /// The longest skew a data system can have on any of `records` ([`data::skew_bound_s`]).
