@@ -31,7 +31,9 @@ Private copy: the aircraft directory is copied to a temporary root (engine/ and 
 the FCS output plus a declared offset property (`gen/elevator-offset-rad`, …) that the generator drives through
 its own first-order actuator. JSBSim's simple trim cannot trim constant-speed propellers (it finds udot not
 trimmable), so the trim is flown: airspeed, altitude, wings-level and yaw-damping loops settle the aircraft for
---settle-s seconds, then hold their commands constant.
+--settle-s seconds, then hold their commands constant. Where that leaves no trim (re-initialised there, a body
+acceleration above 0.3 m/s² or a flight path off level by 0.5°: the 737, whose phugoid the loops excite), JSBSim's
+own full trim is taken instead.
 
 Usage: gen_foreign_records.py --aircraft p51d --out DIR [--seed 1] [--sim-hz 200] [--log-hz 50]
                               [--altitude-ft 6000] [--speed-kts 200] [--turbulence light|none]
@@ -201,6 +203,7 @@ class Aircraft:
         yaw damping on the rudder; afterwards the trims stay where the loops left them."""
         f = self.fdm
         ith, igam, iphi = 0.0, 0.0, 0.0
+        worst = (0.0, 0.0)
         n = int(seconds / self.dt)
         for k in range(n):
             gain = min(1.0, k / (2.0 / self.dt))
@@ -219,6 +222,35 @@ class Aircraft:
             f["fcs/roll-trim-cmd-norm"] = float(np.clip(roll, -1, 1))
             f["fcs/yaw-trim-cmd-norm"] = float(np.clip(0.5 * f["velocities/r-rad_sec"], -1, 1))
             f.run()
+            if k >= n - int(5.0 / self.dt):
+                acc = max(abs(f["accelerations/udot-ft_sec2"]), abs(f["accelerations/wdot-ft_sec2"])) * FT
+                worst = (max(worst[0], acc), max(worst[1], abs(gamma)))
+        self.settle_worst = worst
+
+    def steady(self):
+        """Whether the settle ended in a trim: over its last 5 s the body accelerations stayed below 0.3 m/s²
+        and the flight path within 0.5° of level (read as flown: nothing here touches the simulation)."""
+        acc, gamma = self.settle_worst
+        return acc < 0.3 and gamma < math.radians(0.5)
+
+    def trim_jsbsim(self):
+        """JSBSim's own full trim at the start point, the settle's trims cleared (a jet's trim: a long-period
+        aircraft such as the 737 is not settled by the flown loops within the settle time)."""
+        f = self.fdm
+        for k in ("fcs/pitch-trim-cmd-norm", "fcs/roll-trim-cmd-norm", "fcs/yaw-trim-cmd-norm",
+                  "fcs/elevator-cmd-norm", "fcs/aileron-cmd-norm", "fcs/rudder-cmd-norm"):
+            f[k] = 0.0
+        f["ic/h-sl-ft"] = self.h0_ft
+        f["ic/vt-kts"] = self.v0_kts
+        for k in ("ic/gamma-deg", "ic/phi-deg", "ic/beta-deg", "ic/p-rad_sec", "ic/q-rad_sec", "ic/r-rad_sec"):
+            f[k] = 0.0
+        with quiet():
+            f.run_ic()
+            try:
+                f["simulation/do_simple_trim"] = 1
+            except Exception as e:  # JSBSim raises TrimFailureError
+                sys.exit(f"{self.name}: neither the flown settle nor JSBSim's trim reached a trim at "
+                         f"{self.h0_ft:g} ft, {self.v0_kts:g} kts ({e})")
 
     def pilot(self):
         """A light wings leveller (a pilot holding the wings level between inputs) on the aileron command."""
@@ -559,6 +591,11 @@ def main():
         ac = Aircraft(args.aircraft, args.sim_hz, work)
         ac.start(alt, spd)
         ac.settle(args.settle_s)
+        if not ac.steady():
+            acc, gamma = ac.settle_worst
+            print(f"{args.aircraft}: the flown settle left no trim (body acceleration up to {acc:.2f} m/s², flight "
+                  f"path {math.degrees(gamma):.1f}° over its last 5 s): JSBSim's trim is taken", file=sys.stderr)
+            ac.trim_jsbsim()
         truth, cond = ac.truth()
         af = ac.airframe(imu_m, vane_m)
         sensors = Sensors(rng)
