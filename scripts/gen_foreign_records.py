@@ -15,7 +15,8 @@ An independent generator: it drives JSBSim through its own Python API (not fligh
 
 Truth: each aero input (α, β, p, q, r and the three surfaces) is perturbed by ±h about the trimmed state through
 run_ic (integration suspended, engines keep their state), and the aero coefficients are differenced: forces in
-wind axes (C_L, C_D, C_Y), moments in body axes about the CG (JSBSim's moments/*-aero-lbsft). run_ic leaves the
+wind axes (C_L, C_D), the side force in body axes (C_Y, as flightid's a_y = q̄S C_Y/m reads it: the wind-axis
+C_Yβ differs from it by the drag, 3 % on the 737), moments in body axes about the CG (JSBSim's moments/*-aero-lbsft). run_ic leaves the
 α̇ that the unbalanced state implies; the α̇ coefficient functions (names containing `adot`) are subtracted, their
 lift moved from the aero reference point to the CG (as scripts/oracle_aero.py does for the c172x). The α̇
 derivatives themselves are those functions' values divided by α̇ c̄/(2V).
@@ -292,7 +293,7 @@ class Aircraft:
             elif axis == "PITCH":
                 m_adot += v
         return dict(CL=(f["forces/fwz-aero-lbs"] - lift_adot) / qs, CD=f["forces/fwx-aero-lbs"] / qs,
-                    CY=f["forces/fwy-aero-lbs"] / qs, Cl=f["moments/l-aero-lbsft"] / (qs * b),
+                    CY=f["forces/fby-aero-lbs"] / qs, Cl=f["moments/l-aero-lbsft"] / (qs * b),
                     Cm=(f["moments/m-aero-lbsft"] - m_adot) / (qs * c), Cn=f["moments/n-aero-lbsft"] / (qs * b),
                     adot=f["aero/alphadot-rad_sec"], lift_adot=lift_adot / qs, m_adot=m_adot / (qs * c),
                     udot=f["accelerations/udot-ft_sec2"], wdot=f["accelerations/wdot-ft_sec2"],
