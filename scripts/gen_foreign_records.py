@@ -45,7 +45,7 @@ since that is what other JSBSim scripts fly.
 
 Usage: gen_foreign_records.py --aircraft p51d --out DIR [--seed 1] [--sim-hz 200] [--log-hz 50]
                               [--altitude-ft 6000] [--speed-kts 200] [--turbulence light|none]
-                              [--integrator euler|ab2]
+                              [--integrator euler|ab2] [--sensors logger|ideal]
 """
 import argparse
 import contextlib
@@ -443,9 +443,10 @@ def plans(rng, kind):
 
 
 class Sensors:
-    """Noise (σ), biases and the vane time skew of the logger, in the logged units."""
+    """Noise (σ), biases and the vane time skew of the logger, in the logged units. `ideal`: no bias, no skew,
+    and a thousandth of the noise (a channel without any would have no variance to be weighted by)."""
 
-    def __init__(self, rng):
+    def __init__(self, rng, ideal=False):
         self.rng = rng
         self.sigma = dict(AOA_DEG=0.08, AOS_DEG=0.08, PHI_DEG=0.05, THETA_DEG=0.05, PSI_DEG=0.1,
                           P_DPS=0.08, Q_DPS=0.08, R_DPS=0.08, AX_G=0.004, AY_G=0.004, AZ_G=0.006,
@@ -455,6 +456,10 @@ class Sensors:
         self.bias = dict(AOA_DEG=b(0.4), AOS_DEG=b(0.3), PHI_DEG=b(0.3), THETA_DEG=b(0.3), P_DPS=b(0.15),
                          Q_DPS=b(0.15), R_DPS=b(0.15), AX_G=b(0.01), AY_G=b(0.01), AZ_G=b(0.01))
         self.vane_skew_s = 0.03
+        if ideal:
+            self.sigma = {k: v * 1e-3 for k, v in self.sigma.items()}
+            self.bias = {k: 0.0 for k in self.bias}
+            self.vane_skew_s = 0.0
 
     def measure(self, col, values):
         v = np.asarray(values) + self.bias.get(col, 0.0)
@@ -590,6 +595,9 @@ def main():
     ap.add_argument("--speed-kts", type=float)
     ap.add_argument("--settle-s", type=float, default=60.0)
     ap.add_argument("--turbulence", choices=("light", "none"), default="light")
+    ap.add_argument("--sensors", choices=("logger", "ideal"), default="logger",
+                    help="logger: noise, biases, an IMU and vanes away from the CG, a 30 ms vane skew; ideal: "
+                         "at the CG, no bias or skew, a thousandth of the noise (to test model structure)")
     ap.add_argument("--integrator", choices=("euler", "ab2"), default="euler",
                     help="JSBSim's integrator of the body rates and attitude (module doc)")
     ap.add_argument("--records", default="lon1,lon2,lat1,lat2")
@@ -599,8 +607,9 @@ def main():
     spd = args.speed_kts or spd
     rng = np.random.default_rng(args.seed)
     os.makedirs(args.out, exist_ok=True)
-    imu_m = (0.6, -0.15, 0.25)
-    vane_m = (3.0, 0.0, 0.1)
+    ideal = args.sensors == "ideal"
+    imu_m = (0.0, 0.0, 0.0) if ideal else (0.6, -0.15, 0.25)
+    vane_m = (0.0, 0.0, 0.0) if ideal else (3.0, 0.0, 0.1)
     with tempfile.TemporaryDirectory() as work:
         ac = Aircraft(args.aircraft, args.sim_hz, work, args.integrator)
         ac.start(alt, spd)
@@ -612,7 +621,7 @@ def main():
             ac.trim_jsbsim()
         truth, cond = ac.truth()
         af = ac.airframe(imu_m, vane_m)
-        sensors = Sensors(rng)
+        sensors = Sensors(rng, ideal)
         if args.turbulence == "light":
             ac["atmosphere/turb-type"] = 3
             ac["atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps"] = 15.0

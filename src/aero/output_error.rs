@@ -62,7 +62,7 @@ mod records;
 use checks::{
     alphadot_check, alphadot_terms, beta_skew_check, curvature_check, process_noise_note,
     run_checks, side_force_rate_check, skew_check, skew_taken_off, speed_check, AxisFitter, Check,
-    CURVATURE, SIDE_RATES_AND_SKEW, SKEW, SPEED,
+    StructureCheck, BETA_SKEW, CURVATURE, SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
 use free::{equation_error_starts, parameters, GUST_Q_GAIN, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
@@ -546,16 +546,24 @@ pub fn output_error_report(
     };
     // Per axis: the fit, its structure checks in turn (longitudinal: the vane skew, the α̇ terms (short
     // period), then the speed derivatives (phugoid)), the filter-error comparison and the modes.
-    let lon_checks: &[(Check, &[&'static str])] = &[
-        (skew_check, &SKEW),
-        (alphadot_check, alphadot_terms(options.method)),
-        (speed_check, &SPEED),
-        (curvature_check, &CURVATURE),
+    let check = |run: Check, frees: &'static [&'static str], tested: &'static [&'static str]| {
+        StructureCheck { run, frees, tested }
+    };
+    let alphadot = alphadot_terms(options.method);
+    let lon_checks = [
+        check(skew_check, &SKEW, &SKEW),
+        check(alphadot_check, alphadot, &alphadot[..1]),
+        check(speed_check, &SPEED, &SPEED),
+        check(curvature_check, &CURVATURE, &CURVATURE),
     ];
     // lateral: the skew, then the side-force rate terms (with the skew: each takes the other's shape)
-    let lat_checks: &[(Check, &[&'static str])] = &[
-        (beta_skew_check, &["tau_beta_s"]),
-        (side_force_rate_check, &SIDE_RATES_AND_SKEW),
+    let lat_checks = [
+        check(beta_skew_check, &BETA_SKEW, &BETA_SKEW),
+        check(
+            side_force_rate_check,
+            &SIDE_RATES_AND_SKEW,
+            &SIDE_RATES_AND_SKEW[..2],
+        ),
     ];
     let lon_modes: ModesAt = |c, cond, t| longitudinal_modes_at(c, cond, t, false);
     // (name, asked for, longitudinal, fit, checks, modes)
@@ -565,7 +573,7 @@ pub fn output_error_report(
             axis.longitudinal(),
             true,
             fit_longitudinal,
-            lon_checks,
+            &lon_checks[..],
             lon_modes,
         ),
         (
@@ -573,7 +581,7 @@ pub fn output_error_report(
             axis.lateral(),
             false,
             fit_lateral,
-            lat_checks,
+            &lat_checks[..],
             lateral_modes_at,
         ),
     ];
