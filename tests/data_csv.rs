@@ -215,6 +215,40 @@ fn accelerations_in_g_are_flagged_and_m_s2_are_not() {
 }
 
 #[test]
+fn a_load_factor_az_and_a_rate_of_the_other_sign_are_flagged() {
+    // 50 Hz, 20 s of pitching: θ with 0.05° of attitude-like jitter (which makes dθ/dt too noisy to compare),
+    // q its rate with the other sign (a nose-down-positive gyro), a_z a load factor (+g in level flight).
+    let time_s: Vec<f64> = (0..1000).map(|i| i as f64 * 0.02).collect();
+    let jitter = |t: f64| 0.0009 * (97.0 * t).sin();
+    let theta: Vec<f64> = time_s
+        .iter()
+        .map(|t| 0.05 + 0.03 * (1.3 * t).sin() + jitter(*t))
+        .collect();
+    let q: Vec<f64> = time_s.iter().map(|t| 0.039 * (1.3 * t).cos()).collect();
+    let az: Vec<f64> = time_s
+        .iter()
+        .map(|t| -9.81 - 0.5 * (1.3 * t).sin())
+        .collect();
+    let record = |sign_q: f64, sign_az: f64| {
+        let mut rec = FlightRecord::new(time_s.clone());
+        rec.push_column("theta_rad", theta.clone());
+        rec.push_column("q_rad_s", q.iter().map(|v| sign_q * v).collect());
+        rec.push_column("az_m_s2", az.iter().map(|v| sign_az * v).collect());
+        rec
+    };
+    assert!(record(1.0, 1.0).validate().unwrap().is_empty());
+    let w = record(-1.0, -1.0).validate().unwrap();
+    for column in ["q_rad_s", "az_m_s2"] {
+        let found = w
+            .iter()
+            .find(|w| w.column.as_deref() == Some(column))
+            .unwrap_or_else(|| panic!("no warning on {column}: {w:?}"));
+        assert_eq!(found.kind, WarningKind::OppositeSign, "{found}");
+        assert!(found.message.contains("scale = -1.0"), "{found}");
+    }
+}
+
+#[test]
 fn irregular_sampling_is_detected_and_resampled_linearly() {
     // 50 Hz with jittered times; a ramp survives linear interpolation exactly.
     let time_s: Vec<f64> = (0..101)

@@ -146,6 +146,8 @@ pub enum WarningKind {
     LooksLikeG,
     /// `throttle` lies outside 0..1 (percent?).
     ThrottleOutOfRange,
+    /// A column has the other sign convention (a load factor for `az_m_s2`, a rate of the other sign).
+    OppositeSign,
     /// Sample spacing is not uniform.
     IrregularSampling,
     /// Anything else the reader wants the user to know (e.g. skipped bytes in a tlog).

@@ -348,17 +348,6 @@ fn abs_percentile(values: &[f64], q: f64) -> f64 {
     *a.select_nth_unstable_by(k, |x, y| x.total_cmp(y)).1
 }
 
-/// Central-difference derivative of `x` over `t` (one-sided at the ends).
-fn derivative(t: &[f64], x: &[f64]) -> Vec<f64> {
-    let n = x.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
-            (x[b] - x[a]) / (t[b] - t[a])
-        })
-        .collect()
-}
-
 /// Least-squares slope of `y` on `x` with an intercept, and their correlation.
 fn slope_and_correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
     let n = x.len() as f64;
@@ -381,9 +370,8 @@ fn angle_rate_warning(rec: &FlightRecord, angle: Channel, rate: Channel) -> Opti
     if rec.len() < 20 {
         return None;
     }
-    let dx = derivative(&rec.time_s, x);
     // The Euler-angle rate the body rates give (small-angle terms dropped where columns lack).
-    let kin: Vec<f64> = match angle {
+    let rate_of_angle: Vec<f64> = match angle {
         Channel::Theta => {
             let phi = rec.column(Channel::Phi);
             let r = rec.column(Channel::R);
@@ -396,12 +384,37 @@ fn angle_rate_warning(rec: &FlightRecord, angle: Channel, rate: Channel) -> Opti
         }
         _ => w.to_vec(),
     };
+    // Increments over half-second windows: the angle's change against the rate's integral (trapezoids). A
+    // differentiated angle is too noisy: on a 50 Hz record with 0.05° of attitude noise dθ/dt correlates
+    // with q by 0.63 only.
+    let t = &rec.time_s;
+    let dt = rec.dt_s()?;
+    let span = ((0.5 / dt).round() as usize).max(1);
+    let mut integral = vec![0.0; rec.len()];
+    for i in 1..rec.len() {
+        integral[i] =
+            integral[i - 1] + 0.5 * (rate_of_angle[i] + rate_of_angle[i - 1]) * (t[i] - t[i - 1]);
+    }
+    let (kin, dx): (Vec<f64>, Vec<f64>) = (span..rec.len())
+        .map(|i| (integral[i] - integral[i - span], x[i] - x[i - span]))
+        .unzip();
     let (k, corr) = slope_and_correlation(&kin, &dx);
+    let deg = 180.0 / std::f64::consts::PI;
+    let near = |k: f64, target: f64| (k / target - 1.0).abs() < 0.3;
+    if corr < -0.8 && [-1.0, -deg, -1.0 / deg].iter().any(|&t| near(k, t)) {
+        return Some(Warning {
+            kind: WarningKind::OppositeSign,
+            column: Some(rate.to_string()),
+            message: format!(
+                "d{angle}/dt = {k:.4} × {rate} (correlation {corr:.2}): the two have opposite signs; \
+                 flightid's body rates are positive nose up, right wing down and nose right, like the \
+                 angles they turn: map the one of the other convention with scale = -1.0"
+            ),
+        });
+    }
     if corr < 0.8 {
         return None;
     }
-    let deg = 180.0 / std::f64::consts::PI;
-    let near = |k: f64, target: f64| (k / target - 1.0).abs() < 0.3;
     let (column, what) = if near(k, deg) {
         (angle, "the angle is in degrees")
     } else if near(k, 1.0 / deg) {
@@ -483,6 +496,24 @@ fn accel_g_warning(rec: &FlightRecord) -> Option<Warning> {
         .map(|i| axes.iter().map(|(_, v)| v[i] * v[i]).sum::<f64>().sqrt())
         .collect();
     let med = median_in_place(&mut mags);
+    // The body z axis points down: in flight a_z is about −g cos θ cos φ. A positive median of that size
+    // is a load factor (n_z, positive up), in either unit.
+    if let Some(az) = rec.column(Channel::Az) {
+        let mut v = az.to_vec();
+        let az_med = median_in_place(&mut v);
+        if az_med > 0.5 && (az_med > 0.5 * G0_M_S2 || az_med < 2.0) && az_med < 2.0 * G0_M_S2 {
+            return Some(Warning {
+                kind: WarningKind::OppositeSign,
+                column: Some(Channel::Az.to_string()),
+                message: format!(
+                    "the median of {} is +{az_med:.3}: flightid's a_z is the body-axis specific force, z \
+                     down, about −{G0_M_S2} m/s² in level flight; this looks like a load factor (positive \
+                     up): map it with scale = -1.0 (and unit = \"g\" if it is in g)",
+                    Channel::Az
+                ),
+            });
+        }
+    }
     // Only meaningful when the vertical axis is there: ax/ay alone are near zero in either unit.
     if axes.iter().any(|(c, _)| *c == Channel::Az) && (0.5..2.0).contains(&med) {
         let names: Vec<&str> = axes.iter().map(|(c, _)| c.name()).collect();
