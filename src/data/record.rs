@@ -501,7 +501,9 @@ fn accel_g_warning(rec: &FlightRecord) -> Option<Warning> {
     if let Some(az) = rec.column(Channel::Az) {
         let mut v = az.to_vec();
         let az_med = median_in_place(&mut v);
-        if az_med > 0.5 && (az_med > 0.5 * G0_M_S2 || az_med < 2.0) && az_med < 2.0 * G0_M_S2 {
+        let in_g = (0.5..2.0).contains(&az_med);
+        let in_m_s2 = (0.5 * G0_M_S2..2.0 * G0_M_S2).contains(&az_med);
+        if in_g || in_m_s2 {
             return Some(Warning {
                 kind: WarningKind::OppositeSign,
                 column: Some(Channel::Az.to_string()),
