@@ -409,3 +409,64 @@ fn in_light_turbulence_the_alpha_bias_stays_a_sensor_bias_not_a_rotated_flight_p
         assert!(h_rms < 1.5, "{rec}: altitude residual {h_rms} m");
     }
 }
+
+/// Sign conventions are checked on real records, not guessed: on c310 records from the independent generator
+/// (light turbulence) an α or β vane mapped with the other sign (`scale = -1.0` in the column map) is flagged,
+/// with its column and the fix; with the logger's own map nothing is. Measured: α's windowed change against
+/// its kinematic rate −0.86 (correlation −0.87, the gusts move α without the kinematics), β's −0.99 (−0.98).
+#[test]
+fn an_alpha_or_beta_vane_of_the_other_sign_is_flagged_and_the_right_one_is_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_foreign_records.py");
+    common::run_ok(
+        std::process::Command::new(python())
+            .arg(script)
+            .args([
+                "--aircraft",
+                "c310",
+                "--seed",
+                "1",
+                "--records",
+                "lon1,lat1",
+                "--out",
+            ])
+            .arg(dir.path()),
+    );
+    let map = std::fs::read_to_string(dir.path().join("c310.columns.toml")).unwrap();
+    let flipped = map
+        .replace(
+            "{ to = \"alpha_rad\", unit = \"deg\" }",
+            "{ to = \"alpha_rad\", unit = \"deg\", scale = -1.0 }",
+        )
+        .replace(
+            "{ to = \"beta_rad\", unit = \"deg\" }",
+            "{ to = \"beta_rad\", unit = \"deg\", scale = -1.0 }",
+        );
+    assert_ne!(flipped, map, "the map names the vanes as expected");
+    std::fs::write(dir.path().join("flipped.toml"), flipped).unwrap();
+    let warnings = |rec: &str, map: &str| {
+        let out = common::run_ok(
+            std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
+                .arg("check")
+                .arg(dir.path().join(rec))
+                .arg("--columns")
+                .arg(dir.path().join(map)),
+        );
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    for (rec, column) in [
+        ("c310_lon1.csv", "alpha_rad"),
+        ("c310_lat1.csv", "beta_rad"),
+    ] {
+        let own = warnings(rec, "c310.columns.toml");
+        assert!(!own.contains("warning"), "{rec}: {own}");
+        let stderr = warnings(rec, "flipped.toml");
+        assert!(
+            stderr.contains(&format!("column `{column}`: its change is"))
+                && stderr.contains("the other sign convention")
+                && stderr.contains("scale = -1.0"),
+            "{rec}: {stderr}"
+        );
+    }
+}

@@ -244,7 +244,8 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             } else if m > std::f64::consts::PI {
                 (true, None)
             } else {
-                let limit = if name == Channel::Phi.name() {
+                // a bank angle or a latitude may stay beyond 40° for a whole record
+                let limit = if name == Channel::Phi.name() || name == Channel::Latitude.name() {
                     std::f64::consts::FRAC_PI_2
                 } else {
                     0.7
@@ -253,7 +254,8 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
                 (
                     p95 > limit,
                     Some(format!(
-                        "95 % of |value| lies below {p95:.4}, but as radians that is {:.0}°,                          implausible for this angle over so much of a record",
+                        "95 % of |value| lies below {p95:.4}, but as radians that is {:.0}°, implausible \
+                         for this angle over so much of a record",
                         p95.to_degrees()
                     )),
                 )
@@ -321,6 +323,8 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
     for w in [
         angle_rate_warning(rec, Channel::Theta, Channel::Q),
         angle_rate_warning(rec, Channel::Phi, Channel::P),
+        aero_angle_sign_warning(rec, Channel::Alpha),
+        aero_angle_sign_warning(rec, Channel::Beta),
         speed_kinematics_warning(rec),
         accel_g_warning(rec),
     ]
@@ -364,6 +368,82 @@ fn slope_and_correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
     (sxy / sxx, sxy / (sxx * syy).sqrt())
 }
 
+/// Slope and correlation of an angle's change over half-second windows against its rate's integral over the
+/// same windows (trapezoids). A differentiated angle is too noisy: on a 50 Hz record with 0.05° of attitude
+/// noise dθ/dt correlates with q by 0.63 only, the windowed increments by 0.99.
+fn windowed_slope(rec: &FlightRecord, x: &[f64], rate: &[f64]) -> Option<(f64, f64)> {
+    let t = &rec.time_s;
+    let dt = rec.dt_s()?;
+    let span = ((0.5 / dt).round() as usize).max(1);
+    if rec.len() < 20 || rec.len() <= 2 * span {
+        return None;
+    }
+    let mut integral = vec![0.0; rec.len()];
+    for i in 1..rec.len() {
+        integral[i] = integral[i - 1] + 0.5 * (rate[i] + rate[i - 1]) * (t[i] - t[i - 1]);
+    }
+    let (kin, dx): (Vec<f64>, Vec<f64>) = (span..rec.len())
+        .map(|i| (integral[i] - integral[i - span], x[i] - x[i - span]))
+        .unzip();
+    Some(slope_and_correlation(&kin, &dx))
+}
+
+/// Flags an α or β of the other sign convention: its change over half-second windows anticorrelated
+/// (r < −0.8, slope near −1) with the integral of the rate the kinematics give (flat earth; β ≈ 0 in α̇):
+/// α̇ = q + [a_z cos α − a_x sin α + g (cos φ cos θ cos α + sin θ sin α)]/V,
+/// β̇ = p sin α − r cos α + (a_y + g cos θ sin φ)/V (Klein & Morelli eq. 3.32–3.33, specific forces).
+/// A missing attitude is taken as level.
+fn aero_angle_sign_warning(rec: &FlightRecord, angle: Channel) -> Option<Warning> {
+    let x = rec.column(angle)?;
+    let v = rec.column(Channel::Airspeed)?;
+    let zero = vec![0.0; rec.len()];
+    let col = |c: Channel| rec.column(c).unwrap_or(&zero);
+    let (theta, phi) = (col(Channel::Theta), col(Channel::Phi));
+    let g = G0_M_S2;
+    let rate: Vec<f64> = match angle {
+        Channel::Alpha => {
+            let (q, ax, az) = (
+                rec.column(Channel::Q)?,
+                rec.column(Channel::Ax)?,
+                rec.column(Channel::Az)?,
+            );
+            (0..rec.len())
+                .map(|i| {
+                    let (sa, ca) = x[i].sin_cos();
+                    let grav = g * (phi[i].cos() * theta[i].cos() * ca + theta[i].sin() * sa);
+                    q[i] + (az[i] * ca - ax[i] * sa + grav) / v[i].max(1.0)
+                })
+                .collect()
+        }
+        Channel::Beta => {
+            let (p, r, ay) = (
+                rec.column(Channel::P)?,
+                rec.column(Channel::R)?,
+                rec.column(Channel::Ay)?,
+            );
+            let alpha = col(Channel::Alpha);
+            (0..rec.len())
+                .map(|i| {
+                    let (sa, ca) = alpha[i].sin_cos();
+                    p[i] * sa - r[i] * ca
+                        + (ay[i] + g * theta[i].cos() * phi[i].sin()) / v[i].max(1.0)
+                })
+                .collect()
+        }
+        _ => return None,
+    };
+    let (k, corr) = windowed_slope(rec, x, &rate)?;
+    (corr < -0.8 && (k + 1.0).abs() < 0.3).then(|| Warning {
+        kind: WarningKind::OppositeSign,
+        column: Some(angle.to_string()),
+        message: format!(
+            "its change is {k:.3} × what the body rates and specific forces make of it (correlation {corr:.2}): \
+             the other sign convention (flightid: α positive nose up, β positive with the wind from the \
+             right); map it with scale = -1.0"
+        ),
+    })
+}
+
 /// Flags an angle and its body rate that disagree by the degree factor (see [`unit_warnings`]).
 fn angle_rate_warning(rec: &FlightRecord, angle: Channel, rate: Channel) -> Option<Warning> {
     let (x, w) = (rec.column(angle)?, rec.column(rate)?);
@@ -384,21 +464,7 @@ fn angle_rate_warning(rec: &FlightRecord, angle: Channel, rate: Channel) -> Opti
         }
         _ => w.to_vec(),
     };
-    // Increments over half-second windows: the angle's change against the rate's integral (trapezoids). A
-    // differentiated angle is too noisy: on a 50 Hz record with 0.05° of attitude noise dθ/dt correlates
-    // with q by 0.63 only.
-    let t = &rec.time_s;
-    let dt = rec.dt_s()?;
-    let span = ((0.5 / dt).round() as usize).max(1);
-    let mut integral = vec![0.0; rec.len()];
-    for i in 1..rec.len() {
-        integral[i] =
-            integral[i - 1] + 0.5 * (rate_of_angle[i] + rate_of_angle[i - 1]) * (t[i] - t[i - 1]);
-    }
-    let (kin, dx): (Vec<f64>, Vec<f64>) = (span..rec.len())
-        .map(|i| (integral[i] - integral[i - span], x[i] - x[i - span]))
-        .unzip();
-    let (k, corr) = slope_and_correlation(&kin, &dx);
+    let (k, corr) = windowed_slope(rec, x, &rate_of_angle)?;
     let deg = 180.0 / std::f64::consts::PI;
     let near = |k: f64, target: f64| (k / target - 1.0).abs() < 0.3;
     if corr < -0.8 && [-1.0, -deg, -1.0 / deg].iter().any(|&t| near(k, t)) {
