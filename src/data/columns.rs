@@ -87,9 +87,15 @@ impl Dimension {
 const UNITS: &[(&str, Dimension, f64)] = &[
     ("s", Dimension::Time, 1.0),
     ("ms", Dimension::Time, 1e-3),
+    // microseconds: ArduPilot's TimeUS, PX4's timestamp
+    ("us", Dimension::Time, 1e-6),
     ("rad", Dimension::Angle, 1.0),
     ("deg", Dimension::Angle, std::f64::consts::PI / 180.0),
+    // centidegrees: ArduPilot's integer attitudes and surface outputs
+    ("cdeg", Dimension::Angle, std::f64::consts::PI / 18000.0),
     ("rad/s", Dimension::AngularRate, 1.0),
+    // milliradians per second: MAVLink RAW_IMU / SCALED_IMU gyros
+    ("mrad/s", Dimension::AngularRate, 1e-3),
     (
         "deg/s",
         Dimension::AngularRate,
@@ -102,15 +108,24 @@ const UNITS: &[(&str, Dimension, f64)] = &[
         std::f64::consts::PI / 180.0,
     ),
     ("m", Dimension::Length, 1.0),
+    ("cm", Dimension::Length, 0.01),
     ("ft", Dimension::Length, 0.3048),
     ("m/s", Dimension::Speed, 1.0),
+    ("cm/s", Dimension::Speed, 0.01),
     ("ft/s", Dimension::Speed, 0.3048),
     ("kts", Dimension::Speed, 1852.0 / 3600.0),
+    ("kt", Dimension::Speed, 1852.0 / 3600.0),
+    ("km/h", Dimension::Speed, 1.0 / 3.6),
+    ("mph", Dimension::Speed, 0.44704),
     ("m/s2", Dimension::Acceleration, 1.0),
     ("g", Dimension::Acceleration, G0_M_S2),
+    // milli-g: MAVLink SCALED_IMU accelerometers
+    ("mg", Dimension::Acceleration, G0_M_S2 * 1e-3),
     ("N", Dimension::Force, 1.0),
     ("lbf", Dimension::Force, 4.448_221_615_260_5),
     ("Pa", Dimension::Pressure, 1.0),
+    ("hPa", Dimension::Pressure, 100.0),
+    ("mbar", Dimension::Pressure, 100.0),
     // 1 lbf/ft² = 4.4482216152605 N / 0.09290304 m².
     ("psf", Dimension::Pressure, 47.880_258_980_335_84),
     ("1", Dimension::Fraction, 1.0),
@@ -415,6 +430,26 @@ mod tests {
         assert!((f("QBAR") - 47.880_26).abs() < 1e-4);
         assert!((f("F") - 4.448_222).abs() < 1e-6);
         assert_eq!(f("T"), 1.0);
+    }
+
+    #[test]
+    fn the_units_of_autopilot_logs_convert() {
+        // ArduPilot and MAVLink spellings: TimeUS, centidegrees, mrad/s gyros, milli-g accelerometers, cm
+        let m = parse(
+            "[columns]\nTimeUS = { to = \"time_s\", unit = \"us\" }\nRoll = { to = \"phi_rad\", unit = \"cdeg\" }\n\
+             xgyro = { to = \"p_rad_s\", unit = \"mrad/s\" }\nzacc = { to = \"az_m_s2\", unit = \"mg\" }\n\
+             Alt = { to = \"altitude_m\", unit = \"cm\" }\nGS = { to = \"airspeed_m_s\", unit = \"km/h\" }\n\
+             Press = { to = \"qbar_pa\", unit = \"hPa\" }\n",
+        )
+        .unwrap();
+        let f = |from: &str| m.columns.iter().find(|c| c.from == from).unwrap().factor;
+        assert_eq!(f("TimeUS"), 1e-6);
+        assert!((f("Roll") * 9000.0 - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        assert_eq!(f("xgyro"), 1e-3);
+        assert!((f("zacc") - 0.009_806_65).abs() < 1e-12);
+        assert_eq!(f("Alt"), 0.01);
+        assert!((f("GS") * 36.0 - 10.0).abs() < 1e-12);
+        assert_eq!(f("Press"), 100.0);
     }
 
     #[test]
