@@ -11,7 +11,7 @@
 //! ```
 //!
 //! Units: rad, deg, m, ft, m/s, ft/s, kts, g, m/s2, deg/s, rad/s, deg/s2, rad/s2, N, lbf, Pa, psf, s, ms,
-//! percent.
+//! percent, and the spellings of autopilot logs: us, cdeg, mrad/s, mg, cm, cm/s, kt, km/h, mph, hPa, mbar.
 //! A unit must measure what its target column measures (`deg` cannot go to `airspeed_m_s`).
 //! The reader renames and converts while reading, so every command sees SI columns.
 
