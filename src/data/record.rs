@@ -215,13 +215,19 @@ fn max_abs(values: &[f64]) -> Option<(usize, f64)> {
 /// Unit-sanity heuristics, each with its evidence:
 /// - a `_rad` angle (except `psi_rad`, which may be unwrapped) beyond ±π rad (180°) is implausible in
 ///   radians and typical of degrees; so is an angle of attack, sideslip, pitch angle or surface
-///   deflection whose 95th percentile of |value| exceeds 0.7 rad (40°), or a bank angle whose 95th
-///   percentile exceeds π/2; `psi_rad` is flagged only when it stays within 0..360 and exceeds 2π;
+///   deflection whose 95th percentile of |value| exceeds 0.7 rad (40°), or a bank angle or latitude whose
+///   95th percentile exceeds π/2; `psi_rad` is flagged only when it stays within 0..360 and exceeds 2π;
 /// - a `_rad_s` rate beyond 10 rad/s (573 °/s), or a pitch or yaw rate whose 99th percentile of
 ///   |value| exceeds 2 rad/s (115 °/s), is implausible for an aircraft and typical of deg/s;
-/// - an angle and its rate that disagree by 180/π: dθ/dt against q cos φ − r sin φ, dφ/dt
-///   against p (Euler kinematics, Klein & Morelli eq. 3.34) fitted by least squares when they
-///   correlate (r > 0.8): a slope near 57.3 says the angle is in degrees, near 1/57.3 the rate;
+/// - an angle and its rate that disagree by 180/π: θ's change over half-second windows against the
+///   integral of q cos φ − r sin φ, φ's against that of p (Euler kinematics, Klein & Morelli eq. 3.34),
+///   fitted by least squares when they correlate (r > 0.8): a slope near 57.3 says the angle is in
+///   degrees, near 1/57.3 the rate; anticorrelated (r < −0.8) with a slope near −1, the rate has the other
+///   sign convention;
+/// - an α or β anticorrelated in the same way with the rate the flight-path kinematics give it: the vane
+///   has the other sign convention ([`aero_angle_sign_warning`]);
+/// - a median `az_m_s2` of +0.5..+2 (g) or +0.5 g..+2 g: a load factor (positive up), not the body-axis
+///   specific force (about −g in level flight);
 /// - a median airspeed above 300 m/s, or airspeed changing 1.94 (knots) or 3.28 (ft/s) times as
 ///   fast as the specific force along the flight path says (dV/dt = ax cos α + az sin α − g sin γ,
 ///   fitted over 1 s windows when they correlate);

@@ -112,7 +112,7 @@ pub(super) struct StructureCheck {
 /// A widening that the records cannot tell from one adopted before it is not taken ([`confounded`]): on
 /// noise-free c310 records C_mα̇ was adopted first (−12.8 ± 0.3, JSBSim −12.7; the cost fell by 12 700), and
 /// the speed derivatives adopted after it (3 200) left C_mα̇ at +22 ± 10, with C_mq 42 % and C_mα 51 % off;
-/// held, C_mq and C_mα are within 0.6 %.
+/// refused, C_mq and C_mα are within 1.1 %.
 pub(super) fn run_checks(
     records: &[&(String, data::FlightRecord)],
     setup: FitSetup,
