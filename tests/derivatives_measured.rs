@@ -441,3 +441,52 @@ fn unknown_free_names_and_free_with_equation_error_are_bad_input() {
     assert_bad_input(&run(&["--free", "speed"]), &["--free", "--method oe"]);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A surface recorded in another sign convention fits as well as the right one with the derivative's sign
+/// turned, so only the sign tells: on generated c310 records with the elevator and aileron mapped with
+/// `scale = -1.0`, equation error gives C_mδe +1.65 and C_lδa −0.174, each with a note naming the column and
+/// the fix; with the logger's own map no such note.
+#[test]
+fn a_surface_of_the_other_sign_convention_is_named_in_a_note() {
+    let dir = generated_with("c310", "signs", &["--records", "lon1,lat1"]);
+    let map = std::fs::read_to_string(dir.join("c310.columns.toml")).unwrap();
+    let flipped = map
+        .replace(
+            "{ to = \"elevator_rad\", unit = \"deg\" }",
+            "{ to = \"elevator_rad\", unit = \"deg\", scale = -1.0 }",
+        )
+        .replace(
+            "{ to = \"aileron_rad\", unit = \"deg\" }",
+            "{ to = \"aileron_rad\", unit = \"deg\", scale = -1.0 }",
+        );
+    assert_ne!(flipped, map, "the map names the surfaces as expected");
+    let notes = |map: &str| {
+        std::fs::write(dir.join("map.toml"), map).unwrap();
+        let out = dir.join("ee.json");
+        let mut cmd = flightid();
+        cmd.arg("derivatives");
+        for kind in ["lon1", "lat1"] {
+            cmd.arg("--data").arg(dir.join(format!("c310_{kind}.csv")));
+        }
+        cmd.arg("--airframe")
+            .arg(dir.join("c310.airframe.toml"))
+            .arg("--columns")
+            .arg(dir.join("map.toml"))
+            .arg("--json")
+            .arg(&out);
+        common::run_ok(&mut cmd);
+        common::read_json(&out)["notes"].to_string()
+    };
+    let own = notes(&map);
+    assert!(!own.contains("unconventional sign"), "{own}");
+    let turned = notes(&flipped);
+    for needle in [
+        "Cm_de = 1.",
+        "the elevator column may have the other sign convention",
+        "Cl_da = -0.1",
+        "the aileron column may have the other sign convention",
+    ] {
+        assert!(turned.contains(needle), "{needle}: {turned}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

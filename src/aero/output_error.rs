@@ -684,6 +684,7 @@ pub fn output_error_report(
         fits.first()
             .map_or("Cramér-Rao bounds", |f| f.1.estimate.covariance_method)
     ));
+    notes.extend(super::measured::sign_convention_notes(&derivatives));
     Ok(MeasuredReport {
         method: match options.method {
             Method::Oe => "output_error",
