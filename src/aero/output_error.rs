@@ -646,8 +646,9 @@ pub fn output_error_report(
             notes.push(format!(
                 "{name}: {held_name} is held at 0 but the records cannot tell it from the other pitch \
                  derivatives; the σ reported carries its physical range (0 ± {sd:.2}, from downwash lag), so \
-                 read C_mα, C_mq and C_mδe with that σ (free it with --free alphadot on records that \
-                 separate it)"
+                 read C_mα, C_mq and C_mδe with that σ: held, C_mq stands for C_mq + C_mα̇ and C_mα for \
+                 C_mα + C_mα̇ Z_α c̄/(2V), the equivalent derivatives (free it with --free alphadot on records \
+                 that separate it)"
             ));
         }
         if !held.is_empty() {
