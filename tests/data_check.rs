@@ -357,13 +357,9 @@ fn an_unconverged_check_exits_1_without_a_table() {
     );
 }
 
-/// The reconstruction holds the altitude (ḣ = u sin θ − v sin φ cos θ − w cos φ cos θ, Klein & Morelli eq.
-/// 10.1), which pins the flight-path angle. Without it, on pa28 records in light turbulence written by the
-/// independent generator `scripts/gen_foreign_records.py`, the fit rotated the velocity vector by 34° and
-/// named an α bias of 0.60 ± 0.09 rad significant (the generator's bias: 0.01°). Checked: the α bias stays
-/// within 1° and the altitude is reconstructed to its noise.
-#[test]
-fn in_light_turbulence_the_alpha_bias_stays_a_sensor_bias_not_a_rotated_flight_path() {
+/// Records of `aircraft` (seed 1, `records` e.g. "lon1,lon2") from the independent generator
+/// `scripts/gen_foreign_records.py`, in a temporary directory.
+fn foreign_records(aircraft: &str, records: &str) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     let script =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_foreign_records.py");
@@ -372,15 +368,26 @@ fn in_light_turbulence_the_alpha_bias_stays_a_sensor_bias_not_a_rotated_flight_p
             .arg(script)
             .args([
                 "--aircraft",
-                "pa28",
+                aircraft,
                 "--seed",
                 "1",
                 "--records",
-                "lon1,lon2",
+                records,
                 "--out",
             ])
             .arg(dir.path()),
     );
+    dir
+}
+
+/// The reconstruction holds the altitude (ḣ = u sin θ − v sin φ cos θ − w cos φ cos θ, Klein & Morelli eq.
+/// 10.1), which pins the flight-path angle. Without it, on pa28 records in light turbulence written by the
+/// independent generator `scripts/gen_foreign_records.py`, the fit rotated the velocity vector by 34° and
+/// named an α bias of 0.60 ± 0.09 rad significant (the generator's bias: 0.01°). Checked: the α bias stays
+/// within 1° and the altitude is reconstructed to its noise.
+#[test]
+fn in_light_turbulence_the_alpha_bias_stays_a_sensor_bias_not_a_rotated_flight_path() {
+    let dir = foreign_records("pa28", "lon1,lon2");
     for rec in ["pa28_lon1.csv", "pa28_lon2.csv"] {
         let out = common::run_ok(
             std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
@@ -416,23 +423,7 @@ fn in_light_turbulence_the_alpha_bias_stays_a_sensor_bias_not_a_rotated_flight_p
 /// its kinematic rate −0.86 (correlation −0.87, the gusts move α without the kinematics), β's −0.99 (−0.98).
 #[test]
 fn an_alpha_or_beta_vane_of_the_other_sign_is_flagged_and_the_right_one_is_not() {
-    let dir = tempfile::tempdir().unwrap();
-    let script =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_foreign_records.py");
-    common::run_ok(
-        std::process::Command::new(python())
-            .arg(script)
-            .args([
-                "--aircraft",
-                "c310",
-                "--seed",
-                "1",
-                "--records",
-                "lon1,lat1",
-                "--out",
-            ])
-            .arg(dir.path()),
-    );
+    let dir = foreign_records("c310", "lon1,lat1");
     let map = std::fs::read_to_string(dir.path().join("c310.columns.toml")).unwrap();
     let flipped = map
         .replace(

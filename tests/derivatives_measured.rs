@@ -115,17 +115,38 @@ fn generated_with(aircraft: &str, tag: &str, extra: &[&str]) -> PathBuf {
 
 /// `derivatives --method METHOD` on all four generated records (axis from the records), its JSON.
 fn measured_json(dir: &Path, aircraft: &str, method: &str, extra: &[&str]) -> serde_json::Value {
+    let map = format!("{aircraft}.columns.toml");
+    derivatives_json(
+        dir,
+        aircraft,
+        &["lon1", "lon2", "lat1", "lat2"],
+        &map,
+        method,
+        extra,
+    )
+}
+
+/// `derivatives --method METHOD` on the generated records `kinds` of `aircraft`, read through the column map
+/// `map` (a file in `dir`), its JSON.
+fn derivatives_json(
+    dir: &Path,
+    aircraft: &str,
+    kinds: &[&str],
+    map: &str,
+    method: &str,
+    extra: &[&str],
+) -> serde_json::Value {
     let out = dir.join(format!("{method}.json"));
     let mut cmd = flightid();
     cmd.arg("derivatives");
-    for kind in ["lon1", "lon2", "lat1", "lat2"] {
+    for kind in kinds {
         cmd.arg("--data")
             .arg(dir.join(format!("{aircraft}_{kind}.csv")));
     }
     cmd.arg("--airframe")
         .arg(dir.join(format!("{aircraft}.airframe.toml")))
         .arg("--columns")
-        .arg(dir.join(format!("{aircraft}.columns.toml")))
+        .arg(dir.join(map))
         .args(["--method", method])
         .args(extra)
         .arg("--json")
@@ -331,22 +352,14 @@ fn a_widening_that_takes_an_adopted_term_s_evidence_is_overruled() {
     );
     let truth = common::read_json(&dir.join("c310.truth.json"));
     let fit = |extra: &[&str]| {
-        let out = dir.join("fit.json");
-        let mut cmd = flightid();
-        cmd.arg("derivatives");
-        for kind in ["lon1", "lon2"] {
-            cmd.arg("--data").arg(dir.join(format!("c310_{kind}.csv")));
-        }
-        cmd.arg("--airframe")
-            .arg(dir.join("c310.airframe.toml"))
-            .arg("--columns")
-            .arg(dir.join("c310.columns.toml"))
-            .args(["--method", "oe"])
-            .args(extra)
-            .arg("--json")
-            .arg(&out);
-        common::run_ok(&mut cmd);
-        common::read_json(&out)
+        derivatives_json(
+            &dir,
+            "c310",
+            &["lon1", "lon2"],
+            "c310.columns.toml",
+            "oe",
+            extra,
+        )
     };
     let oe = fit(&[]);
     let notes = oe["notes"].to_string();
@@ -462,20 +475,8 @@ fn a_surface_of_the_other_sign_convention_is_named_in_a_note() {
     assert_ne!(flipped, map, "the map names the surfaces as expected");
     let notes = |map: &str| {
         std::fs::write(dir.join("map.toml"), map).unwrap();
-        let out = dir.join("ee.json");
-        let mut cmd = flightid();
-        cmd.arg("derivatives");
-        for kind in ["lon1", "lat1"] {
-            cmd.arg("--data").arg(dir.join(format!("c310_{kind}.csv")));
-        }
-        cmd.arg("--airframe")
-            .arg(dir.join("c310.airframe.toml"))
-            .arg("--columns")
-            .arg(dir.join("map.toml"))
-            .arg("--json")
-            .arg(&out);
-        common::run_ok(&mut cmd);
-        common::read_json(&out)["notes"].to_string()
+        derivatives_json(&dir, "c310", &["lon1", "lat1"], "map.toml", "ee", &[])["notes"]
+            .to_string()
     };
     let own = notes(&map);
     assert!(!own.contains("unconventional sign"), "{own}");
