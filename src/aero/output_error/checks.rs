@@ -430,11 +430,7 @@ fn group_check(
         .count();
     // χ² at 1 % for 1, 2, 3 degrees of freedom
     let chi2 = [CHI2_1_1PCT, CHI2_2_1PCT, CHI2_3_1PCT][newly_free.clamp(1, 3) - 1];
-    let t_max = tested
-        .iter()
-        .filter_map(|n| wider.fit.estimate.parameter(n))
-        .map(|p| (p.value / p.std_error.max(f64::MIN_POSITIVE)).abs())
-        .fold(0.0, f64::max);
+    let t_max = largest_t(&wider.fit, tested);
     let trusted = wider.converged && key_derivatives_plausible(held, &wider.fit);
     let supported = 2.0 * wider.drop > chi2 && t_max > 3.0 && trusted;
     Some(GroupCheck {
