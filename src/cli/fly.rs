@@ -3,7 +3,7 @@
 use super::common::{emit_json, TrimArgs};
 use crate::cli::UsageError;
 use crate::data;
-use crate::signal::Maneuver;
+use crate::signal::{Maneuver, Sweep};
 use crate::sim::{FlightPlan, Simulator};
 use std::path::PathBuf;
 
@@ -81,12 +81,12 @@ impl ManeuverArgs {
             ManeuverKind::Multisine => {
                 Maneuver::multisine_in_band(self.f_min_hz, self.f_max_hz, active_s)
             }
-            ManeuverKind::Chirp => Maneuver::Chirp {
+            ManeuverKind::Chirp => Maneuver::Chirp(Sweep {
                 f0_hz: self.f_min_hz,
                 f1_hz: self.f_max_hz,
                 sweep_s: active_s,
                 log: self.log_sweep,
-            },
+            }),
         })
     }
 

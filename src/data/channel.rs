@@ -87,26 +87,27 @@ impl Channel {
         Channel::Latitude,
     ];
 
-    /// The control inputs: the three surfaces and the throttle.
-    pub const CONTROLS: [Channel; 4] = [
-        Channel::Elevator,
-        Channel::Aileron,
-        Channel::Rudder,
-        Channel::Throttle,
-    ];
+    /// The control inputs: the three surfaces and the throttle (the four schema columns from `elevator_rad` on).
+    pub const CONTROLS: [Channel; 4] = Channel::run_from(Channel::Elevator);
 
-    /// The attitude angles and body rates of an attitude solution (φ, θ, ψ, p, q, r).
-    pub const ATTITUDE_AND_RATES: [Channel; 6] = [
-        Channel::Phi,
-        Channel::Theta,
-        Channel::Psi,
-        Channel::P,
-        Channel::Q,
-        Channel::R,
-    ];
+    /// The attitude angles and body rates of an attitude solution (φ, θ, ψ, p, q, r: the six schema columns from
+    /// `phi_rad` on).
+    pub const ATTITUDE_AND_RATES: [Channel; 6] = Channel::run_from(Channel::Phi);
 
     /// The body-axis specific forces (accelerometers).
     pub const SPECIFIC_FORCES: [Channel; 3] = [Channel::Ax, Channel::Ay, Channel::Az];
+
+    /// The `N` schema columns from `first` on, in schema order (a const fn, so that a group of adjacent columns
+    /// is a constant taken from [`Channel::ALL`] rather than a second copy of its order).
+    const fn run_from<const N: usize>(first: Channel) -> [Channel; N] {
+        let mut out = [first; N];
+        let mut i = 0;
+        while i < N {
+            out[i] = Channel::ALL[first as usize + i];
+            i += 1;
+        }
+        out
+    }
 
     /// The column name of docs/data.md, e.g. `q_rad_s`.
     pub const fn name(self) -> &'static str {
@@ -232,5 +233,25 @@ mod tests {
         }
         assert_eq!(Channel::Q.surface(), None);
         assert_eq!(Channel::of_surface("flap"), None);
+    }
+
+    /// The groups taken as runs of the schema hold the columns their docs name.
+    #[test]
+    fn groups_of_adjacent_columns_are_the_named_ones() {
+        assert_eq!(
+            names(Channel::CONTROLS),
+            ["elevator_rad", "aileron_rad", "rudder_rad", "throttle"]
+        );
+        assert_eq!(
+            names(Channel::ATTITUDE_AND_RATES),
+            [
+                "phi_rad",
+                "theta_rad",
+                "psi_rad",
+                "p_rad_s",
+                "q_rad_s",
+                "r_rad_s"
+            ]
+        );
     }
 }

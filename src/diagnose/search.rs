@@ -30,6 +30,7 @@ use crate::data::FlightRecord;
 use crate::estimate::covariance;
 use crate::ident::linalg;
 use crate::optimise;
+use crate::signal::sum_sq;
 use crate::sim::{SimError, TrimState};
 use faer::Mat;
 
@@ -286,10 +287,6 @@ pub fn coarse<R>(
     })
 }
 
-fn cost(r: &[f64]) -> f64 {
-    crate::signal::sum_sq(r)
-}
-
 /// Result of an output-error fit.
 #[derive(Debug, Clone)]
 pub struct FitOutcome {
@@ -398,7 +395,7 @@ pub(super) fn untrimmable_is_none<T>(r: Result<T, SimError>) -> Result<Option<T>
 
 /// The cost of a residual, or infinity where the model cannot trim (a trial that explains nothing).
 pub(super) fn cost_or_untrimmable(r: Result<Vec<f64>, SimError>) -> Result<f64, SimError> {
-    untrimmable_is_none(r).map(|r| r.map_or(f64::INFINITY, |r| cost(&r)))
+    untrimmable_is_none(r).map(|r| r.map_or(f64::INFINITY, |r| sum_sq(&r)))
 }
 
 impl optimise::Problem for Replayed<'_, '_, '_> {
@@ -414,7 +411,7 @@ impl optimise::Problem for Replayed<'_, '_, '_> {
     }
 
     fn cost(&self, r: &Vec<f64>) -> f64 {
-        cost(r)
+        sum_sq(r)
     }
 
     fn linearise(
@@ -490,7 +487,7 @@ fn fit_from(
         .flat_map(|(i, a)| (0..a.params.len()).map(move |j| (i, j)))
         .collect();
     let r = residuals(worker, w, active)?;
-    let cost_before = cost(&r);
+    let cost_before = sum_sq(&r);
     let x: Vec<f64> = free.iter().map(|&(i, j)| active[i].params[j]).collect();
     let specs: Vec<_> = free
         .iter()
@@ -525,7 +522,7 @@ fn fit_from(
     let min = optimise::levenberg_marquardt(&mut problem, x, r, &options)?;
     problem.set(&min.x);
     let r = min.point;
-    let c = cost(&r);
+    let c = sum_sq(&r);
     let Replayed {
         worker,
         active,

@@ -65,10 +65,13 @@ fn lag_window(acf: &[f64], len: usize) -> usize {
 /// By convolution and Parseval on series zero-padded to `M ≥ N + L`:
 /// `W_ij = (1/M) Σ_f Σ_a conj(X̂_a,i(f)) Σ_b K̂_ab(f) X̂_b,j(f)`, `K_ab(l) = w(l) R_ab(l)` for |l| ≤ L laid
 /// out circularly (`R_ab(−l) = R_ba(l)`); every bin but DC and Nyquist counts twice (conjugate symmetry).
-pub fn cross_lag_weighted_products(cols: &[Vec<&[f64]>], residuals: &[&[f64]]) -> Vec<f64> {
+pub fn cross_lag_weighted_products<C: AsRef<[f64]>, R: AsRef<[f64]>>(
+    cols: &[Vec<C>],
+    residuals: &[R],
+) -> Vec<f64> {
     let m = residuals.len();
     let p = cols.first().map_or(0, Vec::len);
-    let len = residuals.first().map_or(0, |r| r.len());
+    let len = residuals.first().map_or(0, |r| r.as_ref().len());
     let mut w = vec![0.0; p * p];
     if m == 0 || p == 0 || len < 2 {
         return w;
@@ -81,7 +84,7 @@ pub fn cross_lag_weighted_products(cols: &[Vec<&[f64]>], residuals: &[&[f64]]) -
     let mut planner = RealFftPlanner::<f64>::new();
     let v_hat: Vec<Vec<Complex64>> = residuals
         .iter()
-        .map(|r| real_spectrum(&mut planner, r, size))
+        .map(|r| real_spectrum(&mut planner, r.as_ref(), size))
         .collect();
     // N·R_ab(l) at circular index l (l ≥ 0) and size − l (l < 0), for a ≤ b
     let inverse = planner.plan_fft_inverse(size);
@@ -133,7 +136,7 @@ pub fn cross_lag_weighted_products(cols: &[Vec<&[f64]>], residuals: &[&[f64]]) -
         .iter()
         .map(|c| {
             c.iter()
-                .map(|col| real_spectrum(&mut planner, col, size))
+                .map(|col| real_spectrum(&mut planner, col.as_ref(), size))
                 .collect()
         })
         .collect();
@@ -407,12 +410,7 @@ mod tests {
                     .collect()
             })
             .collect();
-        let col_refs: Vec<Vec<&[f64]>> = cols
-            .iter()
-            .map(|c| c.iter().map(Vec::as_slice).collect())
-            .collect();
-        let res_refs: Vec<&[f64]> = residuals.iter().map(Vec::as_slice).collect();
-        let fast = cross_lag_weighted_products(&col_refs, &res_refs);
+        let fast = cross_lag_weighted_products(&cols, &residuals);
         // the definition: one window for all outputs, the longest
         let lag = residuals
             .iter()
@@ -455,8 +453,9 @@ mod tests {
             }
         }
         // one output: the single-output products
-        let single = lag_weighted_products(&col_refs[0], &lag_weights(&residuals[0]));
-        let one = cross_lag_weighted_products(&col_refs[..1], &res_refs[..1]);
+        let first: Vec<&[f64]> = cols[0].iter().map(Vec::as_slice).collect();
+        let single = lag_weighted_products(&first, &lag_weights(&residuals[0]));
+        let one = cross_lag_weighted_products(&cols[..1], &residuals[..1]);
         for (a, b) in one.iter().zip(&single) {
             assert!(
                 (a - b).abs() <= 1e-10 * single[0].abs().max(1e-300),

@@ -90,6 +90,11 @@ fn start() -> Vec<Parameter> {
         .collect()
 }
 
+/// `p` lies within `k` of its standard errors of `truth`.
+fn within_sigmas(p: &ParameterEstimate, truth: f64, k: f64) -> bool {
+    (p.value - truth).abs() < k * p.std_error
+}
+
 #[test]
 fn noise_free_short_period_is_recovered_to_round_off() {
     // exact data (linear interpolation both in the generator's RK4 and the fit's exact
@@ -135,7 +140,7 @@ fn two_noisy_records_with_biases_and_unknown_initial_states() {
     assert!(est.converged, "{:?}", est.stop);
     for (p, truth) in est.parameters.iter().zip(TRUTH) {
         assert!(
-            (p.value - truth).abs() < 4.0 * p.std_error,
+            within_sigmas(p, truth, 4.0),
             "{}: {} ± {} vs {truth}",
             p.name,
             p.value,
@@ -320,7 +325,7 @@ fn with_process_noise_the_filter_error_method_finds_the_truth() {
     assert!(fem.converged, "{:?}", fem.stop);
     // within 3σ of the truth (the generator's noise is what the model assumes)
     for (b, t) in fem.parameters.iter().zip(TRUTH) {
-        assert!((b.value - t).abs() < 3.0 * b.std_error, "{}", b.name);
+        assert!(within_sigmas(b, t, 3.0), "{}", b.name);
     }
     // the process-noise spectral densities too (2e-4 and 4e-3 in the generator)
     let q: Vec<&ParameterEstimate> = fem
@@ -329,7 +334,7 @@ fn with_process_noise_the_filter_error_method_finds_the_truth() {
         .filter(|n| n.kind == Some(NuisanceKind::ProcessNoise))
         .collect();
     for (n, truth) in q.iter().zip([2e-4, 4e-3]) {
-        assert!((n.value - truth).abs() < 3.0 * n.std_error, "{n:?}");
+        assert!(within_sigmas(n, truth, 3.0), "{n:?}");
     }
     // output error, blind to the turbulence, misses M_δe by more than 3σ here
     let m_de = oe.parameter("M_de").unwrap();

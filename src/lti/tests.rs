@@ -248,6 +248,22 @@ fn stable_tf() -> impl Strategy<Value = TransferFunction> {
         })
 }
 
+/// A [`stable_tf`] with a sample period of 5..100 ms and either discretization (ZOH or Tustin): the
+/// round trips between continuous and discrete time.
+fn sampled_tf() -> impl Strategy<Value = (TransferFunction, f64, Discretization)> {
+    (
+        stable_tf(),
+        0.005f64..0.1,
+        any::<bool>().prop_map(|tustin| {
+            if tustin {
+                Discretization::Tustin
+            } else {
+                Discretization::Zoh
+            }
+        }),
+    )
+}
+
 /// Coefficient-wise comparison, relative to each coefficient but never tighter than 1e-6 of the
 /// polynomial's largest coefficient (a coefficient near zero by cancellation has no relative accuracy).
 fn close(found: &[f64], expected: &[f64], rel: f64) -> Result<(), TestCaseError> {
@@ -299,11 +315,8 @@ proptest! {
 
     #[test]
     fn d2c_after_c2d_is_identity_on_state_space(
-        tf in stable_tf(),
-        dt in 0.005f64..0.1,
-        tustin in any::<bool>(),
+        (tf, dt, method) in sampled_tf(),
     ) {
-        let method = if tustin { Discretization::Tustin } else { Discretization::Zoh };
         let ss = tf2ss(&tf);
         let back = d2c(&c2d(&ss, dt, method), method).unwrap();
         matrices_close(&ss, &back, 1e-9)?;
@@ -311,15 +324,12 @@ proptest! {
 
     #[test]
     fn d2c_after_c2d_on_transfer_functions_is_identity_up_to_the_coefficient_conditioning(
-        tf in stable_tf(),
-        dt in 0.005f64..0.1,
-        tustin in any::<bool>(),
+        (tf, dt, method) in sampled_tf(),
     ) {
         // The z-domain coefficients of a fast-sampled system carry its slow poles only in their last
         // digits: den_z(1) = Π(1 − z_i) is a small difference of O(1) coefficients. One rounding in
         // den_z thus moves the continuous coefficients by about eps·κ, κ = Σ|den_z| / |den_z(1)|,
         // which no algorithm can undo; the round trip must stay within a small multiple of that.
-        let method = if tustin { Discretization::Tustin } else { Discretization::Zoh };
         let d = c2d_tf(&tf, dt, method);
         let kappa = d.den.iter().map(|c| c.abs()).sum::<f64>() / polyval(&d.den, 1.0).abs();
         let rel = (1e3 * f64::EPSILON * kappa).max(1e-9);
@@ -337,11 +347,8 @@ proptest! {
 
     #[test]
     fn c2d_after_d2c_is_identity_on_state_space(
-        tf in stable_tf(),
-        dt in 0.005f64..0.1,
-        tustin in any::<bool>(),
+        (tf, dt, method) in sampled_tf(),
     ) {
-        let method = if tustin { Discretization::Tustin } else { Discretization::Zoh };
         let ssd = c2d(&tf2ss(&tf), dt, method);
         let again = c2d(&d2c(&ssd, method).unwrap(), dt, method);
         matrices_close(&ssd, &again, 1e-9)?;

@@ -28,12 +28,37 @@ pub enum Maneuver {
         period_s: f64,
     },
     /// Sine sweep from `f0_hz` to `f1_hz` over `sweep_s`, linear or logarithmic in frequency.
-    Chirp {
-        f0_hz: f64,
-        f1_hz: f64,
-        sweep_s: f64,
-        log: bool,
-    },
+    Chirp(Sweep),
+}
+
+/// The frequency sweep of a chirp (Morelli & Klein §9.3), at unit amplitude.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Sweep {
+    /// Frequency at the start, Hz.
+    pub f0_hz: f64,
+    /// Frequency at the end, Hz.
+    pub f1_hz: f64,
+    /// Length of the sweep, s.
+    pub sweep_s: f64,
+    /// Logarithmic in frequency (else linear).
+    pub log: bool,
+}
+
+impl Sweep {
+    /// Instantaneous phase `tau_s` into the sweep: linear `f(τ) = f0 + (f1−f0)τ/T`, logarithmic
+    /// `f(τ) = f0·(f1/f0)^(τ/T)`; the phase is the integral of 2πf.
+    fn phase_rad(&self, tau_s: f64) -> f64 {
+        let (f0, f1, t) = (self.f0_hz, self.f1_hz, self.sweep_s);
+        if self.log {
+            let ratio_ln = (f1 / f0).ln();
+            if ratio_ln.abs() < 1e-12 {
+                return TAU * f0 * tau_s;
+            }
+            TAU * f0 * t / ratio_ln * ((ratio_ln * tau_s / t).exp() - 1.0)
+        } else {
+            TAU * (f0 * tau_s + 0.5 * (f1 - f0) * tau_s * tau_s / t)
+        }
+    }
 }
 
 impl Maneuver {
@@ -43,7 +68,7 @@ impl Maneuver {
             Maneuver::Doublet { .. } => "doublet",
             Maneuver::ThreeTwoOneOne { .. } => "3211",
             Maneuver::Multisine { .. } => "multisine",
-            Maneuver::Chirp { .. } => "chirp",
+            Maneuver::Chirp(_) => "chirp",
         }
     }
 
@@ -67,7 +92,7 @@ impl Maneuver {
             Maneuver::Doublet { pulse_s } => Some(2.0 * pulse_s),
             Maneuver::ThreeTwoOneOne { pulse_s } => Some(7.0 * pulse_s),
             Maneuver::Multisine { .. } => None,
-            Maneuver::Chirp { sweep_s, .. } => Some(sweep_s),
+            Maneuver::Chirp(sweep) => Some(sweep.sweep_s),
         }
     }
 
@@ -95,12 +120,12 @@ impl Maneuver {
                 n_harmonics,
                 period_s,
             } => multisine_design(f_min_hz, f_max_hz, n_harmonics, period_s).map(|_| ()),
-            Maneuver::Chirp {
+            Maneuver::Chirp(Sweep {
                 f0_hz,
                 f1_hz,
                 sweep_s,
                 log,
-            } => {
+            }) => {
                 positive("sweep_s", sweep_s)?;
                 let bad = |why| SignalError::BadBand {
                     maneuver: name,
@@ -176,16 +201,11 @@ pub fn generate(m: &Maneuver, dt_s: f64, duration_s: f64, start_s: f64) -> Vec<f
             }
             normalise_peak(&mut x);
         }
-        Maneuver::Chirp {
-            f0_hz,
-            f1_hz,
-            sweep_s,
-            log,
-        } => {
+        Maneuver::Chirp(ref sweep) => {
             for (k, xk) in x.iter_mut().enumerate() {
                 let tk = tau(k);
-                if tk >= -eps && tk < sweep_s - eps {
-                    *xk = chirp_phase_rad(tk.max(0.0), f0_hz, f1_hz, sweep_s, log).sin();
+                if tk >= -eps && tk < sweep.sweep_s - eps {
+                    *xk = sweep.phase_rad(tk.max(0.0)).sin();
                 }
             }
             normalise_peak(&mut x);
@@ -215,20 +235,6 @@ fn square_wave(
                 break;
             }
         }
-    }
-}
-
-/// Instantaneous phase of a sine sweep (Morelli & Klein §9.3): linear `f(τ) = f0 + (f1−f0)τ/T`,
-/// logarithmic `f(τ) = f0·(f1/f0)^(τ/T)`; the phase is the integral of 2πf.
-fn chirp_phase_rad(tau_s: f64, f0_hz: f64, f1_hz: f64, sweep_s: f64, log: bool) -> f64 {
-    if log {
-        let ratio_ln = (f1_hz / f0_hz).ln();
-        if ratio_ln.abs() < 1e-12 {
-            return TAU * f0_hz * tau_s;
-        }
-        TAU * f0_hz * sweep_s / ratio_ln * ((ratio_ln * tau_s / sweep_s).exp() - 1.0)
-    } else {
-        TAU * (f0_hz * tau_s + 0.5 * (f1_hz - f0_hz) * tau_s * tau_s / sweep_s)
     }
 }
 
@@ -484,18 +490,18 @@ mod tests {
                 n_harmonics: 12,
                 period_s: 20.0,
             },
-            Maneuver::Chirp {
+            Maneuver::Chirp(Sweep {
                 f0_hz: 0.1,
                 f1_hz: 3.0,
                 sweep_s: 15.0,
                 log: false,
-            },
-            Maneuver::Chirp {
+            }),
+            Maneuver::Chirp(Sweep {
                 f0_hz: 0.1,
                 f1_hz: 3.0,
                 sweep_s: 15.0,
                 log: true,
-            },
+            }),
         ];
         for m in &shapes {
             let x = generate(m, 1.0 / 120.0, 30.0, 2.0);
@@ -508,14 +514,28 @@ mod tests {
         }
     }
 
+    /// A chirp is written as before its sweep was a type of its own: the sweep's fields beside the shape tag.
+    #[test]
+    fn chirp_json_carries_the_sweep_fields_beside_the_shape() {
+        let m = Maneuver::Chirp(Sweep {
+            f0_hz: 0.2,
+            f1_hz: 2.0,
+            sweep_s: 10.0,
+            log: true,
+        });
+        let json = serde_json::json!({"shape": "chirp", "f0_hz": 0.2, "f1_hz": 2.0, "sweep_s": 10.0, "log": true});
+        assert_eq!(serde_json::to_value(&m).unwrap(), json);
+        assert_eq!(serde_json::from_value::<Maneuver>(json).unwrap(), m);
+    }
+
     #[test]
     fn chirp_is_zero_after_the_sweep_and_starts_from_zero() {
-        let m = Maneuver::Chirp {
+        let m = Maneuver::Chirp(Sweep {
             f0_hz: 0.2,
             f1_hz: 2.0,
             sweep_s: 10.0,
             log: false,
-        };
+        });
         let x = generate(&m, 0.01, 20.0, 1.0);
         assert_eq!(x[100], 0.0); // sin(0)
         assert!(x[1101..].iter().all(|v| *v == 0.0));
@@ -527,15 +547,17 @@ mod tests {
         // f(T/2) = sqrt(f0 f1): the phase derivative there, by central difference
         let (f0, f1, t) = (0.1, 10.0, 20.0);
         let h = 1e-5;
-        let f_mid = (chirp_phase_rad(t / 2.0 + h, f0, f1, t, true)
-            - chirp_phase_rad(t / 2.0 - h, f0, f1, t, true))
-            / (2.0 * h)
-            / TAU;
+        let sweep = |log| Sweep {
+            f0_hz: f0,
+            f1_hz: f1,
+            sweep_s: t,
+            log,
+        };
+        let frequency_hz =
+            |s: Sweep| (s.phase_rad(t / 2.0 + h) - s.phase_rad(t / 2.0 - h)) / (2.0 * h) / TAU;
+        let f_mid = frequency_hz(sweep(true));
         assert!((f_mid - 1.0).abs() < 1e-6, "{f_mid}");
-        let f_lin = (chirp_phase_rad(t / 2.0 + h, f0, f1, t, false)
-            - chirp_phase_rad(t / 2.0 - h, f0, f1, t, false))
-            / (2.0 * h)
-            / TAU;
+        let f_lin = frequency_hz(sweep(false));
         assert!((f_lin - 5.05).abs() < 1e-6, "{f_lin}");
     }
 
@@ -612,12 +634,12 @@ mod tests {
             d.validate(),
             Err(SignalError::NonPositiveTime { .. })
         ));
-        let c = Maneuver::Chirp {
+        let c = Maneuver::Chirp(Sweep {
             f0_hz: 0.0,
             f1_hz: 1.0,
             sweep_s: 1.0,
             log: true,
-        };
+        });
         assert!(c.validate().is_err());
     }
 

@@ -7,7 +7,9 @@
 mod maneuver;
 mod ops;
 
-pub use maneuver::{generate, multisine_design, peak_factor, time_grid, Maneuver, MultisineDesign};
+pub use maneuver::{
+    generate, multisine_design, peak_factor, time_grid, Maneuver, MultisineDesign, Sweep,
+};
 pub use ops::{
     add_white_noise, heading_from_zero_rad, noise_std, on_uniform_step, resample_linear, std_dev,
     sum_sq, unwrap_rad,

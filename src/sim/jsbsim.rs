@@ -9,7 +9,7 @@ use super::{
     FlightPlan, Linearization, SimError, Simulator, StateReset, TrimPoint, TrimState, FT_TO_M,
 };
 use crate::aircraft::{AircraftConfig, Drive};
-use crate::data::FlightRecord;
+use crate::data::{Channel, FlightRecord};
 use std::collections::BTreeMap;
 
 /// Perturbation of each aero input in the bridge's probe: rad for angles and surfaces, rad/s for rates.
@@ -31,22 +31,22 @@ pub(super) fn probe_steps() -> PropertyValues {
     .collect()
 }
 
-/// Recorded channels: (CSV column, JSBSim property, factor to SI). Surfaces are added per aircraft.
-const RECORDED: &[(&str, &str, f64)] = &[
-    ("throttle", "fcs/throttle-pos-norm", 1.0),
-    ("phi_rad", "attitude/phi-rad", 1.0),
-    ("theta_rad", "attitude/theta-rad", 1.0),
-    ("psi_rad", "attitude/psi-rad", 1.0),
-    ("p_rad_s", "velocities/p-rad_sec", 1.0),
-    ("q_rad_s", "velocities/q-rad_sec", 1.0),
-    ("r_rad_s", "velocities/r-rad_sec", 1.0),
-    ("alpha_rad", "aero/alpha-rad", 1.0),
-    ("beta_rad", "aero/beta-rad", 1.0),
-    ("airspeed_m_s", "velocities/vt-fps", FT_TO_M),
-    ("altitude_m", "position/h-sl-ft", FT_TO_M),
-    ("ax_m_s2", "accelerations/a-pilot-x-ft_sec2", FT_TO_M),
-    ("ay_m_s2", "accelerations/a-pilot-y-ft_sec2", FT_TO_M),
-    ("az_m_s2", "accelerations/a-pilot-z-ft_sec2", FT_TO_M),
+/// Recorded channels: (schema column, JSBSim property, factor to SI). Surfaces are added per aircraft.
+const RECORDED: &[(Channel, &str, f64)] = &[
+    (Channel::Throttle, "fcs/throttle-pos-norm", 1.0),
+    (Channel::Phi, "attitude/phi-rad", 1.0),
+    (Channel::Theta, "attitude/theta-rad", 1.0),
+    (Channel::Psi, "attitude/psi-rad", 1.0),
+    (Channel::P, "velocities/p-rad_sec", 1.0),
+    (Channel::Q, "velocities/q-rad_sec", 1.0),
+    (Channel::R, "velocities/r-rad_sec", 1.0),
+    (Channel::Alpha, "aero/alpha-rad", 1.0),
+    (Channel::Beta, "aero/beta-rad", 1.0),
+    (Channel::Airspeed, "velocities/vt-fps", FT_TO_M),
+    (Channel::Altitude, "position/h-sl-ft", FT_TO_M),
+    (Channel::Ax, "accelerations/a-pilot-x-ft_sec2", FT_TO_M),
+    (Channel::Ay, "accelerations/a-pilot-y-ft_sec2", FT_TO_M),
+    (Channel::Az, "accelerations/a-pilot-z-ft_sec2", FT_TO_M),
 ];
 
 /// Surfaces in CSV column order.
@@ -581,7 +581,7 @@ impl JsbsimSim {
         }
         for (i, (name, _, factor)) in RECORDED.iter().enumerate() {
             let values = column(SURFACES.len() + i, *factor);
-            if *name == "psi_rad" {
+            if *name == Channel::Psi {
                 rec.push_column(name, crate::signal::heading_from_zero_rad(&values));
             } else {
                 rec.push_column(name, values);

@@ -2,21 +2,21 @@
 //! whole pipelines can be tested fast and deterministically, and aircraft without a JSBSim model can be flown.
 
 use super::{FlightPlan, Linearization, SimError, Simulator, TrimPoint, TrimState, FT_TO_M};
-use crate::data::FlightRecord;
+use crate::data::{Channel, FlightRecord};
 use crate::lti::{self, StateSpace};
 
-/// State name (JSBSim linearization naming), CSV column, factor from the state's unit to SI.
-const STATE_COLUMNS: &[(&str, &str, f64)] = &[
-    ("Phi", "phi_rad", 1.0),
-    ("Theta", "theta_rad", 1.0),
-    ("Psi", "psi_rad", 1.0),
-    ("P", "p_rad_s", 1.0),
-    ("Q", "q_rad_s", 1.0),
-    ("R", "r_rad_s", 1.0),
-    ("Alpha", "alpha_rad", 1.0),
-    ("Beta", "beta_rad", 1.0),
-    ("Vt", "airspeed_m_s", FT_TO_M),
-    ("Alt", "altitude_m", FT_TO_M),
+/// State name (JSBSim linearization naming), schema column, factor from the state's unit to SI.
+const STATE_COLUMNS: &[(&str, Channel, f64)] = &[
+    ("Phi", Channel::Phi, 1.0),
+    ("Theta", Channel::Theta, 1.0),
+    ("Psi", Channel::Psi, 1.0),
+    ("P", Channel::P, 1.0),
+    ("Q", Channel::Q, 1.0),
+    ("R", Channel::R, 1.0),
+    ("Alpha", Channel::Alpha, 1.0),
+    ("Beta", Channel::Beta, 1.0),
+    ("Vt", Channel::Airspeed, FT_TO_M),
+    ("Alt", Channel::Altitude, FT_TO_M),
 ];
 
 /// A linearization plus the trim it was taken at.
@@ -95,18 +95,18 @@ impl Simulator for LinearSim {
                 (0..=n).map(|k| base + j.map_or(0.0, |j| u[j][k])).collect(),
             );
         }
-        let base = |col: &str| -> f64 {
+        let base = |col: Channel| -> f64 {
             match col {
-                "phi_rad" => self.trim.phi_rad,
-                "theta_rad" => self.trim.theta_rad,
-                "alpha_rad" => self.trim.alpha_rad,
-                "beta_rad" => self.trim.beta_rad,
-                "airspeed_m_s" => self.trim.airspeed_m_s,
-                "altitude_m" => self.trim.altitude_m,
+                Channel::Phi => self.trim.phi_rad,
+                Channel::Theta => self.trim.theta_rad,
+                Channel::Alpha => self.trim.alpha_rad,
+                Channel::Beta => self.trim.beta_rad,
+                Channel::Airspeed => self.trim.airspeed_m_s,
+                Channel::Altitude => self.trim.altitude_m,
                 _ => 0.0,
             }
         };
-        for (state, col, factor) in STATE_COLUMNS {
+        for &(state, col, factor) in STATE_COLUMNS {
             if let Some(i) = self.lin.states.iter().position(|s| s == state) {
                 rec.push_column(col, x[i].iter().map(|v| base(col) + factor * v).collect());
             }

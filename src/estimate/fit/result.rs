@@ -269,12 +269,8 @@ impl Problem<'_> {
                         .collect()
                 })
                 .collect();
-            let col_refs: Vec<Vec<&[f64]>> = blocks
-                .iter()
-                .map(|b| b.iter().map(Vec::as_slice).collect())
-                .collect();
             let res_refs: Vec<&[f64]> = (0..noise.len()).map(|o| &e[rows(o)]).collect();
-            let wr = cross_lag_weighted_products(&col_refs, &res_refs);
+            let wr = cross_lag_weighted_products(&blocks, &res_refs);
             for (acc, v) in w.iter_mut().zip(&wr) {
                 *acc += v;
             }
