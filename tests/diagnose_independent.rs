@@ -10,7 +10,7 @@ use std::path::Path;
 use std::process::Command;
 
 use flightid::aircraft;
-use flightid::data::read_csv;
+use flightid::data::{read_csv, FlightRecord};
 use flightid::diagnose::replay::ReplayCase;
 use flightid::diagnose::search::Worker;
 use flightid::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
@@ -43,6 +43,15 @@ fn check_flown(seed: u64, effects: &str, duration_s: f64, turbulence: bool) -> D
 /// Runs the generator with `args`, diagnoses its case number `case` and checks the named set and values
 /// against the case's truth file.
 fn check_generated(args: &[&str], case: usize) -> Diagnosis {
+    check_generated_with(args, case, |r| r)
+}
+
+/// [`check_generated`] with the training record passed through `log` first (what a data system did to it).
+fn check_generated_with(
+    args: &[&str],
+    case: usize,
+    log: impl Fn(FlightRecord) -> FlightRecord,
+) -> Diagnosis {
     let dir = tempfile::tempdir().unwrap();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_diagnose_records.py");
     let st = Command::new(flightid::sim::env::python().expect("the provisioned Python"))
@@ -56,7 +65,7 @@ fn check_generated(args: &[&str], case: usize) -> Diagnosis {
         .expect("running the generator");
     assert!(st.success(), "the generator failed");
     let file = |what: &str| dir.path().join(format!("case_{case:03}_{what}"));
-    let train = read_csv(&file("train.csv")).unwrap();
+    let train = log(read_csv(&file("train.csv")).unwrap());
     let valid = read_csv(&file("valid.csv")).unwrap();
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(file("truth.json")).unwrap()).unwrap();
@@ -142,6 +151,50 @@ fn elevator_delay_is_named() {
     check(
         102,
         r#"[{"effect": "input_delay", "target": "elevator", "value": 0.08}]"#,
+    );
+}
+
+/// A training log with a 1.5 s dropout 20 s in (after the elevator 3-2-1-1 and the aileron doublet): the
+/// replay runs on the longest uninterrupted piece, the first 20 s, says so, and names the delay from it. Before
+/// the dropout handling the record was put on one uniform grid across the gap, its step stretched by the missing
+/// samples' share (5 %), and the missing 1.5 s interpolated.
+#[test]
+fn a_dropout_in_the_log_leaves_the_replay_its_longest_piece() {
+    let args = [
+        "--cases",
+        "1",
+        "--effects",
+        r#"[{"effect": "input_delay", "target": "elevator", "value": 0.08}]"#,
+        "--duration",
+        "30",
+        "--seed",
+        "102",
+    ];
+    let d = check_generated_with(&args, 0, |rec| {
+        let t0 = rec.time_s[0];
+        let keep: Vec<bool> = rec
+            .time_s
+            .iter()
+            .map(|t| !(20.0..21.5).contains(&(t - t0)))
+            .collect();
+        let pick = |v: &[f64]| -> Vec<f64> {
+            v.iter()
+                .zip(&keep)
+                .filter(|(_, k)| **k)
+                .map(|(x, _)| *x)
+                .collect()
+        };
+        let mut out = FlightRecord::new(pick(&rec.time_s));
+        for (name, values) in &rec.columns {
+            out.push_column(name, pick(values));
+        }
+        out
+    });
+    let warnings = d.warnings.join("\n");
+    assert!(warnings.contains("a dropout of 1.5"), "{warnings}");
+    assert!(
+        warnings.contains("longest uninterrupted piece, t = 0"),
+        "{warnings}"
     );
 }
 

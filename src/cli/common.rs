@@ -151,6 +151,41 @@ impl ColumnsArg {
         }
         Ok(rec)
     }
+
+    /// Reads a measured flight log through the map as the estimators take it: in uniformly sampled pieces
+    /// (`data::uniform_pieces`: split at dropouts, jittered timestamps resampled), each named after the file
+    /// and, when there are several, its time span. Prints the unit-sanity warnings and what was done to the
+    /// sampling on stderr.
+    pub fn read_pieces(&self, path: &Path) -> anyhow::Result<Vec<(String, FlightRecord)>> {
+        let map = self.columns.as_deref().map(ColumnMap::load).transpose()?;
+        let rec = data::read_csv_mapped(path, map.as_ref())?;
+        for w in rec.warnings() {
+            if w.kind != data::WarningKind::IrregularSampling {
+                eprintln!("warning: {}: {w}", path.display());
+            }
+        }
+        let split = data::uniform_pieces(&rec)
+            .map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
+        for note in &split.notes {
+            eprintln!("warning: {}: {note}", path.display());
+        }
+        let name = path.display().to_string();
+        if split.pieces.len() == 1 {
+            return Ok(split
+                .pieces
+                .into_iter()
+                .map(|p| (name.clone(), p))
+                .collect());
+        }
+        Ok(split
+            .pieces
+            .into_iter()
+            .map(|p| {
+                let span = format!("{name} [{} s–{} s]", p.time_s[0], p.time_s[p.len() - 1]);
+                (span, p)
+            })
+            .collect())
+    }
 }
 
 /// `rec` from `path` resampled onto a uniform grid at `resample_hz` when given; a rate the record cannot take

@@ -217,8 +217,7 @@ fn run_measured(args: &DerivativesCmd, airframe_arg: &str) -> anyhow::Result<()>
     let airframe = load_airframe(args, airframe_arg)?;
     let mut records = Vec::new();
     for p in &args.data {
-        let rec = args.columns.read(p)?;
-        records.push((p.display().to_string(), rec));
+        records.extend(args.columns.read_pieces(p)?);
     }
     let axis = match args.axis {
         Some(AxisArg::Longitudinal) => AxisChoice::Longitudinal,

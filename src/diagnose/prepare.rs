@@ -180,6 +180,18 @@ pub fn prepare(
         })
         .collect();
     warnings.extend(rate_note);
+    warnings.extend(
+        case.sampling_notes
+            .iter()
+            .map(|n| format!("training record: {n}")),
+    );
+    if let Some(v) = &vcase {
+        warnings.extend(
+            v.sampling_notes
+                .iter()
+                .map(|n| format!("validation record: {n}")),
+        );
+    }
     for (c, which) in [
         (Some(&mut case), "training"),
         (vcase.as_mut(), "validation"),

@@ -71,6 +71,9 @@ pub struct ReplayCase {
     /// Sample indices where the record's segments start (the first at 0), see [`segment_starts`]: each
     /// segment's initial state is a nuisance term of every fit.
     pub segments: Vec<usize>,
+    /// What was done to the record's sampling before the replay (a dropout cut away, jittered timestamps
+    /// resampled), one sentence each; empty for a uniformly sampled record.
+    pub sampling_notes: Vec<String>,
 }
 
 /// Quiet time before a maneuver that lets it start a new segment, s.
@@ -146,7 +149,30 @@ pub struct TrimMismatch {
 
 impl ReplayCase {
     /// Prepares a record: resamples to a uniform grid if needed, finds the quiet start, builds the trim point.
+    /// A record with dropouts is replayed on its longest uninterrupted piece (`data::uniform_pieces`): an
+    /// open-loop replay cannot cross missing samples, and interpolating over them would invent the motion.
     pub fn new(record: &FlightRecord) -> Result<Self, DiagnoseError> {
+        if record.len() < 50 {
+            return Err(DiagnoseError::TooShort(format!(
+                "{} samples; replay and identification need at least 50",
+                record.len()
+            )));
+        }
+        let split = crate::data::uniform_pieces(record)
+            .map_err(|e| DiagnoseError::BadData(e.to_string()))?;
+        let mut sampling_notes = split.notes;
+        let pieces = split.pieces.len();
+        let Some(longest) = split.pieces.into_iter().max_by_key(|p| p.len()) else {
+            return Err(DiagnoseError::BadData("the record has no samples".into()));
+        };
+        if pieces > 1 {
+            sampling_notes.push(format!(
+                "the replay uses the longest uninterrupted piece, t = {} s to {} s",
+                longest.time_s[0],
+                longest.time_s[longest.len() - 1]
+            ));
+        }
+        let record = &longest;
         let n = record.len();
         if n < 50 {
             return Err(DiagnoseError::TooShort(format!(
@@ -256,6 +282,7 @@ impl ReplayCase {
             .chain(segment_starts(&inputs, dt))
             .collect();
         Ok(ReplayCase {
+            sampling_notes,
             rate_hz: 1.0 / dt,
             record: rec,
             point,
@@ -288,6 +315,7 @@ impl ReplayCase {
         let len = len.min(self.len());
         ReplayCase {
             record: self.record.slice(0, len),
+            sampling_notes: self.sampling_notes.clone(),
             rate_hz: self.rate_hz,
             point: self.point,
             initial: self.initial.clone(),
