@@ -290,6 +290,50 @@ fn big_csv(rows: usize, edit: impl Fn(usize, &mut String)) -> Vec<u8> {
     s.into_bytes()
 }
 
+/// A data system that writes a frame twice (same time, every value the same) loses nothing by it: the repeat
+/// is dropped and a warning names its line. A repeated time with other values stays an error
+/// (`duplicated_time_reports_the_line_of_the_repeat`): which of the two rows is the sample is not known.
+#[test]
+fn rows_a_data_system_wrote_twice_are_dropped_with_a_warning() {
+    let rec = parse("# m\ntime_s,q_rad_s\n0,1\n0.1,2\n0.1,2\n0.2,3\n").unwrap();
+    assert_eq!(rec.time_s, vec![0.0, 0.1, 0.2]);
+    assert_eq!(rec.column("q_rad_s").unwrap(), &[1.0, 2.0, 3.0]);
+    let w: Vec<_> = rec
+        .warnings()
+        .into_iter()
+        .filter(|w| w.kind == WarningKind::RepeatedRows)
+        .collect();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].message.contains("1 repeated row(s) dropped") && w[0].message.contains("line 5"),
+        "{}",
+        w[0].message
+    );
+    // Every row written twice in a file read in parallel chunks: the repeats that straddle a chunk boundary
+    // go as well.
+    let mut text = String::from("time_s,a,b\n");
+    for i in 0..150_000 {
+        let row = format!("{},{},{}\n", i as f64 * 0.01, 0.5 + i as f64 * 1e-6, -2.25);
+        text.push_str(&row);
+        text.push_str(&row);
+    }
+    assert!(text.len() > 3 << 20, "the body must span several chunks");
+    let rec = parse_csv_bytes(text.as_bytes(), "twice.csv").unwrap();
+    assert_eq!(rec.len(), 150_000);
+    assert!(rec.time_s.windows(2).all(|t| t[1] > t[0]));
+    let note = rec
+        .warnings()
+        .into_iter()
+        .find(|w| w.kind == WarningKind::RepeatedRows)
+        .expect("a repeated-rows warning");
+    assert!(
+        note.message.starts_with("150000 repeated row(s) dropped")
+            && note.message.contains("line 3, 5, 7"),
+        "{}",
+        note.message
+    );
+}
+
 #[test]
 fn errors_deep_in_a_chunked_file_report_their_true_line() {
     let ok = big_csv(200_000, |_, _| {});

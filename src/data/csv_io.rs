@@ -285,19 +285,35 @@ fn assemble(
             Ok(mut chunk) => {
                 chunk.first_line += base;
                 chunk.last_line += base;
+                chunk.repeated.iter_mut().for_each(|l| *l += base);
                 base += chunk.newlines;
                 parts.push(chunk);
             }
             Err(e) => return Err(shift_lines(e, base)),
         }
     }
-    let parts: Vec<Chunk> = parts.into_iter().filter(|c| c.rows > 0).collect();
+    let mut repeated: Vec<usize> = parts.iter().flat_map(|c| c.repeated.clone()).collect();
+    let mut parts: Vec<Chunk> = parts.into_iter().filter(|c| c.rows > 0).collect();
     if parts.is_empty() {
         return Err(DataError::NoRows {
             file: file.to_string(),
             line: pre.header_line,
         });
     }
+    // A row repeated across a chunk boundary: the later chunk's first row goes.
+    for k in 1..parts.len() {
+        let (a, b) = (&parts[k - 1], &parts[k]);
+        if b.rows > 0 && (0..b.columns.len()).all(|c| b.columns[c][0] == a.columns[c][a.rows - 1]) {
+            repeated.push(b.first_line);
+            let b = &mut parts[k];
+            b.columns.iter_mut().for_each(|c| {
+                c.remove(0);
+            });
+            b.rows -= 1;
+            b.first_line += 1;
+        }
+    }
+    let parts: Vec<Chunk> = parts.into_iter().filter(|c| c.rows > 0).collect();
     for w in parts.windows(2) {
         let (a, b) = (&w[0], &w[1]);
         let (ta, tb) = (a.columns[time_index][a.rows - 1], b.columns[time_index][0]);
@@ -326,12 +342,29 @@ fn assemble(
     let time_s = std::mem::take(&mut columns[time_index]);
     let mut rec = FlightRecord::new(time_s);
     rec.metadata = pre.metadata;
+    if !repeated.is_empty() {
+        repeated.sort_unstable();
+        rec.metadata.push(repeated_rows_note(&repeated));
+    }
     for (i, (name, values)) in pre.names.into_iter().zip(columns).enumerate() {
         if i != time_index {
             rec.columns.push((name, values));
         }
     }
     Ok(rec)
+}
+
+/// The metadata line that records the repeated rows a reader dropped (file line numbers, ascending): it
+/// travels with the record, is written back as a `#` line and comes out of [`FlightRecord::warnings`].
+fn repeated_rows_note(lines: &[usize]) -> String {
+    let shown: Vec<String> = lines.iter().take(5).map(|l| l.to_string()).collect();
+    format!(
+        "{}{} repeated row(s) dropped, each the same time and values as the row before (line {}{})",
+        super::record::READER_NOTE,
+        lines.len(),
+        shown.join(", "),
+        if lines.len() > 5 { ", …" } else { "" }
+    )
 }
 
 /// Index of the `\n` ending the line at `pos`, or the end of the input.

@@ -150,6 +150,8 @@ pub enum WarningKind {
     OppositeSign,
     /// Sample spacing is not uniform.
     IrregularSampling,
+    /// The reader dropped rows that repeat the row before them (same time, same values).
+    RepeatedRows,
     /// Anything else the reader wants the user to know (e.g. skipped bytes in a tlog).
     Other,
 }

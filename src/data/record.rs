@@ -156,15 +156,30 @@ impl FlightRecord {
         Ok(self.warnings())
     }
 
-    /// Soft findings only: unit sanity and sampling regularity (see [`unit_warnings`]).
+    /// Soft findings only: unit sanity, sampling regularity (see [`unit_warnings`]) and what the reader did
+    /// to the data (the metadata lines it added, [`READER_NOTE`]).
     pub fn warnings(&self) -> Vec<Warning> {
-        let mut w = unit_warnings(self);
+        let mut w: Vec<Warning> = self
+            .metadata
+            .iter()
+            .filter_map(|m| m.strip_prefix(READER_NOTE))
+            .map(|m| Warning {
+                kind: WarningKind::RepeatedRows,
+                column: None,
+                message: m.to_string(),
+            })
+            .collect();
+        w.extend(unit_warnings(self));
         if let Some(s) = sampling_warning(&self.time_s) {
             w.push(s);
         }
         w
     }
 }
+
+/// The start of a metadata line that a reader added to say what it did to the data (not a `#` line of the
+/// file's own): [`FlightRecord::warnings`] reports it.
+pub const READER_NOTE: &str = " flightid read: ";
 
 /// Differences between consecutive times.
 fn time_steps(time_s: &[f64]) -> Vec<f64> {

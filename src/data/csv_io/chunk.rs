@@ -101,6 +101,8 @@ pub(super) struct Chunk {
     pub(super) first_line: usize,
     pub(super) last_line: usize,
     pub(super) newlines: usize,
+    /// Lines dropped as repeats of the row before (same time, same values).
+    pub(super) repeated: Vec<usize>,
 }
 
 /// Parses one chunk with chunk-relative line numbers (its first line is line 1).
@@ -121,6 +123,7 @@ pub(super) fn parse_chunk(
         names,
         time_index,
         file,
+        repeated: Vec::new(),
     };
     let newlines = if quoted {
         parse_chunk_quoted(bytes, 1, &mut sink)?;
@@ -134,6 +137,7 @@ pub(super) fn parse_chunk(
         first_line: sink.first_line,
         last_line: sink.last_line,
         newlines,
+        repeated: sink.repeated,
     })
 }
 
@@ -146,6 +150,7 @@ pub(super) struct ChunkSink<'a> {
     names: &'a [String],
     time_index: usize,
     file: &'a str,
+    repeated: Vec<usize>,
 }
 
 impl ChunkSink<'_> {
@@ -201,12 +206,20 @@ impl ChunkSink<'_> {
         self.finish_row(line)
     }
 
-    /// Checks the time order of the row just pushed and counts it.
+    /// Checks the time order of the row just pushed and counts it. A row that repeats the one before it in
+    /// every column (a data system writing a frame twice) is taken back and its line remembered.
     fn finish_row(&mut self, line: usize) -> Result<(), DataError> {
         let rows = self.rows;
         if rows > 0 {
             let t = &self.columns[self.time_index];
             let (prev, cur) = (t[rows - 1], t[rows]);
+            if cur == prev && self.columns.iter().all(|c| c[rows] == c[rows - 1]) {
+                self.columns.iter_mut().for_each(|c| {
+                    c.pop();
+                });
+                self.repeated.push(line);
+                return Ok(());
+            }
             if cur <= prev {
                 return Err(DataError::time_not_increasing(
                     self.file,
