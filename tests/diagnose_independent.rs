@@ -46,7 +46,8 @@ fn check_generated(args: &[&str], case: usize) -> Diagnosis {
     check_generated_with(args, case, |r| r)
 }
 
-/// [`check_generated`] with the training record passed through `log` first (what a data system did to it).
+/// [`check_generated`] with the training and validation records passed through `log` first (what a data system
+/// did to them).
 fn check_generated_with(
     args: &[&str],
     case: usize,
@@ -66,7 +67,7 @@ fn check_generated_with(
     assert!(st.success(), "the generator failed");
     let file = |what: &str| dir.path().join(format!("case_{case:03}_{what}"));
     let train = log(read_csv(&file("train.csv")).unwrap());
-    let valid = read_csv(&file("valid.csv")).unwrap();
+    let valid = log(read_csv(&file("valid.csv")).unwrap());
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(file("truth.json")).unwrap()).unwrap();
     let hidden = truth["effects"].as_array().unwrap().clone();
@@ -154,8 +155,9 @@ fn elevator_delay_is_named() {
     );
 }
 
-/// A training log with a 1.5 s dropout 20 s in (after the elevator 3-2-1-1 and the aileron doublet): the
-/// replay runs on the longest uninterrupted piece, the first 20 s, says so, and names the delay from it. Before
+/// Training and validation logs with a 1.5 s dropout 20 s in (after the elevator 3-2-1-1 and the aileron
+/// doublet): each replay runs on its longest uninterrupted piece, the first 20 s, the warnings say so for both
+/// records, and the delay is named from them. Before
 /// the dropout handling the record was put on one uniform grid across the gap, its step stretched by the missing
 /// samples' share (5 %), and the missing 1.5 s interpolated.
 #[test]
@@ -191,11 +193,17 @@ fn a_dropout_in_the_log_leaves_the_replay_its_longest_piece() {
         out
     });
     let warnings = d.warnings.join("\n");
-    assert!(warnings.contains("a dropout of 1.5"), "{warnings}");
-    assert!(
-        warnings.contains("longest uninterrupted piece, t = 0"),
-        "{warnings}"
-    );
+    for record in ["training", "validation"] {
+        for needle in [
+            "a dropout of 1.5",
+            "the replay uses the longest uninterrupted piece, t = 0",
+        ] {
+            assert!(
+                warnings.contains(&format!("{record} record: {needle}")),
+                "{record}: {needle}: {warnings}"
+            );
+        }
+    }
 }
 
 #[test]

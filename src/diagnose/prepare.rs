@@ -139,26 +139,29 @@ pub fn prepare(
     // The simulation steps at a whole multiple of the training record's rate; a validation record sampled at
     // another rate is interpolated onto the training rate (linearly, no filtering) and the warning says so.
     let mut rate_note = None;
+    let mut valid_notes = Vec::new();
     let valid = match valid {
         Some(v) => {
-            let v_rate_hz = ReplayCase::new(v)?.rate_hz;
+            let (v, notes) = replay::longest_uniform_piece(v)?;
+            valid_notes = notes;
+            let v_rate_hz = ReplayCase::new(&v)?.rate_hz;
             if (v_rate_hz - case.rate_hz).abs() > 1e-6 * case.rate_hz {
                 rate_note = Some(format!(
                     "the validation record ({v_rate_hz:.3} Hz) was interpolated linearly onto the training \
                      record's rate ({:.3} Hz) for the replay",
                     case.rate_hz
                 ));
-                Some(std::borrow::Cow::Owned(
-                    crate::data::resample_uniform(v, case.rate_hz)
+                Some(
+                    crate::data::resample_uniform(&v, case.rate_hz)
                         .map_err(|e| DiagnoseError::BadData(format!("validation record: {e}")))?,
-                ))
+                )
             } else {
-                Some(std::borrow::Cow::Borrowed(v))
+                Some(v)
             }
         }
         None => None,
     };
-    let mut vcase = valid.as_deref().map(ReplayCase::new).transpose()?;
+    let mut vcase = valid.as_ref().map(ReplayCase::new).transpose()?;
     // Heading is compared only where each segment's initial heading is estimated (a simulation that can set
     // its state mid-flight, the training record): elsewhere it drifts from the record's without bound.
     if let Some(v) = vcase.as_mut() {
@@ -185,13 +188,11 @@ pub fn prepare(
             .iter()
             .map(|n| format!("training record: {n}")),
     );
-    if let Some(v) = &vcase {
-        warnings.extend(
-            v.sampling_notes
-                .iter()
-                .map(|n| format!("validation record: {n}")),
-        );
-    }
+    warnings.extend(
+        valid_notes
+            .iter()
+            .map(|n| format!("validation record: {n}")),
+    );
     for (c, which) in [
         (Some(&mut case), "training"),
         (vcase.as_mut(), "validation"),

@@ -53,6 +53,29 @@ pub const HEADING: &str = "psi_rad";
 /// half of it, and an actuator lag then fitted a true delay better than the delay itself.
 pub const MIN_SIM_RATE_HZ: f64 = 200.0;
 
+/// The longest uninterrupted, uniformly sampled piece of a measured record (`data::uniform_pieces`), with what
+/// was done to get it: an open-loop replay cannot cross a dropout, and interpolating over the missing samples
+/// would invent the motion in them.
+pub fn longest_uniform_piece(
+    record: &FlightRecord,
+) -> Result<(FlightRecord, Vec<String>), DiagnoseError> {
+    let split =
+        crate::data::uniform_pieces(record).map_err(|e| DiagnoseError::BadData(e.to_string()))?;
+    let mut notes = split.notes;
+    let pieces = split.pieces.len();
+    let Some(longest) = split.pieces.into_iter().max_by_key(|p| p.len()) else {
+        return Err(DiagnoseError::BadData("the record has no samples".into()));
+    };
+    if pieces > 1 {
+        notes.push(format!(
+            "the replay uses the longest uninterrupted piece, t = {} s to {} s",
+            longest.time_s[0],
+            longest.time_s[longest.len() - 1]
+        ));
+    }
+    Ok((longest, notes))
+}
+
 /// A measured record prepared for replay: uniform grid, trim point, input deviations, compared outputs.
 #[derive(Debug, Clone)]
 pub struct ReplayCase {
@@ -158,20 +181,7 @@ impl ReplayCase {
                 record.len()
             )));
         }
-        let split = crate::data::uniform_pieces(record)
-            .map_err(|e| DiagnoseError::BadData(e.to_string()))?;
-        let mut sampling_notes = split.notes;
-        let pieces = split.pieces.len();
-        let Some(longest) = split.pieces.into_iter().max_by_key(|p| p.len()) else {
-            return Err(DiagnoseError::BadData("the record has no samples".into()));
-        };
-        if pieces > 1 {
-            sampling_notes.push(format!(
-                "the replay uses the longest uninterrupted piece, t = {} s to {} s",
-                longest.time_s[0],
-                longest.time_s[longest.len() - 1]
-            ));
-        }
+        let (longest, sampling_notes) = longest_uniform_piece(record)?;
         let record = &longest;
         let n = record.len();
         if n < 50 {
