@@ -136,6 +136,53 @@ fn two_records_give_every_parameter_within_3_sigma_of_the_truth() {
     assert!(v["fit_percent"]["q_rad_s"].as_f64().unwrap() > 50.0);
 }
 
+/// Two flights in one log, with a 1 s dropout between them (a data system that stopped and started again):
+/// `estimate` splits the log at the dropout, says so, and fits the two pieces as the records they are, each
+/// with its own initial state and biases: the same estimates as from the two files, to 1e-6. Fitted across
+/// the gap as one record, the second flight's initial state would have to follow from the first's.
+#[test]
+fn a_log_with_a_dropout_is_fitted_as_its_pieces() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = |name: &str| dir.path().join(name);
+    write_record(&file("a.csv"), [0.02, -0.05], [0.01, -0.003], 1);
+    write_record(&file("b.csv"), [-0.03, 0.04], [-0.02, 0.004], 2);
+    let mut log = std::fs::read_to_string(file("a.csv")).unwrap();
+    for row in std::fs::read_to_string(file("b.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+    {
+        let (t, rest) = row.split_once(',').unwrap();
+        log += &format!("{},{rest}\n", t.parse::<f64>().unwrap() + 13.0);
+    }
+    std::fs::write(file("log.csv"), log).unwrap();
+    let run = |data: &[&str], json: &str| {
+        let mut cmd = bin();
+        cmd.arg("estimate").arg("--model").arg(model_file());
+        for d in data {
+            cmd.arg("--data").arg(file(d));
+        }
+        let out = common::run_ok(cmd.arg("--json").arg(file(json)));
+        (
+            common::read_json(&file(json)),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let (two, _) = run(&["a.csv", "b.csv"], "two.json");
+    let (one, stderr) = run(&["log.csv"], "one.json");
+    assert!(
+        stderr.contains("a dropout of 1.04") && stderr.contains("after t = 11.96 s"),
+        "{stderr}"
+    );
+    for (name, _) in TRUTH {
+        let (a, b) = (
+            two["parameters"][name]["value"].as_f64().unwrap(),
+            one["parameters"][name]["value"].as_f64().unwrap(),
+        );
+        assert!((a - b).abs() <= 1e-6 * a.abs(), "{name}: {b} against {a}");
+    }
+}
+
 /// Runs `estimate` on a model text and returns (exit code, stderr).
 fn bad_model(text: &str, csv: &Path) -> (i32, String) {
     let dir = tempfile::tempdir().unwrap();

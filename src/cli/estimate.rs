@@ -73,11 +73,11 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
         Some(path) => Some(UserModel::load(path).map_err(|e| UsageError(e.to_string()))?),
         None => None,
     };
-    let flights = args
-        .data
-        .iter()
-        .map(|path| Ok((path.display().to_string(), args.columns.read(path)?)))
-        .collect::<anyhow::Result<Vec<_>>>()?;
+    // Each log in uniformly sampled pieces: split at dropouts, jittered timestamps resampled (docs/data.md).
+    let mut flights = Vec::new();
+    for path in &args.data {
+        flights.extend(args.columns.read_pieces(path)?);
+    }
     let usage = |e: &dyn std::fmt::Display| UsageError(e.to_string());
     let Some(method) = method else {
         return subspace(args, model.as_ref(), &flights, hold);
