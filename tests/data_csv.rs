@@ -309,6 +309,23 @@ fn rows_a_data_system_wrote_twice_are_dropped_with_a_warning() {
         "{}",
         w[0].message
     );
+    // Written back and read again, the note is history, not a warning about the new file.
+    let dir = tempfile::tempdir().unwrap();
+    let again = dir.path().join("again.csv");
+    write_csv_atomic(&again, &rec).unwrap();
+    let reread = read_csv(&again).unwrap();
+    assert!(reread
+        .warnings()
+        .iter()
+        .all(|w| w.kind != WarningKind::RepeatedRows));
+    assert!(
+        reread
+            .metadata
+            .iter()
+            .any(|m| m.contains("(when read before) 1 repeated row(s) dropped")),
+        "{:?}",
+        reread.metadata
+    );
     // Every row written twice in a file read in parallel chunks: the repeats that straddle a chunk boundary
     // go as well.
     let mut text = String::from("time_s,a,b\n");

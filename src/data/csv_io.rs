@@ -341,7 +341,15 @@ fn assemble(
     }
     let time_s = std::mem::take(&mut columns[time_index]);
     let mut rec = FlightRecord::new(time_s);
-    rec.metadata = pre.metadata;
+    // A note of an earlier read, written back with the record, is history, not news about this file.
+    rec.metadata = pre
+        .metadata
+        .into_iter()
+        .map(|m| match m.strip_prefix(super::record::READER_NOTE) {
+            Some(rest) => format!(" (when read before) {rest}"),
+            None => m,
+        })
+        .collect();
     if !repeated.is_empty() {
         repeated.sort_unstable();
         rec.metadata.push(repeated_rows_note(&repeated));
