@@ -169,6 +169,13 @@ impl ColumnsArg {
         for note in &split.notes {
             eprintln!("warning: {}: {note}", path.display());
         }
+        if split.pieces.len() > 1 {
+            eprintln!(
+                "warning: {}: its {} pieces are fitted as separate records, each with its own initial state",
+                path.display(),
+                split.pieces.len()
+            );
+        }
         let name = path.display().to_string();
         if split.pieces.len() == 1 {
             return Ok(split

@@ -75,7 +75,7 @@ pub const MIN_PIECE_S: f64 = 2.0;
 /// A record as an estimator can take it: uniformly sampled pieces, with what was done to get them.
 #[derive(Debug, Clone)]
 pub struct UniformPieces {
-    /// The pieces, each uniformly sampled at the record's median step, in time order.
+    /// The pieces, each uniformly sampled, in time order.
     pub pieces: Vec<FlightRecord>,
     /// What was done, one sentence each: where the record was split, what was left out, what was resampled.
     pub notes: Vec<String>,
@@ -84,8 +84,8 @@ pub struct UniformPieces {
 /// A measured record in uniformly sampled pieces, the way a flight log needs it before a time-domain
 /// estimator: split at every dropout (a step over [`DROPOUT_STEPS`] median steps: interpolating over missing
 /// samples would invent the motion in them), pieces shorter than [`MIN_PIECE_S`] left out, and a piece whose
-/// steps jitter by more than 10 % of the median step resampled onto the median step's grid by
-/// [`resample_uniform`] (logger timestamps taken from a clock that is not the sampling clock). A record that
+/// steps jitter by more than 10 % of the median step resampled onto its nominal step by [`resample_uniform`]
+/// (logger timestamps taken from a clock that is not the sampling clock). A record that
 /// is already uniform comes back as one piece, unchanged, with no note. The pieces are separate records to the
 /// estimators: each with its own initial state, fitted jointly.
 pub fn uniform_pieces(rec: &FlightRecord) -> Result<UniformPieces, DataError> {
@@ -106,8 +106,7 @@ pub fn uniform_pieces(rec: &FlightRecord) -> Result<UniformPieces, DataError> {
         if *s > DROPOUT_STEPS * median {
             bounds.push(k + 1);
             notes.push(format!(
-                "a dropout of {s:.3} s ({:.0} samples missing) after t = {} s: the record is split there \
-                 and its pieces are fitted as separate records",
+                "a dropout of {s:.3} s ({:.0} samples missing) after t = {} s: the record is split there",
                 s / median - 1.0,
                 t[k]
             ));
