@@ -144,8 +144,7 @@ impl ColumnsArg {
     /// Reads a flight-data CSV through the map, printing the record's unit-sanity and sampling
     /// warnings on stderr. A bad map or file is a usage error (exit 2).
     pub fn read(&self, path: &Path) -> anyhow::Result<FlightRecord> {
-        let map = self.columns.as_deref().map(ColumnMap::load).transpose()?;
-        let rec = data::read_csv_mapped(path, map.as_ref())?;
+        let rec = self.read_quietly(path)?;
         for w in rec.warnings() {
             eprintln!("warning: {}: {w}", path.display());
         }
@@ -157,8 +156,7 @@ impl ColumnsArg {
     /// and, when there are several, its time span. Prints the unit-sanity warnings and what was done to the
     /// sampling on stderr.
     pub fn read_pieces(&self, path: &Path) -> anyhow::Result<Vec<(String, FlightRecord)>> {
-        let map = self.columns.as_deref().map(ColumnMap::load).transpose()?;
-        let rec = data::read_csv_mapped(path, map.as_ref())?;
+        let rec = self.read_quietly(path)?;
         for w in rec.warnings() {
             if w.kind != data::WarningKind::IrregularSampling {
                 eprintln!("warning: {}: {w}", path.display());
@@ -177,21 +175,25 @@ impl ColumnsArg {
             );
         }
         let name = path.display().to_string();
-        if split.pieces.len() == 1 {
-            return Ok(split
-                .pieces
-                .into_iter()
-                .map(|p| (name.clone(), p))
-                .collect());
-        }
+        let several = split.pieces.len() > 1;
         Ok(split
             .pieces
             .into_iter()
             .map(|p| {
-                let span = format!("{name} [{} s–{} s]", p.time_s[0], p.time_s[p.len() - 1]);
-                (span, p)
+                let label = if several {
+                    format!("{name} [{} s–{} s]", p.time_s[0], p.time_s[p.len() - 1])
+                } else {
+                    name.clone()
+                };
+                (label, p)
             })
             .collect())
+    }
+
+    /// Reads a flight-data CSV through the map, printing nothing.
+    fn read_quietly(&self, path: &Path) -> anyhow::Result<FlightRecord> {
+        let map = self.columns.as_deref().map(ColumnMap::load).transpose()?;
+        Ok(data::read_csv_mapped(path, map.as_ref())?)
     }
 }
 

@@ -345,10 +345,12 @@ fn assemble(
     rec.metadata = pre
         .metadata
         .into_iter()
-        .map(|m| match m.strip_prefix(super::record::READER_NOTE) {
-            Some(rest) => format!(" (when read before) {rest}"),
-            None => m,
-        })
+        .map(
+            |m| match m.strip_prefix(super::record::REPEATED_ROWS_NOTE) {
+                Some(rest) => format!(" (when read before) {rest}"),
+                None => m,
+            },
+        )
         .collect();
     if !repeated.is_empty() {
         repeated.sort_unstable();
@@ -368,7 +370,7 @@ fn repeated_rows_note(lines: &[usize]) -> String {
     let shown: Vec<String> = lines.iter().take(5).map(|l| l.to_string()).collect();
     format!(
         "{}{} repeated row(s) dropped, each the same time and values as the row before (line {}{})",
-        super::record::READER_NOTE,
+        super::record::REPEATED_ROWS_NOTE,
         lines.len(),
         shown.join(", "),
         if lines.len() > 5 { ", …" } else { "" }

@@ -156,13 +156,13 @@ impl FlightRecord {
         Ok(self.warnings())
     }
 
-    /// Soft findings only: unit sanity, sampling regularity (see [`unit_warnings`]) and what the reader did
-    /// to the data (the metadata lines it added, [`READER_NOTE`]).
+    /// Soft findings only: unit sanity, sampling regularity (see [`unit_warnings`]) and the repeated rows the
+    /// reader dropped (its metadata line, [`REPEATED_ROWS_NOTE`]).
     pub fn warnings(&self) -> Vec<Warning> {
         let mut w: Vec<Warning> = self
             .metadata
             .iter()
-            .filter_map(|m| m.strip_prefix(READER_NOTE))
+            .filter_map(|m| m.strip_prefix(REPEATED_ROWS_NOTE))
             .map(|m| Warning {
                 kind: WarningKind::RepeatedRows,
                 column: None,
@@ -177,9 +177,9 @@ impl FlightRecord {
     }
 }
 
-/// The start of a metadata line that a reader added to say what it did to the data (not a `#` line of the
-/// file's own): [`FlightRecord::warnings`] reports it.
-pub const READER_NOTE: &str = " flightid read: ";
+/// The start of the metadata line in which a reader records the repeated rows it dropped (not a `#` line of
+/// the file's own): [`FlightRecord::warnings`] reports it.
+pub const REPEATED_ROWS_NOTE: &str = " flightid read: ";
 
 /// Differences between consecutive times.
 fn time_steps(time_s: &[f64]) -> Vec<f64> {
