@@ -206,6 +206,51 @@ fn a_dropout_in_the_log_leaves_the_replay_its_longest_piece() {
     }
 }
 
+/// A clean 55 s record in light turbulence whose only maneuver is an elevator 3-2-1-1 (case 10 of the
+/// turbulent false-alarm run `diagnose_eval -- --false-alarm --turbulence --seed 23`): the lateral axis moves by
+/// the gusts alone. Before the derivatives needed an input of their axis, `Cl_r` ×2.27 was named on it (and on
+/// three more of that run's 24 clean records: 4/24, now 1/24). Nothing is named; the lateral derivatives are
+/// listed as skipped, with the reason.
+#[test]
+fn a_clean_longitudinal_record_in_gusts_names_no_lateral_derivative() {
+    let args = [
+        "--cases",
+        "1",
+        "--first",
+        "10",
+        "--seed",
+        "23",
+        "--stratified",
+        "--turbulence",
+        "--effects",
+        "[]",
+        "--plan",
+        "random",
+        "--min-duration",
+        "15",
+        "--max-duration",
+        "90",
+        "--max-noise",
+        "2",
+    ];
+    let d = check_generated(&args, 10);
+    let skipped: Vec<String> = d
+        .skipped
+        .iter()
+        .filter(|s| {
+            s.reason
+                .starts_with("no input of its axis (aileron, rudder) moves")
+        })
+        .map(|s| s.target.clone())
+        .collect();
+    for t in ["Cl_r", "Cl_p", "Cn_beta", "Cn_r"] {
+        assert!(
+            skipped.iter().any(|s| s == t),
+            "{t} not skipped: {skipped:?}"
+        );
+    }
+}
+
 #[test]
 fn pitch_rate_gyro_bias_is_named() {
     check(

@@ -68,6 +68,24 @@ pub trait Extension: Send + Sync {
     /// for `CL_alpha2`. Near a trim point a refinement acts mostly as a change of that term, so its smallest
     /// effect worth naming is measured against that term's resolution on the record (see `select`).
     fn refines(&self) -> Option<(&'static str, String)>;
+    /// The inputs of which at least one must move for the record to excite the effect (empty: any motion
+    /// does). A signal-path effect needs its own surface. An aerodynamic derivative needs an input of its
+    /// axis: without one, that axis moves only by the gusts and the segments' initial states, which an
+    /// open-loop replay follows no better with the derivative changed than without.
+    fn excited_by(&self) -> Vec<String> {
+        if self.stage() == Stage::Input {
+            return vec![self.target().to_string()];
+        }
+        if !matches!(self.effect(), "aero_derivative" | "aero_nonlinearity") {
+            return Vec::new();
+        }
+        let axis: &[&str] = match self.target().split('_').next() {
+            Some("Cl" | "Cn" | "CY") => &["aileron", "rudder"],
+            Some("CL" | "CD" | "Cm") => &["elevator", "throttle"],
+            _ => &[],
+        };
+        axis.iter().map(|s| s.to_string()).collect()
+    }
 }
 
 /// How an effect changes the replay on its target. An effect type implements the one method of its stage

@@ -229,24 +229,35 @@ pub fn prepare(
             reason,
         })
         .collect();
-    // Inputs that do not move cannot reveal signal-path effects.
-    let still: Vec<String> = case
+    // An effect that no moving input excites cannot be told from the gusts and the initial states: a
+    // signal-path effect needs its surface to move, a derivative an input of its axis (`Extension::excited_by`).
+    let moving: Vec<&str> = case
         .inputs
         .iter()
-        .filter(|(_, d)| d.iter().all(|v| v.abs() < 1e-6))
-        .map(|(s, _)| s.clone())
+        .filter(|(_, d)| d.iter().any(|v| v.abs() >= 1e-6))
+        .map(|(s, _)| s.as_str())
         .collect();
     let mut catalogue = Vec::new();
     for e in all {
-        if e.stage() == Stage::Input && still.iter().any(|s| s == e.target()) {
-            skipped.push(Skipped {
-                effect: e.effect().into(),
-                target: e.target().into(),
-                reason: "the input does not move in the record".into(),
-            });
-        } else {
+        let needs = e.excited_by();
+        if needs.is_empty() || needs.iter().any(|n| moving.contains(&n.as_str())) {
             catalogue.push(e);
+            continue;
         }
+        let reason = if e.stage() == Stage::Input {
+            "the input does not move in the record".to_string()
+        } else {
+            format!(
+                "no input of its axis ({}) moves in the record: that axis moves only by the gusts and the \
+                 initial states",
+                needs.join(", ")
+            )
+        };
+        skipped.push(Skipped {
+            effect: e.effect().into(),
+            target: e.target().into(),
+            reason,
+        });
     }
     let sigma = weights(&case);
     Ok(Prepared {
