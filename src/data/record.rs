@@ -620,6 +620,18 @@ fn accel_g_warning(rec: &FlightRecord) -> Option<Warning> {
 
 /// Flags non-uniform sampling: steps deviating more than 10 % from the median step.
 pub fn sampling_warning(time_s: &[f64]) -> Option<Warning> {
+    irregular_sampling(time_s).map(|found| Warning {
+        kind: WarningKind::IrregularSampling,
+        column: Some(Channel::Time.to_string()),
+        message: format!(
+            "{found}; resample onto a uniform grid (--resample-hz) before identification"
+        ),
+    })
+}
+
+/// What is irregular about the sampling, in a sentence (steps deviating more than 10 % from the median step),
+/// or None for a uniform record.
+pub(crate) fn irregular_sampling(time_s: &[f64]) -> Option<String> {
     let steps = time_steps(time_s);
     if steps.len() < 2 {
         return None;
@@ -637,16 +649,11 @@ pub fn sampling_warning(time_s: &[f64]) -> Option<Warning> {
     }
     let min = steps.iter().copied().fold(f64::INFINITY, f64::min);
     let max = steps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    Some(Warning {
-        kind: WarningKind::IrregularSampling,
-        column: Some(Channel::Time.to_string()),
-        message: format!(
-            "irregular sampling: {} of {} steps differ from the median step {median} s by more than 10 % \
-             (steps range {min} .. {max} s; first at t = {} s); resample onto a uniform grid \
-             (--resample-hz) before identification",
-            off.len(),
-            steps.len(),
-            time_s[off[0]]
-        ),
-    })
+    Some(format!(
+        "irregular sampling: {} of {} steps differ from the median step {median} s by more than 10 % \
+         (steps range {min} .. {max} s; first at t = {} s)",
+        off.len(),
+        steps.len(),
+        time_s[off[0]]
+    ))
 }

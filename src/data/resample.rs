@@ -125,9 +125,8 @@ pub fn uniform_pieces(rec: &FlightRecord) -> Result<UniformPieces, DataError> {
             ));
             continue;
         }
-        if let Some(w) = super::sampling_warning(&piece.time_s) {
+        if let Some(message) = super::record::irregular_sampling(&piece.time_s) {
             let rate_hz = 1.0 / nominal_step_s(&piece.time_s, median);
-            let message = w.message.split("; resample").next().unwrap_or(&w.message);
             notes.push(format!(
                 "t = {} s to {} s: {message}; resampled onto a uniform {rate_hz:.4} Hz grid by {RESAMPLE_METHOD}",
                 piece.time_s[0],
