@@ -12,6 +12,8 @@ Files written to --out DIR:
   hfb_1.csv … hfb_N.csv   the records, header `T,DELV,PDYN,THRUST,TASCG,ALFCG,THE,Q,QDOT,AXCG,AZCG,AYCG,P,R,
                           PDOT,RDOT,BETCG,PHI,DAIL,DRUD`, all SI units and radians;
   hfb.columns.toml        the flightid column map of those columns (QDOT, PDOT, RDOT left unmapped);
+  hfb_K.asc, hfb.asc.columns.toml   with --asc: the same records as the book's supplement writes them (no header,
+                          spaces between the columns, exponent form) and the map naming their columns by position;
   hfb.airframe.toml       the flightid airframe description (mass, inertia, wing, thrust line, density);
   hfb.truth.json          the true coefficients, their equivalents in flightid's model convention, the trim,
                           the turbulence, the input timing and the seeds.
@@ -406,11 +408,21 @@ def write_csv(path, cols):
     np.savetxt(path, data, delimiter=",", header=",".join(COLUMNS), comments="", fmt=fmt)
 
 
-def write_columns(path):
+def write_asc(path, cols):
+    """The record as the book's supplement writes its flight data: no header, the same columns in the same
+    order, numbers in exponent form separated by runs of spaces."""
+    data = np.column_stack([cols[c] for c in COLUMNS])
+    np.savetxt(path, data, delimiter="", fmt="%16.7e")
+
+
+def write_columns(path, by_position=False):
     lines = ["# Column map of the HFB-320-like records (scripts/gen_hfb_records.py) onto the flight-data schema.",
              "# QDOT, PDOT, RDOT have no schema column and are left unmapped (kept as they are).", "[columns]"]
+    if by_position:
+        lines.insert(1, "# The .asc files have no header row: their columns are named by position (1 = T, 2 = DELV, …).")
     for col, (to, unit) in COLUMN_MAP.items():
-        lines.append(f'{col} = {{ to = "{to}", unit = "{unit}" }}')
+        key = COLUMNS.index(col) + 1 if by_position else col
+        lines.append(f'{key} = {{ to = "{to}", unit = "{unit}" }}')
     with open(path, "w") as fh:
         fh.write("\n".join(lines) + "\n")
 
@@ -455,6 +467,9 @@ def main():
     ap.add_argument("--alpha-skew-s", type=float, default=0.0, help="the α vane reads this many seconds late")
     ap.add_argument("--log-hz", type=float, default=10.0)
     ap.add_argument("--verbose", action="store_true", help="print per-record diagnostics")
+    ap.add_argument("--asc", action="store_true",
+                    help="also write each record as the book's text file (hfb_K.asc: no header, spaces between the "
+                         "columns, exponent form) with its map by column position (hfb.asc.columns.toml)")
     args = ap.parse_args()
     if args.records < 1 or args.log_hz <= 0 or args.log_hz > SIM_HZ or args.turb_ms < 0:
         ap.error("need --records >= 1, 0 < --log-hz <= 200, --turb-ms >= 0")
@@ -466,6 +481,8 @@ def main():
         cols, info, diag = simulate(args.seed, k, tr, args)
         name = f"hfb_{k}.csv"
         write_csv(os.path.join(args.out, name), cols)
+        if args.asc:
+            write_asc(os.path.join(args.out, f"hfb_{k}.asc"), cols)
         mean_v.append(diag["mean_airspeed_logged_m_s"])
         records.append({"file": name, "seed_sequence": [args.seed, k], "input": info,
                         "mean_airspeed_logged_m_s": diag["mean_airspeed_logged_m_s"],
@@ -481,6 +498,8 @@ def main():
                   f"mean V {diag['mean_airspeed_logged_m_s']:.3f}")
 
     write_columns(os.path.join(args.out, "hfb.columns.toml"))
+    if args.asc:
+        write_columns(os.path.join(args.out, "hfb.asc.columns.toml"), by_position=True)
     write_airframe(os.path.join(args.out, "hfb.airframe.toml"))
     truth = {
         "source": "Jategaonkar, Flight Vehicle System Identification, 2nd ed., test case 4 (HFB-320 longitudinal), "

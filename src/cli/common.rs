@@ -135,7 +135,9 @@ pub fn spinner(message: &str) -> indicatif::ProgressBar {
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct ColumnsArg {
     /// Column map (TOML) renaming a foreign CSV's columns onto the schema and converting their
-    /// units (`[columns] DELV = { to = "elevator_rad", unit = "deg" }`; see docs/data.md).
+    /// units (`[columns] DELV = { to = "elevator_rad", unit = "deg" }`). A text file without a
+    /// header row (columns separated by commas, spaces or tabs) is mapped by column position:
+    /// `1 = { to = "time_s" }`. See docs/data.md.
     #[arg(long, value_name = "MAP.toml")]
     pub columns: Option<PathBuf>,
 }

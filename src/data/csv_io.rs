@@ -4,6 +4,11 @@
 //! required, any order, unknown columns kept); every data cell must be a finite number. The body is
 //! split at line boundaries into chunks parsed in parallel (each chunk with the `csv` crate's
 //! `ByteRecord`), unless it holds a quote character, in which case one chunk keeps quoting exact.
+//!
+//! Text files as data systems and textbooks also write them are read too: columns separated by spaces
+//! or tabs instead of commas (the first line that is not metadata has no comma), and files without a
+//! header row (that line is all numbers). A headerless file's columns are named by their position,
+//! `1`, `2`, …, which a column map renames (`1 = { to = "time_s" }`).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{BufWriter, Read, Write};
@@ -65,6 +70,11 @@ fn read_csv_in_blocks(
     let mut eof = false;
     while !eof && !header_complete(&head) {
         eof = read_block(&mut f, &mut head, 1 << 16).map_err(BlockReadError::Io)?;
+    }
+    if whitespace_separated(&head) {
+        // Rare in files this large; converted whole rather than block by block.
+        f.read_to_end(&mut head).map_err(BlockReadError::Io)?;
+        return parse_csv_bytes_mapped(&head, file, map).map_err(BlockReadError::Data);
     }
     let pre = parse_preamble(&head, file, map).map_err(BlockReadError::Data)?;
     let carry = head.split_off(pre.body_start);
@@ -189,6 +199,13 @@ pub fn parse_csv_bytes_mapped(
     file: &str,
     map: Option<&ColumnMap>,
 ) -> Result<FlightRecord, DataError> {
+    let spaced;
+    let bytes = if whitespace_separated(bytes) {
+        spaced = whitespace_to_commas(bytes);
+        &spaced[..]
+    } else {
+        bytes
+    };
     let pre = parse_preamble(bytes, file, map)?;
     let body = &bytes[pre.body_start..];
     let (chunks, quoted) = split_chunks(body);
@@ -242,13 +259,46 @@ fn parse_preamble(
         }
         pos = (end + 1).min(bytes.len());
     };
-    let names = parse_header(&bytes[header_span.0..header_span.1], file, line)?;
+    let first_row = trim_cr(&bytes[header_span.0..header_span.1]);
+    let headerless = is_numbers_row(first_row);
+    let names = if headerless {
+        let n = first_row.split(|&b| b == b',').count();
+        (1..=n).map(|k| k.to_string()).collect()
+    } else {
+        parse_header(&bytes[header_span.0..header_span.1], file, line)?
+    };
     let (names, factors) = match map {
-        Some(m) => m.apply_to_header(&names, file)?,
+        Some(m) => m.apply_to_header(&names, file).map_err(|e| match e {
+            DataError::MapColumnMissing {
+                file, map, columns, ..
+            } if headerless => DataError::MapColumnMissing {
+                file,
+                map,
+                columns,
+                present: format!(
+                    "1 to {} by position, as it has no header row (line {line} is numbers)",
+                    names.len()
+                ),
+            },
+            e => e,
+        })?,
+        None if headerless => {
+            return Err(DataError::NoHeader {
+                file: file.to_string(),
+                line,
+                columns: names.len(),
+            })
+        }
         None => {
             let n = names.len();
             (names, vec![1.0; n])
         }
+    };
+    // A headerless file's first row is data: the body starts there, after an implied header line.
+    let (header_line, body_start) = if headerless {
+        (line - 1, header_span.0)
+    } else {
+        (line, (header_span.1 + 1).min(bytes.len()))
     };
     let time_index =
         names
@@ -263,8 +313,8 @@ fn parse_preamble(
         metadata,
         names,
         time_index,
-        header_line: line,
-        body_start: (header_span.1 + 1).min(bytes.len()),
+        header_line,
+        body_start,
         factors,
     })
 }
@@ -378,6 +428,54 @@ fn repeated_rows_note(lines: &[usize]) -> String {
 }
 
 /// Index of the `\n` ending the line at `pos`, or the end of the input.
+/// Whether the first line that is neither metadata nor blank separates its fields by spaces or tabs:
+/// it holds no comma and at least two whitespace-separated fields.
+fn whitespace_separated(bytes: &[u8]) -> bool {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    bytes
+        .split(|&b| b == b'\n')
+        .find(|l| !l.starts_with(b"#") && !l.iter().all(u8::is_ascii_whitespace))
+        .is_some_and(|l| {
+            !l.contains(&b',')
+                && l.split(u8::is_ascii_whitespace)
+                    .filter(|f| !f.is_empty())
+                    .nth(1)
+                    .is_some()
+        })
+}
+
+/// The text with every run of spaces and tabs between fields turned into one comma (leading and
+/// trailing ones dropped); metadata lines are kept as they are and every line break stays, so line
+/// numbers in messages are the file's.
+fn whitespace_to_commas(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(bytes.len());
+    for (k, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        if k > 0 {
+            out.push(b'\n');
+        }
+        if line.starts_with(b"#") {
+            out.extend_from_slice(line);
+            continue;
+        }
+        let fields = line
+            .split(u8::is_ascii_whitespace)
+            .filter(|f| !f.is_empty());
+        for (j, field) in fields.enumerate() {
+            if j > 0 {
+                out.push(b',');
+            }
+            out.extend_from_slice(field);
+        }
+    }
+    out
+}
+
+/// Whether every comma-separated field of `line` is a number: a data row where a header was expected.
+fn is_numbers_row(line: &[u8]) -> bool {
+    line.split(|&b| b == b',')
+        .all(|f| std::str::from_utf8(f).is_ok_and(|f| f.trim().parse::<f64>().is_ok()))
+}
+
 fn next_line_end(bytes: &[u8], pos: usize) -> usize {
     bytes[pos..]
         .iter()
@@ -670,6 +768,55 @@ mod tests {
                 assert!(blocks.starts_with("f.csv:"), "case {k}: {blocks}");
             }
         }
+    }
+
+    #[test]
+    fn text_separated_by_spaces_and_without_a_header_reads_as_its_csv() {
+        let csv = "# meta\ntime_s,q_rad_s\n0,0.5\n0.1,-2.5e-1\n0.2,1\n";
+        let spaced = "# meta\r\n  time_s \t q_rad_s\r\n 0   0.5\r\n\t0.1\t-2.5e-1  \r\n0.2 1\r\n";
+        let expected = parse_csv_bytes(csv.as_bytes(), "f").unwrap();
+        let got = parse_csv_bytes(spaced.as_bytes(), "f").unwrap();
+        assert_eq!(
+            (got.time_s, got.columns),
+            (expected.time_s.clone(), expected.columns.clone())
+        );
+
+        let map = ColumnMap::parse(
+            "[columns]\n1 = { to = \"time_s\" }\n2 = { to = \"q_rad_s\" }\n",
+            Path::new("m.toml"),
+        )
+        .unwrap();
+        let headerless = "# meta\n0 0.5\n0.1   -2.5e-1\n0.2\t1\n";
+        let got = parse_csv_bytes_mapped(headerless.as_bytes(), "f", Some(&map)).unwrap();
+        assert_eq!(
+            (got.time_s, got.columns),
+            (expected.time_s, expected.columns)
+        );
+        // A bad cell is named by the file's own line number; the block-wise path agrees.
+        let bad = headerless.replace("0.1 ", "0.1x ");
+        let e = parse_csv_bytes_mapped(bad.as_bytes(), "f", Some(&map)).unwrap_err();
+        assert!(e.to_string().starts_with("f:3:"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("f.asc");
+        fs::write(&path, &bad).unwrap();
+        let blocks = read_csv_in_blocks(File::open(&path).unwrap(), "f", 7, Some(&map));
+        assert!(matches!(blocks, Err(BlockReadError::Data(b)) if b.to_string() == e.to_string()));
+        let e = parse_csv_bytes(headerless.as_bytes(), "f").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                DataError::NoHeader {
+                    line: 2,
+                    columns: 2,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        // A comma-separated headerless file is named by position too.
+        let commas = headerless.replace("   ", ",").replace([' ', '\t'], ",");
+        let got = parse_csv_bytes_mapped(commas.as_bytes(), "f", Some(&map)).unwrap();
+        assert_eq!(got.time_s, vec![0.0, 0.1, 0.2]);
     }
 
     #[test]

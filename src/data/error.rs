@@ -32,6 +32,13 @@ pub enum DataError {
         line: usize,
         found: String,
     },
+    /// The first line that is not metadata is numbers, and no column map names the columns.
+    #[error("{file}:{line}: the file has no header row (line {line} is {columns} numbers); name its columns by position in a column map (`--columns MAP.toml` with e.g. `1 = {{ to = \"time_s\" }}`, `2 = {{ to = \"elevator_rad\", unit = \"deg\" }}`), or add a header row starting with `time_s`")]
+    NoHeader {
+        file: String,
+        line: usize,
+        columns: usize,
+    },
     /// A column name appears twice in the header.
     #[error("{file}:{line}: column `{column}` appears more than once in the header")]
     DuplicateColumn {
