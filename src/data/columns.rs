@@ -10,6 +10,14 @@
 //! VTAS = { to = "airspeed_m_s", unit = "kts" }
 //! ```
 //!
+//! A schema column can also be a weighted sum of foreign columns, for a log that records what the schema
+//! has as one column in several (the left and right ailerons of a transport aircraft):
+//!
+//! ```toml
+//! [derived]
+//! aileron_rad = { from = { DAR = 0.5, DAL = -0.5 }, unit = "deg" }   # ½(right − left), then deg → rad
+//! ```
+//!
 //! Units: rad, deg, m, ft, m/s, ft/s, kts, g, m/s2, deg/s, rad/s, deg/s2, rad/s2, N, lbf, Pa, psf, s, ms,
 //! percent, and the spellings of autopilot logs: us, cdeg, mrad/s, mg, cm, cm/s, kt, km/h, mph, hPa, mbar.
 //! A unit must measure what its target column measures (`deg` cannot go to `airspeed_m_s`).
@@ -157,12 +165,46 @@ pub struct ColumnMap {
     pub file: PathBuf,
     /// The mappings, by foreign column name.
     pub columns: Vec<ColumnMapping>,
+    /// Schema columns formed as weighted sums of foreign columns (`[derived]`).
+    pub derived: Vec<DerivedColumn>,
+}
+
+/// A schema column that is a weighted sum of foreign columns, converted to SI after summing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DerivedColumn {
+    /// The schema column it becomes.
+    pub to: String,
+    /// The foreign columns (as named in the file, before any renaming) and their weights.
+    pub terms: Vec<(String, f64)>,
+    /// The unit of the sum as written in the map (the target's own unit when the map gives none).
+    pub unit: String,
+    /// Multiplier taking the weighted sum to SI.
+    pub factor: f64,
+}
+
+/// A derived column placed in a header: the indices of its terms among the file's columns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlacedDerivedColumn {
+    /// The schema column it becomes.
+    pub to: String,
+    /// (column index in the file, weight × the unit's factor).
+    pub terms: Vec<(usize, f64)>,
 }
 
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MapFile {
+    #[serde(default)]
     columns: BTreeMap<String, MapEntry>,
+    #[serde(default)]
+    derived: BTreeMap<String, DerivedEntry>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DerivedEntry {
+    from: BTreeMap<String, f64>,
+    unit: Option<String>,
 }
 
 #[derive(serde::Deserialize)]
@@ -197,41 +239,12 @@ impl ColumnMap {
         let mut columns = Vec::with_capacity(raw.columns.len());
         let mut errors = Vec::new();
         for (from, entry) in raw.columns {
-            let Some(dim) = Dimension::of_column(&entry.to) else {
-                let hint = did_you_mean(&entry.to, SCHEMA_COLUMNS.iter().copied())
-                    .map(|c| format!("; did you mean `{c}`?"))
-                    .unwrap_or_default();
-                errors.push(format!(
-                    "`{from}`: unknown target column `{}`{hint} (schema columns: {})",
-                    entry.to,
-                    SCHEMA_COLUMNS.join(", ")
-                ));
-                continue;
-            };
-            let (unit, unit_factor) = match &entry.unit {
-                None => (default_unit(dim).to_string(), 1.0),
-                Some(u) => match UNITS.iter().find(|x| x.0 == u.trim()) {
-                    Some(&(name, d, f)) if d == dim => (name.to_string(), f),
-                    Some(&(name, d, _)) => {
-                        errors.push(format!(
-                            "`{from}`: unit `{name}` measures {} but `{}` is {}",
-                            d.name(),
-                            entry.to,
-                            dim.name()
-                        ));
-                        continue;
-                    }
-                    None => {
-                        let hint = did_you_mean(u, UNITS.iter().map(|x| x.0))
-                            .map(|c| format!("; did you mean `{c}`?"))
-                            .unwrap_or_default();
-                        errors.push(format!(
-                            "`{from}`: unknown unit `{u}`{hint} (units: {})",
-                            unit_names().join(", ")
-                        ));
-                        continue;
-                    }
-                },
+            let (unit, unit_factor, dim) = match target_unit(&entry.to, entry.unit.as_deref()) {
+                Ok(u) => u,
+                Err(e) => {
+                    errors.push(format!("`{from}`: {e}"));
+                    continue;
+                }
             };
             let scale = entry.scale.unwrap_or(1.0);
             if !(scale.is_finite() && scale != 0.0) || (dim == Dimension::Time && scale < 0.0) {
@@ -247,12 +260,41 @@ impl ColumnMap {
                 factor: unit_factor * scale,
             });
         }
-        for (i, a) in columns.iter().enumerate() {
-            if let Some(b) = columns[..i].iter().find(|b| b.to == a.to) {
+        let mut derived = Vec::with_capacity(raw.derived.len());
+        for (to, entry) in raw.derived {
+            let (unit, factor, _) = match target_unit(&to, entry.unit.as_deref()) {
+                Ok(u) => u,
+                Err(e) => {
+                    errors.push(format!("[derived] `{to}`: {e}"));
+                    continue;
+                }
+            };
+            if entry.from.is_empty() || entry.from.values().any(|w| !w.is_finite()) {
                 errors.push(format!(
-                    "`{}` and `{}` both map to `{}`",
-                    b.from, a.from, a.to
+                    "[derived] `{to}`: `from` needs at least one column with a finite weight, \
+                     e.g. `from = {{ DAR = 0.5, DAL = -0.5 }}`"
                 ));
+                continue;
+            }
+            if to == "time_s" {
+                errors.push("[derived] `time_s`: time must be a column of the file".to_string());
+                continue;
+            }
+            derived.push(DerivedColumn {
+                to,
+                terms: entry.from.into_iter().collect(),
+                unit,
+                factor,
+            });
+        }
+        let targets: Vec<(&str, &str)> = columns
+            .iter()
+            .map(|m| (m.from.as_str(), m.to.as_str()))
+            .chain(derived.iter().map(|d| ("[derived]", d.to.as_str())))
+            .collect();
+        for (i, a) in targets.iter().enumerate() {
+            if let Some(b) = targets[..i].iter().find(|b| b.1 == a.1) {
+                errors.push(format!("`{}` and `{}` both map to `{}`", b.0, a.0, a.1));
             }
         }
         if !errors.is_empty() {
@@ -261,23 +303,31 @@ impl ColumnMap {
         Ok(ColumnMap {
             file: path.to_path_buf(),
             columns,
+            derived,
         })
     }
 
-    /// Applies the map to a header: the renamed header and each column's factor to SI.
-    /// Fails naming every mapped column the header lacks, and a target the file already has
-    /// under its own name.
+    /// Applies the map to a header: the renamed header, each column's factor to SI, and the derived
+    /// columns placed among the file's columns. Fails naming every mapped or summed column the header
+    /// lacks, and a target the file already has under its own name.
     pub fn apply_to_header(
         &self,
         names: &[String],
         file: &str,
-    ) -> Result<(Vec<String>, Vec<f64>), DataError> {
-        let missing: Vec<&str> = self
+    ) -> Result<(Vec<String>, Vec<f64>, Vec<PlacedDerivedColumn>), DataError> {
+        let mut missing: Vec<&str> = self
             .columns
             .iter()
-            .filter(|m| !names.contains(&m.from))
             .map(|m| m.from.as_str())
+            .chain(
+                self.derived
+                    .iter()
+                    .flat_map(|d| d.terms.iter().map(|t| t.0.as_str())),
+            )
+            .filter(|from| !names.iter().any(|n| n == from))
             .collect();
+        missing.sort_unstable();
+        missing.dedup();
         if !missing.is_empty() {
             return Err(DataError::MapColumnMissing {
                 file: file.to_string(),
@@ -290,6 +340,14 @@ impl ColumnMap {
                 present: names.join(", "),
             });
         }
+        let taken = |name: &str, by: &str| {
+            DataError::ColumnMap {
+            map: self.file.clone(),
+            message: format!(
+                "{file} already has a column `{name}`, and the map also maps {by} onto it; drop one of them"
+            ),
+        }
+        };
         let mut out = Vec::with_capacity(names.len());
         let mut factors = Vec::with_capacity(names.len());
         for name in names {
@@ -300,21 +358,66 @@ impl ColumnMap {
                 }
                 None => {
                     if let Some(m) = self.columns.iter().find(|m| &m.to == name) {
-                        return Err(DataError::ColumnMap {
-                            map: self.file.clone(),
-                            message: format!(
-                                "{file} already has a column `{name}`, and the map also maps `{}` onto it; \
-                                 drop one of them",
-                                m.from
-                            ),
-                        });
+                        return Err(taken(name, &format!("`{}`", m.from)));
                     }
                     out.push(name.clone());
                     factors.push(1.0);
                 }
             }
         }
-        Ok((out, factors))
+        let mut derived = Vec::with_capacity(self.derived.len());
+        for d in &self.derived {
+            if out.contains(&d.to) {
+                return Err(taken(&d.to, "a `[derived]` sum"));
+            }
+            let terms = d
+                .terms
+                .iter()
+                .map(|(from, w)| {
+                    let k = names.iter().position(|n| n == from).expect("checked above");
+                    (k, w * d.factor)
+                })
+                .collect();
+            derived.push(PlacedDerivedColumn {
+                to: d.to.clone(),
+                terms,
+            });
+        }
+        Ok((out, factors, derived))
+    }
+}
+
+/// The unit of a map entry onto schema column `to`: its name, its factor to SI and the target's dimension
+/// (the target's own unit when `unit` is `None`). The error says what is wrong, for the entry's message.
+fn target_unit(to: &str, unit: Option<&str>) -> Result<(String, f64, Dimension), String> {
+    let Some(dim) = Dimension::of_column(to) else {
+        let hint = did_you_mean(to, SCHEMA_COLUMNS.iter().copied())
+            .map(|c| format!("; did you mean `{c}`?"))
+            .unwrap_or_default();
+        return Err(format!(
+            "unknown target column `{to}`{hint} (schema columns: {})",
+            SCHEMA_COLUMNS.join(", ")
+        ));
+    };
+    match unit {
+        None => Ok((default_unit(dim).to_string(), 1.0, dim)),
+        Some(u) => match UNITS.iter().find(|x| x.0 == u.trim()) {
+            Some(&(name, d, f)) if d == dim => Ok((name.to_string(), f, dim)),
+            Some(&(name, d, _)) => Err(format!(
+                "unit `{name}` measures {} but `{to}` is {}",
+                d.name(),
+                dim.name()
+            )),
+            None => {
+                let hint = did_you_mean(u, UNITS.iter().map(|x| x.0))
+                    .map(|c| format!("; did you mean `{c}`?"))
+                    .unwrap_or_default();
+                Err(format!(
+                    "unknown unit `{u}`{hint} (units: {})",
+                    unit_names().join(", ")
+                ))
+            }
+        },
     }
 }
 
@@ -471,6 +574,36 @@ mod tests {
         );
         let e = refusal("[columns]\nA = { to = \"alpha_rad\" }\nB = { to = \"alpha_rad\" }\n");
         assert!(e.contains("both map to `alpha_rad`"), "{e}");
+    }
+
+    #[test]
+    fn derived_sums_are_checked_like_mapped_columns() {
+        let e =
+            refusal("[derived]\naileron = { from = { DAR = 0.5, DAL = -0.5 }, unit = \"deg\" }\n");
+        assert!(
+            e.contains("[derived] `aileron`: unknown target column") && e.contains("aileron_rad"),
+            "{e}"
+        );
+        let e = refusal("[derived]\naileron_rad = { from = {}, unit = \"deg\" }\n");
+        assert!(e.contains("at least one column"), "{e}");
+        let e = refusal(
+            "[columns]\nDA = { to = \"aileron_rad\" }\n[derived]\naileron_rad = { from = { DAR = 1.0 } }\n",
+        );
+        assert!(e.contains("both map to `aileron_rad`"), "{e}");
+        let m = parse(
+            "[derived]\naileron_rad = { from = { DAR = 0.5, DAL = -0.5 }, unit = \"deg\" }\n",
+        )
+        .unwrap();
+        let names = vec!["t".to_string(), "DAL".to_string()];
+        let e = m.apply_to_header(&names, "f.csv").unwrap_err().to_string();
+        assert!(
+            e.contains("names `DAR`, which the file does not have"),
+            "{e}"
+        );
+        let names = vec!["t".to_string(), "DAL".to_string(), "DAR".to_string()];
+        let (_, _, placed) = m.apply_to_header(&names, "f.csv").unwrap();
+        let deg = std::f64::consts::PI / 180.0;
+        assert_eq!(placed[0].terms, vec![(1, -0.5 * deg), (2, 0.5 * deg)]);
     }
 
     #[test]

@@ -16,7 +16,7 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
-use super::columns::ColumnMap;
+use super::columns::{ColumnMap, PlacedDerivedColumn};
 use super::error::{DataError, Warning};
 use super::record::FlightRecord;
 
@@ -227,6 +227,8 @@ struct Preamble {
     body_start: usize,
     /// Per column: the factor taking file values to SI (1 unless a column map converts it).
     factors: Vec<f64>,
+    /// Columns a column map forms as weighted sums of the file's columns (their values as read).
+    derived: Vec<PlacedDerivedColumn>,
 }
 
 /// Parses the metadata (`#` lines and blank lines before the header) and the header.
@@ -267,7 +269,7 @@ fn parse_preamble(
     } else {
         parse_header(&bytes[header_span.0..header_span.1], file, line)?
     };
-    let (names, factors) = match map {
+    let (names, factors, derived) = match map {
         Some(m) => m.apply_to_header(&names, file).map_err(|e| match e {
             DataError::MapColumnMissing {
                 file, map, columns, ..
@@ -291,7 +293,7 @@ fn parse_preamble(
         }
         None => {
             let n = names.len();
-            (names, vec![1.0; n])
+            (names, vec![1.0; n], Vec::new())
         }
     };
     // A headerless file's first row is data: the body starts there, after an implied header line.
@@ -316,6 +318,7 @@ fn parse_preamble(
         header_line,
         body_start,
         factors,
+        derived,
     })
 }
 
@@ -384,6 +387,16 @@ fn assemble(
             dst.extend_from_slice(&src);
         }
     }
+    let derived: Vec<(String, Vec<f64>)> = pre
+        .derived
+        .iter()
+        .map(|d| {
+            let values = (0..total)
+                .map(|k| d.terms.iter().map(|&(c, w)| w * columns[c][k]).sum())
+                .collect();
+            (d.to.clone(), values)
+        })
+        .collect();
     for (values, &factor) in columns.iter_mut().zip(&pre.factors) {
         if factor != 1.0 {
             values.iter_mut().for_each(|v| *v *= factor);
@@ -411,6 +424,7 @@ fn assemble(
             rec.columns.push((name, values));
         }
     }
+    rec.columns.extend(derived);
     Ok(rec)
 }
 
@@ -812,6 +826,21 @@ mod tests {
                 }
             ),
             "{e}"
+        );
+        // A weighted sum of columns (an aileron as ½(right − left), in degrees).
+        let sums = ColumnMap::parse(
+            "[columns]\n1 = { to = \"time_s\" }\n[derived]\n\
+             aileron_rad = { from = { 2 = 0.5, 3 = -0.5 }, unit = \"deg\" }\n",
+            Path::new("m.toml"),
+        )
+        .unwrap();
+        let got = parse_csv_bytes_mapped(b"0 4 -2\n0.1 1 1\n", "f", Some(&sums)).unwrap();
+        let aileron = got.column("aileron_rad").unwrap();
+        assert!((aileron[0] - 3f64.to_radians()).abs() < 1e-15 && aileron[1] == 0.0);
+        assert_eq!(
+            got.column("2"),
+            Some(&[4.0, 1.0][..]),
+            "the summed columns stay"
         );
         // A comma-separated headerless file is named by position too.
         let commas = headerless.replace("   ", ",").replace([' ', '\t'], ",");
