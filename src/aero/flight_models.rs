@@ -29,7 +29,13 @@
 //! α̇_g = −α_g V/L_w (white process noise drives it), ξ̇ = (α_g − ξ)/τ_q, τ_q = 4b/(πV). The aerodynamics see
 //! α + α_g and the pitch-rate gust q + q_g, q_g = k_q (α_g − ξ)/τ_q, i.e. k_q s/(1 + τ_q s) α_g, the rotary
 //! term MIL-F-8785C derives from the same vertical gust; α̇, γ and the kinematics stay inertial; the vane
-//! reads α + α_g. The gain k_q (`gust_q_gain`) is estimated: whether the gust's pitch rate reaches the
+//! reads α + α_g. Lift and drag then act in the air's axes, rotated by α_g against the inertial velocity, so
+//! V̇ and α̇ take the body forces X, Z projected on the inertial velocity: V̇ = (X cos α + Z sin α)/m − g sin γ,
+//! α̇ = (Z cos α − X sin α)/(mV) + q + g cos γ/V (the wind-axis form above when α_g = 0). The form above with
+//! α + α_g throughout missed the lift's push along the path, L sin α_g: on pa28 records flown through a
+//! first-order vertical gust of 0.9 m/s alone, filter error then had C_mq 36 % off (6.6 % with it; C_Lα and
+//! C_mα, 36 % and 22 % off either way on ideal sensors, are within 3.1 % with the logger's sensor noise).
+//! The gain k_q (`gust_q_gain`) is estimated: whether the gust's pitch rate reaches the
 //! aerodynamics, and with which sign, is the atmosphere's and the airframe's, not the model's to assume.
 //! JSBSim's milspec turbulence has it (std 0.0056 rad/s on the c310 in light turbulence, a quarter of a
 //! ±0.1 doublet's pitch rate); without it, filter error put C_mδe 18–21 % and C_mq 14–19 % low on five gusty
@@ -183,19 +189,29 @@ pub fn longitudinal(c: &Constants, theta: &[f64], x: &[f64], u: &LonInputs) -> L
     let g = c.g_m_s2;
     let gamma = pitch - alpha_inertial;
     let da2 = (alpha - c.alpha_ref_rad).powi(2);
-    // C_L without its α̇ term, then α̇ solved from α̇ (1 + q̄S C_Lα̇ k/(mV)) = rest.
+    // The aerodynamic force acts in the air's wind axes (α_air = α + α_g), the kinematics in the inertial
+    // velocity's: the body forces X, Z are projected onto the inertial velocity (V̇) and its normal (α̇). In
+    // still air this is the usual wind-axis form, V̇ = (T cos(α + ε) − D)/m − g sin γ and
+    // α̇ = (−L − T sin(α + ε))/(mV) + q + g cos γ/V; in a gust the lift leans by α_g and pushes along the
+    // flight path (L sin α_g, a twentieth of the weight for a 3° gust).
+    let (sg, cg) = gust.alpha_rad.sin_cos();
+    let (sa, ca) = alpha.sin_cos();
+    // C_L without its α̇ term, then α̇ solved from α̇ (1 + q̄S C_Lα̇ k cos α_g/(mV)) = rest.
     let cl_static = theta[CL0]
         + theta[CLA] * alpha
         + theta[CLQ] * q * k
         + theta[CLDE] * de
         + theta[CLV] * vhat
         + theta[CLA2] * da2;
-    let rest = (-qbar_s * cl_static - t * (alpha + eps).sin()) / (m * v)
+    let cd = theta[CD0] + theta[CDA] * alpha + theta[CDDE] * de + theta[CDV] * vhat;
+    // Thrust along the body's x axis inclined by ε; its normal and tangential shares of the inertial velocity.
+    let thrust_normal = -t * (alpha_inertial + eps).sin();
+    let thrust_along = t * (alpha_inertial + eps).cos();
+    let rest = (-qbar_s * (cl_static * cg + cd * sg) + thrust_normal) / (m * v)
         + q_inertial
         + g * gamma.cos() / v;
-    let alphadot = rest / (1.0 + qbar_s * theta[CLAD] * k / (m * v));
+    let alphadot = rest / (1.0 + qbar_s * theta[CLAD] * k * cg / (m * v));
     let cl = cl_static + theta[CLAD] * alphadot * k;
-    let cd = theta[CD0] + theta[CDA] * alpha + theta[CDDE] * de + theta[CDV] * vhat;
     let cm = theta[CM0]
         + theta[CMA] * alpha
         + theta[CMQ] * q * k
@@ -203,9 +219,8 @@ pub fn longitudinal(c: &Constants, theta: &[f64], x: &[f64], u: &LonInputs) -> L
         + theta[CMAD] * alphadot * k
         + theta[CMV] * vhat
         + theta[CMA2] * da2;
-    let vdot = (t * (alpha + eps).cos() - qbar_s * cd) / m - g * gamma.sin();
+    let vdot = (thrust_along + qbar_s * (cl * sg - cd * cg)) / m - g * gamma.sin();
     let qdot = (qbar_s * cbar * cm + t * c.thrust_moment_arm_m) / c.mass.iyy_kg_m2;
-    let (sa, ca) = alpha.sin_cos();
     let ax = (-qbar_s * cd * ca + qbar_s * cl * sa + t * eps.cos()) / m;
     let az = (-qbar_s * cd * sa - qbar_s * cl * ca - t * eps.sin()) / m;
     LonEval {

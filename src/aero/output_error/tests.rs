@@ -248,3 +248,51 @@ fn the_vertical_gust_states_give_the_dryden_rotary_term_and_scale_length() {
     assert!((VerticalGust::scale_length_m(Some(6000.0 * ft)) - 1750.0 * ft).abs() < 1e-9);
     assert!((VerticalGust::scale_length_m(None) - 1750.0 * ft).abs() < 1e-9);
 }
+
+#[test]
+fn in_a_gust_the_flight_path_equations_are_the_body_forces_projected_on_the_inertial_velocity() {
+    // The aerodynamics act in the air's axes (α + α_g), the kinematics in the inertial velocity's: V̇ and α̇
+    // must be the body specific forces (a_x, a_z at the CG, which the model also outputs) projected on the
+    // inertial velocity and its normal, V̇ = a_x cos α + a_z sin α − g sin γ and
+    // α̇ = (a_z cos α − a_x sin α)/V + q + g cos γ/V. Held by a 3° gust with thrust on an inclined line and
+    // C_Lα̇ free. The wind-axis form with α + α_g throughout (before) missed the lift's push along the path,
+    // L sin α_g (about 0.5 m/s² here), and failed it.
+    use crate::aero::flight_models::{longitudinal, LonInputs};
+    let mut c = constants();
+    c.thrust_inclination_rad = 0.04;
+    let names = LONGITUDINAL_PARAMETERS;
+    let mut theta = vec![0.0; names.len()];
+    for (n, v) in [
+        ("CL_0", 0.3),
+        ("CL_alpha", 5.0),
+        ("CL_alphadot", 2.0),
+        ("CD_0", 0.03),
+        ("CD_alpha", 0.2),
+        ("Cm_alpha", -1.0),
+        ("Cm_q", -12.0),
+    ] {
+        theta[names.iter().position(|p| *p == n).unwrap()] = v;
+    }
+    let (v, alpha, pitch, q, alpha_g) = (55.0, 0.06, 0.08, 0.02, 3f64.to_radians());
+    let x = [v, alpha, pitch, q, alpha_g, 0.0];
+    let u = LonInputs {
+        elevator_rad: -0.02,
+        thrust_n: 1800.0,
+        density_kg_m3: 1.1,
+    };
+    let e = longitudinal(&c, &theta, &x, &u);
+    let [ax, az] = e.accel_cg;
+    let (g, gamma) = (c.g_m_s2, pitch - alpha);
+    let vdot = ax * alpha.cos() + az * alpha.sin() - g * gamma.sin();
+    let alphadot = (az * alpha.cos() - ax * alpha.sin()) / v + q + g * gamma.cos() / v;
+    assert!(
+        (e.dx[0] - vdot).abs() < 1e-12,
+        "V̇ {} against {vdot}",
+        e.dx[0]
+    );
+    assert!(
+        (e.dx[1] - alphadot).abs() < 1e-12,
+        "α̇ {} against {alphadot}",
+        e.dx[1]
+    );
+}
