@@ -182,6 +182,17 @@ pub struct DerivedColumn {
     pub factor: f64,
 }
 
+/// A header after the map: the schema names, each column's factor to SI, and the derived columns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MappedHeader {
+    /// The column names, renamed where the map says.
+    pub names: Vec<String>,
+    /// Per column: the factor taking file values to SI.
+    pub factors: Vec<f64>,
+    /// The derived columns, placed among the file's columns.
+    pub derived: Vec<PlacedDerivedColumn>,
+}
+
 /// A derived column placed in a header: the indices of its terms among the file's columns.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlacedDerivedColumn {
@@ -310,11 +321,7 @@ impl ColumnMap {
     /// Applies the map to a header: the renamed header, each column's factor to SI, and the derived
     /// columns placed among the file's columns. Fails naming every mapped or summed column the header
     /// lacks, and a target the file already has under its own name.
-    pub fn apply_to_header(
-        &self,
-        names: &[String],
-        file: &str,
-    ) -> Result<(Vec<String>, Vec<f64>, Vec<PlacedDerivedColumn>), DataError> {
+    pub fn apply_to_header(&self, names: &[String], file: &str) -> Result<MappedHeader, DataError> {
         let mut missing: Vec<&str> = self
             .columns
             .iter()
@@ -383,7 +390,11 @@ impl ColumnMap {
                 terms,
             });
         }
-        Ok((out, factors, derived))
+        Ok(MappedHeader {
+            names: out,
+            factors,
+            derived,
+        })
     }
 }
 
@@ -601,7 +612,7 @@ mod tests {
             "{e}"
         );
         let names = vec!["t".to_string(), "DAL".to_string(), "DAR".to_string()];
-        let (_, _, placed) = m.apply_to_header(&names, "f.csv").unwrap();
+        let placed = m.apply_to_header(&names, "f.csv").unwrap().derived;
         let deg = std::f64::consts::PI / 180.0;
         assert_eq!(placed[0].terms, vec![(1, -0.5 * deg), (2, 0.5 * deg)]);
     }

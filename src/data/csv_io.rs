@@ -270,20 +270,23 @@ fn parse_preamble(
         parse_header(&bytes[header_span.0..header_span.1], file, line)?
     };
     let (names, factors, derived) = match map {
-        Some(m) => m.apply_to_header(&names, file).map_err(|e| match e {
-            DataError::MapColumnMissing {
-                file, map, columns, ..
-            } if headerless => DataError::MapColumnMissing {
-                file,
-                map,
-                columns,
-                present: format!(
-                    "1 to {} by position, as it has no header row (line {line} is numbers)",
-                    names.len()
-                ),
-            },
-            e => e,
-        })?,
+        Some(m) => {
+            let h = m.apply_to_header(&names, file).map_err(|e| match e {
+                DataError::MapColumnMissing {
+                    file, map, columns, ..
+                } if headerless => DataError::MapColumnMissing {
+                    file,
+                    map,
+                    columns,
+                    present: format!(
+                        "1 to {} by position, as it has no header row (line {line} is numbers)",
+                        names.len()
+                    ),
+                },
+                e => e,
+            })?;
+            (h.names, h.factors, h.derived)
+        }
         None if headerless => {
             return Err(DataError::NoHeader {
                 file: file.to_string(),
