@@ -51,6 +51,14 @@ fn data_args(dir: &Path) -> Vec<std::ffi::OsString> {
     args
 }
 
+/// The derivatives the tests judge, under flightid's name and the truth's.
+const PITCH_AND_LIFT: [(&str, &str); 4] = [
+    ("Cm_alpha", "Cm_alpha"),
+    ("Cm_q", "Cm_q"),
+    ("Cm_de", "Cm_de"),
+    ("CL_alpha", "CL_alpha"),
+];
+
 /// Relative errors of the named estimates against the truth, printed; `value_of` reads an estimate.
 fn errors(
     truth: &serde_json::Value,
@@ -107,14 +115,8 @@ fn built_in_model_finds_the_hfb320_derivatives_in_turbulence_once_the_speed_chec
             method == "oe",
             "{method}: {notes}"
         );
-        let names = [
-            ("Cm_alpha", "Cm_alpha"),
-            ("Cm_q", "Cm_q"),
-            ("Cm_de", "Cm_de"),
-            ("CL_alpha", "CL_alpha"),
-        ];
         eprintln!("{method}:");
-        for e in errors(truth, &names, |n| {
+        for e in errors(truth, &PITCH_AND_LIFT, |n| {
             fit["derivatives"][n]["value"].as_f64().unwrap()
         }) {
             assert!(e.abs() < tolerance, "{method}: {e}");
@@ -230,13 +232,7 @@ fn the_books_headerless_text_layout_is_read_by_column_position() {
     );
     let fit = common::read_json(&out);
     let truth = &common::read_json(&dir.join("hfb.truth.json"))["flightid_equivalent"];
-    let names = [
-        ("Cm_alpha", "Cm_alpha"),
-        ("Cm_q", "Cm_q"),
-        ("Cm_de", "Cm_de"),
-        ("CL_alpha", "CL_alpha"),
-    ];
-    for e in errors(truth, &names, |n| {
+    for e in errors(truth, &PITCH_AND_LIFT, |n| {
         fit["derivatives"][n]["value"].as_f64().unwrap()
     }) {
         assert!(e.abs() < 0.05, "shipped map and airframe: {e}");
