@@ -9,8 +9,7 @@
 //! - gain: `A = ∂f/∂x`, `C = ∂h/∂x` at the record's initial state and first input (central
 //!   differences; exact for a linear model), `P` the stabilising solution of
 //!   `A P + P Aᵀ − P Cᵀ (Δt R)⁻¹ C P + F Fᵀ = 0` ([`super::riccati`]), `K = P Cᵀ R⁻¹`
-//!   (Jategaonkar §5.3, the steady-state filter of a time-invariant or linearised system), with R
-//!   the innovations' full covariance ([`gain_correlated`]);
+//!   (Jategaonkar §5.3, the steady-state filter of a time-invariant or linearised system);
 //! - filter: prediction `ỹ_k = h(x̃_k, u_k) + b_y`, innovation `v_k = z_k − ỹ_k`, correction
 //!   `x̂_k = x̃_k + K v_k`, then `x̃_{k+1}` by integrating `f` from `x̂_k` over the sample
 //!   interval with the nonlinear model (the "mixed" formulation for nonlinear systems: nonlinear
@@ -37,7 +36,6 @@
 //! record without process noise keeps `q` on its bound, `K = 0`, and the filter is the output-error
 //! simulation: FEM gives the output-error answer.
 
-use faer::prelude::*;
 use faer::Mat;
 
 use super::integrate::{check_output, Propagation};
@@ -88,34 +86,13 @@ pub(crate) fn linearise(
 }
 
 /// The steady-state gain for process-noise variances `q` (per state), innovation variances `r`
-/// (per output, uncorrelated) and sample interval `dt_s`: [`gain_correlated`] with a diagonal R.
+/// (per output) and sample interval `dt_s` (module doc), with the largest diagonal entry of `K C`
+/// (the optimiser keeps it ≤ 1). `Err` when no stabilising solution exists.
 pub(crate) fn gain(
     a: &Mat<f64>,
     c: &Mat<f64>,
     q: &[f64],
     r: &[f64],
-    dt_s: f64,
-) -> Result<Gain, SimError> {
-    let m = c.nrows();
-    if r.len() < m {
-        return gain_correlated(a, c, q, None, dt_s);
-    }
-    let r = Mat::<f64>::from_fn(m, m, |i, j| if i == j { r[i] } else { 0.0 });
-    gain_correlated(a, c, q, Some(&r), dt_s)
-}
-
-/// The steady-state gain for process-noise variances `q` (per state), the innovation covariance `r`
-/// (m×m; `None` before any innovations exist) and sample interval `dt_s` (module doc), with the largest
-/// diagonal entry of `K C` (the optimiser keeps it ≤ 1). `Err` when no stabilising solution exists.
-///
-/// The innovations of outputs that see the same state error are correlated (a gust's α reaches the α
-/// vane and, through the lift, the normal accelerometer in the same sample): the filter's gain
-/// `K = P Cᵀ R⁻¹` and its Riccati equation take the full R, or they count that state's evidence twice.
-pub(crate) fn gain_correlated(
-    a: &Mat<f64>,
-    c: &Mat<f64>,
-    q: &[f64],
-    r: Option<&Mat<f64>>,
     dt_s: f64,
 ) -> Result<Gain, SimError> {
     let (n, m) = (a.nrows(), c.nrows());
@@ -125,12 +102,12 @@ pub(crate) fn gain_correlated(
             kc_max: 0.0,
         })
     };
-    let Some(r) = r else {
+    if q.iter().all(|v| *v == 0.0) && r.len() < m {
         // before any innovation variance (the first simulation of a fit): no filter yet
         return no_gain();
-    };
+    }
     let qm = Mat::<f64>::from_fn(n, n, |i, j| if i == j { q[i] } else { 0.0 });
-    let r_c = Mat::<f64>::from_fn(m, m, |i, j| dt_s * r[(i, j)]);
+    let r_c = Mat::<f64>::from_fn(m, m, |i, j| if i == j { dt_s * r[i] } else { 0.0 });
     if q.iter().all(|v| *v == 0.0) {
         // Without process noise a stable model needs no correction (P = 0: the filter is the simulation).
         // An unstable one does: the stabilising solution of the Riccati equation with Q → 0⁺ keeps a gain on
@@ -147,10 +124,9 @@ pub(crate) fn gain_correlated(
     let p = care_filter(a, c, &qm, &r_c).ok_or_else(|| {
         SimError::Failed("the filter's Riccati equation has no stabilising solution".into())
     })?;
-    let r_inv = r.partial_piv_lu().solve(Mat::<f64>::identity(m, m));
-    let kmat = &p * c.transpose() * &r_inv;
+    let pct = &p * c.transpose();
     let k: Vec<Vec<f64>> = (0..n)
-        .map(|i| (0..m).map(|o| kmat[(i, o)]).collect())
+        .map(|i| (0..m).map(|o| pct[(i, o)] / r[o]).collect())
         .collect();
     let mut kc_max = 0.0_f64;
     for (i, ki) in k.iter().enumerate() {
@@ -241,44 +217,4 @@ pub(crate) fn filter(
         }
     }
     Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Two outputs measuring one random-walk state, y₁ = x + n₁, y₂ = x + n₂: their innovations share the
-    /// state's prediction error, R = P 1 1ᵀ + diag(v₁, v₂), and the filter must see what one output of the
-    /// fused noise v = 1/(1/v₁ + 1/v₂) sees (the matrix inversion lemma: 1ᵀ R⁻¹ 1 = 1/(P + v)). With the
-    /// full R both give K C = P/(P + v); a diagonal R counts the state's evidence twice and gives another
-    /// gain.
-    #[test]
-    fn correlated_innovations_of_two_outputs_give_the_fused_outputs_gain() {
-        let (q, dt, v1, v2): (f64, f64, f64, f64) = (2.0, 0.02, 0.01, 0.03);
-        let v = 1.0 / (1.0 / v1 + 1.0 / v2);
-        // P² = q Δt (P + v), the steady state of ṗ = q − P²/(Δt (P + v)) (module doc's Riccati equation)
-        let p = 0.5 * (q * dt + (q * q * dt * dt + 4.0 * q * dt * v).sqrt());
-        let a = Mat::<f64>::zeros(1, 1);
-        let one = gain(&a, &Mat::from_fn(1, 1, |_, _| 1.0), &[q], &[p + v], dt).unwrap();
-        assert!((one.kc_max - p / (p + v)).abs() < 1e-9, "{}", one.kc_max);
-        let c2 = Mat::<f64>::from_fn(2, 1, |_, _| 1.0);
-        let r2 = Mat::<f64>::from_fn(2, 2, |i, j| {
-            p + if i != j {
-                0.0
-            } else if i == 0 {
-                v1
-            } else {
-                v2
-            }
-        });
-        let two = gain_correlated(&a, &c2, &[q], Some(&r2), dt).unwrap();
-        assert!(
-            (two.kc_max - one.kc_max).abs() < 1e-9,
-            "{} against {}",
-            two.kc_max,
-            one.kc_max
-        );
-        let diagonal = gain(&a, &c2, &[q], &[p + v1, p + v2], dt).unwrap();
-        assert!(diagonal.kc_max > one.kc_max + 0.05, "{}", diagonal.kc_max);
-    }
 }

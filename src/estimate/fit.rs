@@ -248,7 +248,7 @@ pub fn fit(
         hold: options.hold,
         max_step_s: max_step_s.clone(),
         method,
-        gain_noise: RwLock::new(None),
+        gain_noise: RwLock::new(Vec::new()),
     };
     if options.method == Method::Fem {
         let Some(sm) = model.state_model() else {
@@ -312,9 +312,9 @@ struct Problem<'a> {
     hold: InputHold,
     max_step_s: Vec<f64>,
     method: Method,
-    /// Filter error: the innovation covariance the gain is computed with, m×m (held fixed during a
-    /// parameter update, replaced by the relaxation step; `None` before the first innovations).
-    gain_noise: RwLock<Option<Mat<f64>>>,
+    /// Filter error: the innovation variances the gain is computed with (held fixed during a
+    /// parameter update, replaced by the relaxation step).
+    gain_noise: RwLock<Vec<f64>>,
 }
 
 /// Where the iterations ended.
@@ -467,7 +467,7 @@ impl Problem<'_> {
             .read()
             .map_err(|_| SimError::Failed("the filter's noise estimate is unavailable".into()))?
             .clone();
-        fem::gain_correlated(&a, &c, &q, noise.as_ref(), rec.median_dt_s())
+        fem::gain(&a, &c, &q, &noise, rec.median_dt_s())
     }
 
     /// Filter error: F–R compensation of φ's process-noise variances for R moving from `old` to
@@ -574,7 +574,7 @@ impl Problem<'_> {
         let mut pred = self.predict_all(&phi).map_err(start_diverges)?;
         let mut res = self.residuals(&pred);
         let noise = self.noise(&res);
-        self.set_gain_noise(&res, &noise);
+        self.set_gain_noise(&noise);
         if self.method == Method::Fem {
             // q = 0 at the start: the filter is the simulation, the first R is the output-error R
             pred = self.predict_all(&phi).map_err(start_diverges)?;
@@ -606,32 +606,11 @@ impl Problem<'_> {
         })
     }
 
-    /// The innovation covariance the filter's gain uses from now on: the variances `noise` (the
-    /// likelihood's R) on the diagonal, the residuals' cross-covariances off it.
-    fn set_gain_noise(&self, res: &Predictions, noise: &[f64]) {
-        let cov = self.cross_covariance(res, noise);
+    /// The innovation variances the filter's gain uses from now on.
+    fn set_gain_noise(&self, noise: &[f64]) {
         if let Ok(mut g) = self.gain_noise.write() {
-            *g = Some(cov);
+            *g = noise.to_vec();
         }
-    }
-
-    /// The residuals' covariance across outputs, with `variances` on its diagonal; each correlation is
-    /// held within ±0.99 so that the matrix stays positive definite.
-    fn cross_covariance(&self, res: &Predictions, variances: &[f64]) -> Mat<f64> {
-        let m = variances.len();
-        let n: usize = res.iter().map(|rr| rr.first().map_or(0, Vec::len)).sum();
-        let n = n.max(1) as f64;
-        Mat::<f64>::from_fn(m, m, |i, j| {
-            if i == j {
-                return variances[i];
-            }
-            let s: f64 = res
-                .iter()
-                .map(|rr| rr[i].iter().zip(&rr[j]).map(|(a, b)| a * b).sum::<f64>())
-                .sum();
-            let bound = 0.99 * (variances[i] * variances[j]).sqrt();
-            (s / n).clamp(-bound, bound)
-        })
     }
 }
 
@@ -723,8 +702,7 @@ impl optimise::Problem for Relaxed<'_, '_> {
         if problem.method == Method::Fem {
             let mut compensated = phi.clone();
             problem.compensate(&mut compensated, &self.noise, &new_noise);
-            let old_gain_noise = problem.gain_noise.read().ok().and_then(|g| g.clone());
-            problem.set_gain_noise(&at.res, &new_noise);
+            problem.set_gain_noise(&new_noise);
             // with the new R the gain may break diag(KC) ≤ 1: scale the process noise back by the
             // least common factor that restores it
             problem.scale_into_constraint(&mut compensated);
@@ -737,9 +715,7 @@ impl optimise::Problem for Relaxed<'_, '_> {
                 Err(_) => match problem.predict_all(phi) {
                     Ok(p) => at.pred = p,
                     Err(_) => {
-                        if let Ok(mut g) = problem.gain_noise.write() {
-                            *g = old_gain_noise;
-                        }
+                        problem.set_gain_noise(&self.noise);
                         return Ok(optimise::Relaxation::Stop);
                     }
                 },
