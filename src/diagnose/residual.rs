@@ -339,6 +339,15 @@ mod tests {
     }
 
     #[test]
+    fn every_segment_is_split_at_its_middle_into_the_two_halves() {
+        use super::segment_halves;
+        // segments listed as `ReplayCase::segments` lists them (the first at 0), one of odd length
+        let [first, second] = segment_halves(&[0, 100, 251], 300);
+        assert_eq!(first, vec![(0, 50), (100, 175), (251, 275)]);
+        assert_eq!(second, vec![(50, 100), (175, 251), (275, 300)]);
+    }
+
+    #[test]
     fn the_held_out_share_matches_a_direct_leave_one_out() {
         // pseudo-random residuals and change; three segments of unequal length
         let mut state = 12345u64;
