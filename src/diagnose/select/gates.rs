@@ -10,7 +10,7 @@ use crate::diagnose::{Candidate, DiagnoseOptions};
 /// χ²₁ point at 1 % (one parameter, the change's size, sized on the other half).
 pub(in crate::diagnose) const HELD_OUT_CHI2: f64 = 6.63;
 
-/// Why a candidate that a later stage adds (output error did not pass it) is not confirmed by a split of the
+/// Why a candidate that a later stage adds (output error did not name it) is not confirmed by a split of the
 /// training record in time (None: it is, or the split cannot test it). The record is split into the first and
 /// the second half of every segment (`residual::segment_halves`); along the fitted change, residual `r_base`
 /// (the model without the candidate) to `r_fit` (with it), its size is estimated on one half and the cost it

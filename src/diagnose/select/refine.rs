@@ -334,7 +334,7 @@ impl<'e> Replacement<'_, 'e> {
 /// Regression*, 2nd ed., §3.3: the replacement step, here after the weighting of the residuals has changed). In
 /// gusts output error named `Cn_r` ×2.1 ahead of a hidden `Cn_dr` ×0.53 (ΔBIC −134 against −101, both
 /// significant); on the filter's innovations `Cn_r` was no longer determined and went, and `Cn_dr` was never
-/// fitted again. Output error did not pass these alternatives, so each must also be confirmed on a half of the
+/// fitted again. Output error did not name these alternatives, so each must also be confirmed on a half of the
 /// record it was not sized on (`gates::unconfirmed_in_time`). Returns the fit of the model with the named
 /// alternatives, None when none was named.
 pub(in crate::diagnose) fn substitute_dropped<'e>(
@@ -384,7 +384,7 @@ pub(in crate::diagnose) fn substitute_dropped<'e>(
             let Ok((o, a)) = out else { continue };
             let mut c = ctx.candidate(catalogue[j], &o, true, resolution[j]);
             c.rejected_because = rejection(&c, catalogue[j], &o, *state.cost, opts, &masks[j]);
-            // Output error did not pass it: it must also hold on a half of the record it was not sized on.
+            // Output error did not name it: it must also hold on a half of the record it was not sized on.
             if c.rejected_because.is_none() {
                 if base.is_none() {
                     let r =
