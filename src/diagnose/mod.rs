@@ -162,7 +162,9 @@ pub struct Candidate {
     pub full_fit: bool,
     /// Leave-one-segment-out cross-validation of the fitted change on the training record: the cost it
     /// removes on each held-out segment when its size is estimated from the others, over the cost it removes
-    /// there in the fit (`None` where no segment can be held out, and for the fits after forward selection).
+    /// there in the fit (`None` where no segment can be held out, and for the fits after forward selection). For a
+    /// cause the filter error refit adds, the same share between the first and second halves of the segments
+    /// (`None` where neither half can be held out).
     pub held_out_share: Option<f64>,
 }
 

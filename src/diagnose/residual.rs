@@ -165,8 +165,8 @@ pub fn effective_n(r: &[f64], m: usize) -> f64 {
         .sum()
 }
 
-/// Least share of the change's weight Σ dᵀd that the other segments must carry for a segment to be held out
-/// in [`held_out_share`]: a segment the others barely inform is not tested.
+/// Least share of the change's weight Σ dᵀd that the other segments (folds) must carry for a segment to be held
+/// out in [`held_out_share`] ([`cross_validated`]): a segment the others barely inform is not tested.
 const HELD_OUT_MIN_REST: f64 = 0.25;
 
 /// Least share of the change's weight that a held-out segment must carry to count.
@@ -187,25 +187,77 @@ pub fn held_out_share(
     segments: &[usize],
     len: usize,
 ) -> Option<f64> {
-    if len == 0 || r_base.len() != r_fit.len() || !r_base.len().is_multiple_of(len) {
-        return None;
-    }
-    // [start, end) of every segment; a start listed at 0 gives an empty first pair, dropped
-    let bounds: Vec<(usize, usize)> = std::iter::once(0)
+    let folds: Vec<Vec<(usize, usize)>> = segment_bounds(segments, len)
+        .map(|bounds| vec![bounds])
+        .collect();
+    cross_validated(r_base, r_fit, &folds, len).and_then(HeldOut::share)
+}
+
+/// [start, end) of every segment of a record of `len` samples whose segments start at `segments` (a start
+/// listed at 0 gives an empty first pair, dropped).
+fn segment_bounds(segments: &[usize], len: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
+    std::iter::once(0)
         .chain(segments.iter().copied())
         .zip(segments.iter().copied().chain(std::iter::once(len)))
         .filter(|(b, e)| b < e)
-        .collect();
-    // per segment: dᵀd, dᵀr
-    let sums: Vec<(f64, f64)> = bounds
+}
+
+/// The record split in time into two folds for [`cross_validated`]: the first half of every segment, and the
+/// second half of every segment (`segments`: the segment starts, `len` samples). Every maneuver lies in both
+/// folds, so a change that any maneuver excites is informed in both; the two folds are different stretches
+/// of the flight, seconds apart within each maneuver, so they meet different gusts.
+pub fn segment_halves(segments: &[usize], len: usize) -> [Vec<(usize, usize)>; 2] {
+    let mut folds = [Vec::new(), Vec::new()];
+    for (b, e) in segment_bounds(segments, len) {
+        let mid = b + (e - b) / 2;
+        folds[0].push((b, mid));
+        folds[1].push((mid, e));
+    }
+    folds
+}
+
+/// What a fitted change does on the parts of the record held out from its sizing ([`cross_validated`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldOut {
+    /// Σ over the held-out folds g of ‖r_g‖² − ‖r_g + t₋g d_g‖²: the cost the change, sized from the other
+    /// folds, removes where it was not sized.
+    pub reduction: f64,
+    /// The cost the fit itself (t = 1) removes on the same folds.
+    pub in_sample: f64,
+}
+
+impl HeldOut {
+    /// The held-out reduction over the in-sample one (None when the fit removes nothing there).
+    pub fn share(self) -> Option<f64> {
+        (self.in_sample > 0.0).then(|| self.reduction / self.in_sample)
+    }
+}
+
+/// Leave-one-fold-out cross-validation of a fitted change along its direction d = r_fit − r_base (see
+/// [`held_out_share`]); each fold is a set of [start, end) sample ranges of every channel (`len` samples per
+/// channel, channel-major). A fold is held out only when the other folds carry at least
+/// [`HELD_OUT_MIN_REST`] of Σ dᵀd and it carries [`HELD_OUT_MIN_OWN`]. `None` when no fold can be held out.
+pub fn cross_validated(
+    r_base: &[f64],
+    r_fit: &[f64],
+    folds: &[Vec<(usize, usize)>],
+    len: usize,
+) -> Option<HeldOut> {
+    if len == 0 || r_base.len() != r_fit.len() || !r_base.len().is_multiple_of(len) {
+        return None;
+    }
+    // per fold: dᵀd, dᵀr
+    let sums: Vec<(f64, f64)> = folds
         .iter()
-        .map(|&(b, e)| {
+        .map(|ranges| {
             let (mut dd, mut dr) = (0.0, 0.0);
-            for c in 0..r_base.len() / len {
-                for k in c * len + b..c * len + e {
-                    let d = r_fit[k] - r_base[k];
-                    dd += d * d;
-                    dr += d * r_base[k];
+            for &(b, e) in ranges {
+                for c in 0..r_base.len() / len {
+                    for k in c * len + b..c * len + e.min(len) {
+                        let d = r_fit[k] - r_base[k];
+                        dd += d * d;
+                        dr += d * r_base[k];
+                    }
                 }
             }
             (dd, dr)
@@ -217,17 +269,22 @@ pub fn held_out_share(
     if total_dd <= 0.0 {
         return None;
     }
-    let (mut held_out, mut in_sample) = (0.0, 0.0);
+    let mut out = HeldOut {
+        reduction: 0.0,
+        in_sample: 0.0,
+    };
+    let mut tested = false;
     for &(dd, dr) in &sums {
         let rest = total_dd - dd;
         if rest < HELD_OUT_MIN_REST * total_dd || dd < HELD_OUT_MIN_OWN * total_dd {
             continue;
         }
         let t = -(total_dr - dr) / rest;
-        held_out += -(2.0 * t * dr + t * t * dd);
-        in_sample += -(2.0 * dr + dd);
+        out.reduction += -(2.0 * t * dr + t * t * dd);
+        out.in_sample += -(2.0 * dr + dd);
+        tested = true;
     }
-    (in_sample > 0.0).then(|| held_out / in_sample)
+    tested.then_some(out)
 }
 
 #[cfg(test)]
@@ -279,6 +336,15 @@ mod tests {
         });
         let fit = series(|_, _| 0.0);
         assert_eq!(held_out_share(&base, &fit, &[100, 200], 300), None);
+    }
+
+    #[test]
+    fn every_segment_is_split_at_its_middle_into_the_two_halves() {
+        use super::segment_halves;
+        // segments listed as `ReplayCase::segments` lists them (the first at 0), one of odd length
+        let [first, second] = segment_halves(&[0, 100, 251], 300);
+        assert_eq!(first, vec![(0, 50), (100, 175), (251, 275)]);
+        assert_eq!(second, vec![(50, 100), (175, 251), (275, 300)]);
     }
 
     #[test]

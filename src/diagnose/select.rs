@@ -31,7 +31,7 @@
 mod gates;
 mod identifiability;
 mod refine;
-use gates::{beaten_within_resolution, rejection};
+use gates::{beaten_within_resolution, rejection, unconfirmed_in_time};
 pub(super) use gates::{BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
 pub use identifiability::profiled_information;
 use identifiability::{identifiable, Identifiable};

@@ -2,8 +2,43 @@
 
 use super::profiled_information;
 use crate::diagnose::extension::Extension;
+use crate::diagnose::residual::{cross_validated, segment_halves, HeldOut};
 use crate::diagnose::search::FitOutcome;
 use crate::diagnose::{Candidate, DiagnoseOptions};
+
+/// The χ² margin a change that the filter error refit adds must earn on the record's held-out half: the
+/// χ²₁ point at 1 % (one parameter, the change's size, sized on the other half).
+pub(in crate::diagnose) const HELD_OUT_CHI2: f64 = 6.63;
+
+/// Why a candidate that a later stage adds (output error did not name it) is not confirmed by a split of the
+/// training record in time (None: it is, or the split cannot test it). The record is split into the first and
+/// the second half of every segment (`residual::segment_halves`); along the fitted change, residual `r_base`
+/// (the model without the candidate) to `r_fit` (with it), its size is estimated on one half and the cost it
+/// removes on the other is summed over both (two-fold cross-validation; Stone, J. R. Stat. Soc. B 36, 1974),
+/// and expressed in the candidate's own significance: χ = z² · (held-out reduction / in-sample reduction),
+/// since the in-sample reduction is worth z² in the coloured-residual metric of its standard error. The change
+/// must earn [`HELD_OUT_CHI2`] there. `c.held_out_share` is set to that split's share. A half that carries
+/// less than a quarter of the change (an input effect whose response lies in each maneuver's first half) is
+/// not held out; where neither can be, the candidate passes, as the segments' own hold-out lets pass an effect
+/// that one maneuver alone excites.
+pub(in crate::diagnose) fn unconfirmed_in_time(
+    c: &mut Candidate,
+    r_base: &[f64],
+    r_fit: &[f64],
+    segments: &[usize],
+    len: usize,
+) -> Option<String> {
+    let folds = segment_halves(segments, len);
+    let share = cross_validated(r_base, r_fit, &folds, len).and_then(HeldOut::share)?;
+    c.held_out_share = Some(share);
+    let chi2 = share * c.z * c.z;
+    (chi2 <= HELD_OUT_CHI2).then(|| {
+        format!(
+            "{NOT_HELD_OUT_IN_TIME}: sized on one half of every segment it earns χ² {chi2:.1} ≤ {HELD_OUT_CHI2} \
+             on the other (held-out share {share:.2})"
+        )
+    })
+}
 
 /// Why a fully fitted candidate is not significant (None: it is).
 pub(in crate::diagnose) fn rejection(
@@ -102,6 +137,9 @@ pub(in crate::diagnose) const WITHIN_RESOLUTION: &str = "smaller than the resolu
 pub(in crate::diagnose) const NOT_SIGNIFICANT: &str = "|z|";
 /// How the reason of a candidate that explains too small a share of the cost starts.
 pub(in crate::diagnose) const SMALL_SHARE: &str = "explains";
+/// Start of the rejection of a change the filter error refit adds that the halves of the segments do not agree on.
+pub(in crate::diagnose) const NOT_HELD_OUT_IN_TIME: &str =
+    "not confirmed by the held-out half of the record";
 /// Start of the rejection of a fit that the record's segments do not agree on.
 pub(in crate::diagnose) const NOT_HELD_OUT: &str = "not confirmed by the held-out segments";
 /// How the reason of a candidate that passed its own tests but lost to a fit within its resolution starts

@@ -4,7 +4,8 @@
 //! *Subset Selection in Regression*, 2nd ed., §3.2–3.3.
 
 use super::{
-    adopt, fit_starts, rejection, score_test, settle, with_candidate, with_freedom, RoundContext,
+    adopt, fit_starts, rejection, score_test, settle, unconfirmed_in_time, with_candidate,
+    with_freedom, RoundContext,
 };
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
@@ -333,7 +334,9 @@ impl<'e> Replacement<'_, 'e> {
 /// Regression*, 2nd ed., §3.3: the replacement step, here after the weighting of the residuals has changed). In
 /// gusts output error named `Cn_r` ×2.1 ahead of a hidden `Cn_dr` ×0.53 (ΔBIC −134 against −101, both
 /// significant); on the filter's innovations `Cn_r` was no longer determined and went, and `Cn_dr` was never
-/// fitted again. Returns the fit of the model with the named alternatives, None when none was named.
+/// fitted again. Output error did not name these alternatives, so each must also be confirmed on a half of the
+/// record it was not sized on (`gates::unconfirmed_in_time`). Returns the fit of the model with the named
+/// alternatives, None when none was named.
 pub(in crate::diagnose) fn substitute_dropped<'e>(
     refiner: &mut Refiner<'_, 'e>,
     state: Replacement<'_, 'e>,
@@ -375,10 +378,26 @@ pub(in crate::diagnose) fn substitute_dropped<'e>(
         let fitted_better = format!("in place of {key} after {what}: another fitted better");
         // The best passing fit so far and its entry among the candidates.
         let mut best: Option<(FitOutcome, Vec<Active<'e>>, usize)> = None;
+        // The residual of the model without the alternatives, replayed once a fit passes its tests.
+        let mut base: Option<Vec<f64>> = None;
         for (&(j, _), out) in tries.iter().zip(fits) {
             let Ok((o, a)) = out else { continue };
             let mut c = ctx.candidate(catalogue[j], &o, true, resolution[j]);
-            c.rejected_because = rejection(&c, catalogue[j], &o, *state.cost, opts, &masks[j])
+            c.rejected_because = rejection(&c, catalogue[j], &o, *state.cost, opts, &masks[j]);
+            // Output error did not name it: it must also hold on a half of the record it was not sized on.
+            if c.rejected_because.is_none() {
+                if base.is_none() {
+                    let r =
+                        residuals(&mut workers[0], w, state.selected).map_err(sim_err("replay"))?;
+                    base = Some(r);
+                }
+                let r_base = base.as_deref().unwrap_or_default();
+                let len = w.case.len();
+                c.rejected_because =
+                    unconfirmed_in_time(&mut c, r_base, &o.residual, &w.case.segments, len);
+            }
+            c.rejected_because = c
+                .rejected_because
                 .map(|reason| format!("in place of {key} after {what}: {reason}"));
             if c.rejected_because.is_none() {
                 match &best {

@@ -193,3 +193,58 @@ fn a_change_the_held_out_segments_do_not_confirm_is_not_named() {
         }
     }
 }
+
+#[test]
+fn a_change_the_refit_adds_must_hold_on_the_other_half_of_every_segment() {
+    use super::gates::{unconfirmed_in_time, HELD_OUT_CHI2, NOT_HELD_OUT_IN_TIME};
+    // one channel of 400 samples, segments starting at 0 and 200; halves [0, 100) ∪ [200, 300) and the rest
+    let (len, segments) = (400, [0usize, 200]);
+    let wiggle = |k: usize| ((k as f64) * 0.37).sin();
+    let first_half = |k: usize| k % 200 < 100;
+    // the model misses the same signature everywhere, and the fit removes it: both halves agree
+    let everywhere: Vec<f64> = (0..len).map(|k| 2.0 * wiggle(k)).collect();
+    let removed = vec![0.0; len];
+    // only the first halves depart; the fit moves every sample by the compromise −0.7 w
+    let departing: Vec<f64> = (0..len)
+        .map(|k| if first_half(k) { 2.0 * wiggle(k) } else { 0.0 })
+        .collect();
+    let compromise: Vec<f64> = (0..len).map(|k| departing[k] - 0.7 * wiggle(k)).collect();
+    for (base, fit, z, named) in [
+        (&everywhere, &removed, 6.0, true),
+        (&departing, &compromise, 6.0, false),
+        // agreed, but the held-out half alone is no evidence: χ² = 1.0 · 2.5² < 6.63
+        (&everywhere, &removed, 2.5, false),
+    ] {
+        let mut c = accepted("sensor_scale", "ax_m_s2", 0.94, 0.02);
+        c.z = z;
+        let why = unconfirmed_in_time(&mut c, base, fit, &segments, len);
+        assert_eq!(why.is_none(), named, "z {z}: {why:?}");
+        let share = c.held_out_share.expect("both halves can be held out");
+        assert_eq!(share * z * z > HELD_OUT_CHI2, named, "share {share}");
+        if let Some(why) = why {
+            assert!(why.starts_with(NOT_HELD_OUT_IN_TIME), "{why}");
+        }
+    }
+}
+
+#[test]
+fn a_change_one_half_of_the_segments_carries_alone_passes_untested() {
+    use super::gates::unconfirmed_in_time;
+    // the change lives in the first half of each segment only (an input effect): nothing to size it on elsewhere
+    let len = 400;
+    let base: Vec<f64> = (0..len)
+        .map(|k| {
+            if k % 200 < 100 {
+                ((k as f64) * 0.37).sin()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut c = accepted("input_delay", "elevator", 0.08, 0.02);
+    assert_eq!(
+        unconfirmed_in_time(&mut c, &base, &[0.0; 400], &[0, 200], len),
+        None
+    );
+    assert_eq!(c.held_out_share, None);
+}
