@@ -117,6 +117,7 @@ pub fn refit_in_turbulence(
                 &mut refiner,
                 state.reborrow(),
                 "the filter error refit",
+                true,
                 held,
             )?;
             // What the refit dropped may have hidden the right effect from output error: its alternatives are

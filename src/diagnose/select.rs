@@ -664,7 +664,9 @@ pub fn select<'e>(
     replace_ambiguous(&mut refiner, &sens, &later_in_model, state.reborrow())?;
     if opts.backward_elimination {
         state.round += 1;
-        eliminate_backward(&mut refiner, state, "backward elimination", |_| false)?;
+        eliminate_backward(&mut refiner, state, "backward elimination", false, |_| {
+            false
+        })?;
     }
     Ok(Selection {
         selected,

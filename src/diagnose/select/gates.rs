@@ -6,12 +6,13 @@ use crate::diagnose::residual::{cross_validated, segment_halves, HeldOut};
 use crate::diagnose::search::FitOutcome;
 use crate::diagnose::{Candidate, DiagnoseOptions};
 
-/// The χ² margin a change that the filter error refit adds must earn on the record's held-out half: the
-/// χ²₁ point at 1 % (one parameter, the change's size, sized on the other half).
+/// The χ² margin a change that the filter error refit adds or keeps must earn on the record's held-out half:
+/// the χ²₁ point at 1 % (one parameter, the change's size, sized on the other half).
 pub(in crate::diagnose) const HELD_OUT_CHI2: f64 = 6.63;
 
-/// Why a candidate that a later stage adds (output error did not name it) is not confirmed by a split of the
-/// training record in time (None: it is, or the split cannot test it). The record is split into the first and
+/// Why a candidate that a later stage adds (output error did not name it) or keeps on other residuals (the
+/// filter error refit's backward test) is not confirmed by a split of the training record in time (None: it
+/// is, or the split cannot test it). The record is split into the first and
 /// the second half of every segment (`residual::segment_halves`); along the fitted change, residual `r_base`
 /// (the model without the candidate) to `r_fit` (with it), its size is estimated on one half and the cost it
 /// removes on the other is summed over both (two-fold cross-validation; Stone, J. R. Stat. Soc. B 36, 1974),
