@@ -342,6 +342,31 @@ fn with_process_noise_the_filter_error_method_finds_the_truth() {
         (m_de.value - TRUTH[4]).abs() > 3.0 * m_de.std_error,
         "{m_de:?}"
     );
+    // the gain stays inside its bound: the records carry measurement noise
+    assert!(
+        !fem.warnings
+            .iter()
+            .any(|w| w.contains("gain is on its bound")),
+        "{:?}",
+        fem.warnings
+    );
+}
+
+/// The same turbulence with no measurement noise at all: R = C P Cᵀ + G Gᵀ leaves G = 0, the gain ends on its
+/// bound diag(K C) = 1, and the estimate says so (`Problem::gain_on_bound`).
+#[test]
+fn filter_error_on_noise_free_records_warns_that_its_gain_is_on_the_bound() {
+    let recs: Vec<Record> = (0..2)
+        .map(|s| turbulent_record(0.02, [2e-4, 4e-3], [0.0, 0.0], 31 + s))
+        .collect();
+    let (_, fem) = output_error_and_filter_error(&recs);
+    assert!(
+        fem.warnings
+            .iter()
+            .any(|w| w.contains("gain is on its bound")),
+        "{:?}",
+        fem.warnings
+    );
 }
 
 #[test]
