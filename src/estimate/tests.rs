@@ -257,6 +257,14 @@ fn turbulent_record(dt_s: f64, q_psd: [f64; 2], noise: [f64; 2], seed: u64) -> R
     Record { outputs, ..clean }
 }
 
+/// Two records (seeds 31, 32) of the short period in turbulence of spectral densities 2e-4 and 4e-3, sampled at
+/// 50 Hz with measurement noise of standard deviation `noise` on α and q.
+fn two_turbulent_records(noise: [f64; 2]) -> Vec<Record> {
+    (0..2)
+        .map(|s| turbulent_record(0.02, [2e-4, 4e-3], noise, 31 + s))
+        .collect()
+}
+
 /// The short-period model fitted to `recs` by output error and by filter error, both estimating the initial
 /// state of each record.
 fn output_error_and_filter_error(recs: &[Record]) -> (Estimate, Estimate) {
@@ -306,10 +314,7 @@ fn without_process_noise_the_filter_error_method_gives_the_output_error_answer()
 
 #[test]
 fn with_process_noise_the_filter_error_method_finds_the_truth() {
-    let recs: Vec<Record> = (0..2)
-        .map(|s| turbulent_record(0.02, [2e-4, 4e-3], [0.001, 0.002], 31 + s))
-        .collect();
-    let (oe, fem) = output_error_and_filter_error(&recs);
+    let (oe, fem) = output_error_and_filter_error(&two_turbulent_records([0.001, 0.002]));
     for ((a, b), t) in oe.parameters.iter().zip(&fem.parameters).zip(TRUTH) {
         eprintln!(
             "{}: truth {t} oe {:.3} ± {:.3} ({:.1}σ)  fem {:.3} ± {:.3} ({:.1}σ)",
@@ -356,10 +361,7 @@ fn with_process_noise_the_filter_error_method_finds_the_truth() {
 /// bound diag(K C) = 1, and the estimate says so (`Problem::gain_on_bound`).
 #[test]
 fn filter_error_on_noise_free_records_warns_that_its_gain_is_on_the_bound() {
-    let recs: Vec<Record> = (0..2)
-        .map(|s| turbulent_record(0.02, [2e-4, 4e-3], [0.0, 0.0], 31 + s))
-        .collect();
-    let (_, fem) = output_error_and_filter_error(&recs);
+    let (_, fem) = output_error_and_filter_error(&two_turbulent_records([0.0, 0.0]));
     assert!(
         fem.warnings
             .iter()
