@@ -186,19 +186,7 @@ fn time_steps(time_s: &[f64]) -> Vec<f64> {
     time_s.windows(2).map(|w| w[1] - w[0]).collect()
 }
 
-/// Median of a non-empty slice (reorders it).
-pub(crate) fn median_in_place(v: &mut [f64]) -> f64 {
-    let n = v.len();
-    let mid = n / 2;
-    let (_, m, _) = v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-    let m = *m;
-    if n % 2 == 1 {
-        m
-    } else {
-        let lower = v[..mid].iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        0.5 * (lower + m)
-    }
-}
+pub(crate) use crate::signal::median_in_place;
 
 /// Fails on the first time sample that does not exceed its predecessor.
 pub(crate) fn check_time_increasing(

@@ -25,7 +25,8 @@ use serde::Serialize;
 
 use super::channel::Channel;
 use super::error::DataError;
-use super::record::{median_in_place, FlightRecord};
+use super::record::FlightRecord;
+use crate::signal::{difference_noise_std, median_in_place};
 
 /// The kind of maneuver found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -169,7 +170,7 @@ pub fn scan_segments(rec: &FlightRecord, opts: &SegmentOptions) -> Result<Segmen
         let u = rec.column(surface).unwrap_or(&[]);
         let baseline = moving_median_baseline(&rec.time_s, u, opts.baseline_window_s);
         let dev: Vec<f64> = u.iter().zip(&baseline).map(|(a, b)| a - b).collect();
-        let thr = opts.min_amplitude_rad.max(6.0 * difference_noise(u));
+        let thr = opts.min_amplitude_rad.max(6.0 * difference_noise_std(u));
         let active: Vec<bool> = dev.iter().map(|d| d.abs() > thr).collect();
         let gap = (opts.max_gap_s / dt_s).ceil() as usize;
         let amplitude = |s: usize, e: usize| dev[s..e].iter().fold(0.0_f64, |m, d| m.max(d.abs()));
@@ -320,17 +321,6 @@ fn moving_median_baseline(t: &[f64], u: &[f64], window_s: f64) -> Vec<f64> {
             med[k] + w * (med[k1] - med[k])
         })
         .collect()
-}
-
-/// Robust noise standard deviation from first differences: 1.4826 · MAD(Δu) / √2.
-fn difference_noise(u: &[f64]) -> f64 {
-    if u.len() < 3 {
-        return 0.0;
-    }
-    let mut d: Vec<f64> = u.windows(2).map(|w| w[1] - w[0]).collect();
-    let m = median_in_place(&mut d);
-    let mut ad: Vec<f64> = d.iter().map(|x| (x - m).abs()).collect();
-    1.4826 * median_in_place(&mut ad) / std::f64::consts::SQRT_2
 }
 
 /// Runs of active samples, bridging inactive gaps of at most `gap` samples: `[start, end)`.

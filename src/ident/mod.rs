@@ -339,7 +339,7 @@ fn validate(u: &[f64], y: &[f64], dt_s: f64, opts: &IdentOptions) -> Result<(), 
 /// A lead-in shorter than [`MIN_NOISY_LEAD_IN`] samples is not a trim but an input that moves
 /// from the start (a multisine, a chirp): then only samples equal to the first count.
 fn trim_offsets(u: &[f64], y: &[f64]) -> (f64, f64) {
-    let band = 5.0 * input_noise_std(u);
+    let band = 5.0 * crate::signal::difference_noise_std(u);
     let quiet = |band: f64| u.iter().take_while(|x| (**x - u[0]).abs() <= band).count();
     let still = match quiet(band) {
         n if n >= MIN_NOISY_LEAD_IN => n,
@@ -353,20 +353,6 @@ fn trim_offsets(u: &[f64], y: &[f64]) -> (f64, f64) {
 
 /// Fewest samples of a noisy quiet lead-in that [`trim_offsets`] averages as the trim.
 const MIN_NOISY_LEAD_IN: usize = 10;
-
-/// White-noise standard deviation of a sampled signal from the median absolute first
-/// difference: for white noise of σ, Δu has σ√2 and MAD(Δu)·1.4826 estimates it; steps and
-/// smooth motion occupy few or small differences and leave the median alone. 0 for a signal
-/// that is piecewise constant over more than half its samples.
-fn input_noise_std(u: &[f64]) -> f64 {
-    if u.len() < 3 {
-        return 0.0;
-    }
-    let mut d: Vec<f64> = u.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
-    let mid = d.len() / 2;
-    let (_, median, _) = d.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-    1.4826 * *median / std::f64::consts::SQRT_2
-}
 
 /// Largest model order accepted: the output-error sensitivities filter by `A(s)²`, and the state
 /// filters are specialised up to order 2 × 32 (see [`filter::Svf`]).
