@@ -163,7 +163,7 @@ fn doublet_csv_passes_schema_validation_and_starts_at_trim() {
     let rec = flightid::data::read_csv(&csv).unwrap();
     rec.validate().unwrap();
     // `fly` records every schema column but the measured-data ones (thrust, dynamic pressure, angular
-    // accelerations) and the GPS latitude (it flies on the equator, where a replay without it trims).
+    // accelerations, density) and the GPS latitude (it flies on the equator, where a replay without it trims).
     let measured_only = [
         "thrust_n",
         "qbar_pa",
@@ -171,6 +171,7 @@ fn doublet_csv_passes_schema_validation_and_starts_at_trim() {
         "qdot_rad_s2",
         "rdot_rad_s2",
         "latitude_rad",
+        "density_kg_m3",
     ];
     for col in flightid::data::SCHEMA_COLUMNS
         .iter()

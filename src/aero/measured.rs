@@ -4,7 +4,8 @@
 //!
 //! Unlike the JSBSim study ([`super::study`]), nothing here comes from a trim or a simulator: mass, inertia,
 //! geometry, thrust line and sensor positions come from an [`Airframe`]; dynamic pressure from the record's
-//! `qbar_pa`, else ½ρV² with ρ from `altitude_m` (ISA) or the airframe's `flight.density_kg_m3`.
+//! `qbar_pa`, else ½ρV² with ρ from the logged `density_kg_m3`, `altitude_m` (ISA) or the airframe's
+//! `flight.density_kg_m3`.
 //!
 //! Sensors away from the CG (Morelli & Klein §9.3, Jategaonkar §10.2): with r the sensor position in body axes,
 //! - accelerometers: a_CG = a_IMU − ω̇ × r − ω × (ω × r);
@@ -81,7 +82,8 @@ impl AxisChoice {
 }
 
 /// A surface moves in a record when its peak-to-peak excursion exceeds both 0.5° and 20× its sample noise
-/// (noise: the RMS of first differences / √2, which white noise dominates at logging rates).
+/// (noise: [`crate::signal::difference_noise_std`], which the steps of a pulse train leave alone; the RMS
+/// of the first differences counted each step as noise, and a 3-2-1-1 of ±1.6° logged at 25 Hz read as still).
 pub fn surface_moves(values: &[f64]) -> bool {
     if values.len() < 3 {
         return false;
@@ -91,15 +93,10 @@ pub fn surface_moves(values: &[f64]) -> bool {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    let n = (values.len() - 1) as f64;
-    let noise = (values
-        .windows(2)
-        .map(|w| (w[1] - w[0]).powi(2))
-        .sum::<f64>()
-        / n
-        / 2.0)
-        .sqrt();
-    hi - lo > 0.5f64.to_radians().max(20.0 * noise)
+    hi - lo
+        > 0.5f64
+            .to_radians()
+            .max(20.0 * crate::signal::difference_noise_std(values))
 }
 
 /// The axes a record excites: longitudinal when the elevator moves, lateral when the aileron or rudder moves.
@@ -555,9 +552,13 @@ impl MeasuredReport {
     /// The text tables.
     pub fn to_text(&self) -> String {
         let mut out = format!(
-            "{} ({:?} axis) at V = {:.1} m/s, ρ = {:.4} kg/m³, q̄ = {:.0} Pa\n\n",
+            "{} ({}) at V = {:.1} m/s, ρ = {:.4} kg/m³, q̄ = {:.0} Pa\n\n",
             self.method.replace('_', " "),
-            self.axis,
+            match self.axis {
+                AxisChoice::Longitudinal => "longitudinal axis",
+                AxisChoice::Lateral => "lateral-directional axis",
+                AxisChoice::Both => "both axes",
+            },
             self.reference.airspeed_m_s,
             self.reference.density_kg_m3,
             self.reference.qbar_pa()
@@ -778,5 +779,30 @@ mod tests {
             })
             .collect();
         assert!(surface_moves(&doublet));
+    }
+
+    /// A short, slowly logged pulse train: five steps of 3.2° in 500 samples (a 3-2-1-1 of ±1.6° at 25 Hz,
+    /// the elevator record of a transport) moves the surface. Counted as noise, its steps once made it 0.2°
+    /// of "noise" and the record read as still; a noise of 0.2° itself does not move it.
+    #[test]
+    fn a_slowly_logged_pulse_train_is_excitation_and_its_steps_are_not_noise() {
+        let step = 1.6f64.to_radians();
+        let noise = |i: usize| 0.01f64.to_radians() * (((i * 7919) % 101) as f64 / 50.0 - 1.0);
+        let pulses: Vec<f64> = (0..500)
+            .map(|i| {
+                let t = i as f64 / 25.0;
+                let u = match t {
+                    t if (2.0..4.25).contains(&t) => step,
+                    t if (4.25..5.75).contains(&t) => -step,
+                    t if (5.75..6.5).contains(&t) => step,
+                    t if (6.5..7.25).contains(&t) => -step,
+                    _ => 0.0,
+                };
+                0.0036 + u + noise(i)
+            })
+            .collect();
+        assert!(surface_moves(&pulses));
+        let noisy: Vec<f64> = (0..500).map(|i| 20.0 * noise(i)).collect();
+        assert!(!surface_moves(&noisy));
     }
 }

@@ -10,7 +10,7 @@ use crate::data::{self, CheckOptions};
 /// Check the kinematic consistency of a flight-data CSV.
 #[derive(clap::Args, Debug, Clone)]
 #[command(
-    after_help = "Examples:\n  flightid check flight.csv\n  flightid check flight.csv --from-s 10 --to-s 40 --no-scale-factors --json"
+    after_help = "Examples:\n  flightid check flight.csv\n  flightid check flight.csv --from-s 10 --to-s 40 --no-scale-factors --json\n  flightid check fAttasAilRud1.asc --columns models/attas.columns.toml --airframe models/attas.airframe.toml"
 )]
 pub struct CheckArgs {
     /// Flight-data CSV (docs/data.md); best a maneuver segment of some tens of seconds.
@@ -30,6 +30,12 @@ pub struct CheckArgs {
     /// Iteration limit of the reconstruction (an unconverged fit is an error, exit 1).
     #[arg(long, default_value_t = 50)]
     pub max_iterations: usize,
+    /// The aircraft's airframe description (FILE.toml, docs/airframe.md): its `[sensors]` positions move the
+    /// accelerations and the α and β vanes to the CG before the reconstruction, whose kinematics are the CG's.
+    /// Without it the sensors are taken at the CG: a vane on a nose boom x metres ahead reads β + r x/V and
+    /// α − q x/V, which the reconstruction takes for a skew of about x/V (0.1 s at 13 m and 130 m/s).
+    #[arg(long, value_name = "FILE.toml")]
+    pub airframe: Option<PathBuf>,
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
@@ -60,7 +66,12 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         }
         rec = window;
     }
-    let rec = resample(rec, args.record.resample_hz, &args.file)?;
+    let mut rec = resample(rec, args.record.resample_hz, &args.file)?;
+    if let Some(path) = &args.airframe {
+        let airframe = crate::aero::Airframe::load(path).map_err(|e| UsageError(e.to_string()))?;
+        rec = crate::aero::measured::moved_to_cg(&rec, &airframe.sensors)
+            .map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;
+    }
     let what = args.file.display().to_string();
     crate::limits::RECONSTRUCTION.check(&what, rec.len() as f64)?;
     let opts = CheckOptions {
@@ -96,13 +107,18 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         return Err(not_converged());
     }
     println!(
-        "flight-path reconstruction of {} ({} samples, {}): {} iterations",
+        "flight-path reconstruction of {} ({} samples, {}{}): {} iterations",
         args.file.display(),
         rec.len(),
         if report.translational {
             "attitude + translational"
         } else {
             "attitude only"
+        },
+        if args.airframe.is_some() {
+            ", sensors moved to the CG"
+        } else {
+            ""
         },
         report.iterations,
     );
@@ -129,8 +145,8 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     for e in report.implausible_skews(&rec) {
         println!(
             "note: {} = {:.0} ms is longer than a data system's skew can be (one sample interval, {:.0} ms): \
-             the vane reads motion the kinematics do not see (gusts) or sits behind a filter; `derivatives` \
-             does not shift it out",
+             the vane reads motion the kinematics do not see (gusts), sits behind a filter, or sits away from \
+             the CG (--airframe with its [sensors] position); `derivatives` does not shift it out",
             e.name,
             1000.0 * e.value,
             1000.0 * bound_s

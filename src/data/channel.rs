@@ -56,11 +56,14 @@ pub enum Channel {
     RDot,
     /// `latitude_rad`: geodetic latitude, rad (from GPS; a replay trims at it, as gravity changes with it).
     Latitude,
+    /// `density_kg_m3`: air density ρ, kg/m³ (from the data system's static pressure and temperature; the
+    /// aerodynamic coefficients of a measured record use q̄ = ½ρV² with it when `qbar_pa` is not logged).
+    Density,
 }
 
 impl Channel {
     /// Every column of the schema, in its canonical order.
-    pub const ALL: [Channel; 24] = [
+    pub const ALL: [Channel; 25] = [
         Channel::Time,
         Channel::Elevator,
         Channel::Aileron,
@@ -85,6 +88,7 @@ impl Channel {
         Channel::QDot,
         Channel::RDot,
         Channel::Latitude,
+        Channel::Density,
     ];
 
     /// The control inputs: the three surfaces and the throttle (the four schema columns from `elevator_rad` on).
@@ -136,6 +140,7 @@ impl Channel {
             Channel::QDot => "qdot_rad_s2",
             Channel::RDot => "rdot_rad_s2",
             Channel::Latitude => "latitude_rad",
+            Channel::Density => "density_kg_m3",
         }
     }
 

@@ -15,10 +15,11 @@
 //!
 //! ```toml
 //! [derived]
-//! aileron_rad = { from = { DAR = 0.5, DAL = -0.5 }, unit = "deg" }   # ½(right − left), then deg → rad
+//! aileron_rad = { from = { DAL = 0.5, DAR = -0.5 }, unit = "deg" }   # ½(left − right), then deg → rad
 //! ```
 //!
-//! Units: rad, deg, m, ft, m/s, ft/s, kts, g, m/s2, deg/s, rad/s, deg/s2, rad/s2, N, lbf, Pa, psf, s, ms,
+//! Units: rad, deg, m, ft, m/s, ft/s, kts, g, m/s2, deg/s, rad/s, deg/s2, rad/s2, N, lbf, Pa, psf, kg/m3,
+//! slug/ft3, s, ms,
 //! percent, and the spellings of autopilot logs: us, cdeg, mrad/s, mg, cm, cm/s, kt, km/h, mph, hPa, mbar.
 //! A unit must measure what its target column measures (`deg` cannot go to `airspeed_m_s`).
 //! The reader renames and converts while reading, so every command sees SI columns.
@@ -48,6 +49,8 @@ pub enum Dimension {
     Force,
     /// Pascals.
     Pressure,
+    /// Kilograms per cubic metre.
+    Density,
     /// Radians per second squared.
     AngularAcceleration,
     /// A fraction (throttle 0..1).
@@ -67,6 +70,7 @@ impl Dimension {
             "altitude_m" => Dimension::Length,
             "thrust_n" => Dimension::Force,
             "qbar_pa" => Dimension::Pressure,
+            "density_kg_m3" => Dimension::Density,
             c if c.ends_with("_rad_s") => Dimension::AngularRate,
             c if c.ends_with("_rad_s2") => Dimension::AngularAcceleration,
             c if c.ends_with("_rad") => Dimension::Angle,
@@ -85,6 +89,7 @@ impl Dimension {
             Dimension::Acceleration => "an acceleration",
             Dimension::Force => "a force",
             Dimension::Pressure => "a pressure",
+            Dimension::Density => "a density",
             Dimension::AngularAcceleration => "an angular acceleration",
             Dimension::Fraction => "a fraction",
         }
@@ -136,6 +141,9 @@ const UNITS: &[(&str, Dimension, f64)] = &[
     ("mbar", Dimension::Pressure, 100.0),
     // 1 lbf/ft² = 4.4482216152605 N / 0.09290304 m².
     ("psf", Dimension::Pressure, 47.880_258_980_335_84),
+    ("kg/m3", Dimension::Density, 1.0),
+    // 1 slug/ft³ = 14.593902937 kg / 0.028316846592 m³.
+    ("slug/ft3", Dimension::Density, 515.378_818_393_183_3),
     ("1", Dimension::Fraction, 1.0),
     ("percent", Dimension::Fraction, 0.01),
 ];
@@ -443,6 +451,7 @@ fn default_unit(dim: Dimension) -> &'static str {
         Dimension::Acceleration => "m/s2",
         Dimension::Force => "N",
         Dimension::Pressure => "Pa",
+        Dimension::Density => "kg/m3",
         Dimension::AngularAcceleration => "rad/s2",
         Dimension::Fraction => "1",
     }

@@ -20,12 +20,12 @@ pub fn standard_density_kg_m3(altitude_m: f64) -> f64 {
 pub struct AirData {
     /// Mean density over the record, kg/m³.
     pub density_kg_m3: f64,
-    /// `qbar_pa`, `altitude_m (ISA)` or `airframe flight.density_kg_m3`.
+    /// `qbar_pa`, `density_kg_m3`, `altitude_m (ISA)` or `airframe flight.density_kg_m3`.
     pub source: String,
 }
 
-/// The record's air density: from `qbar_pa` and `airspeed_m_s` (ρ = 2 q̄/V², averaged), else ISA at the mean
-/// `altitude_m`, else the airframe's `flight.density_kg_m3`.
+/// The record's air density: from `qbar_pa` and `airspeed_m_s` (ρ = 2 q̄/V², averaged), else the logged
+/// `density_kg_m3` (averaged), else ISA at the mean `altitude_m`, else the airframe's `flight.density_kg_m3`.
 pub fn air_data(rec: &data::FlightRecord, airframe: &Airframe) -> Result<AirData, AirframeError> {
     if let (Some(q), Some(v)) = (rec.column("qbar_pa"), rec.column("airspeed_m_s")) {
         let rho: Vec<f64> = q
@@ -40,6 +40,12 @@ pub fn air_data(rec: &data::FlightRecord, airframe: &Airframe) -> Result<AirData
                 source: "qbar_pa".into(),
             });
         }
+    }
+    if let Some(rho) = rec.column("density_kg_m3").filter(|r| !r.is_empty()) {
+        return Ok(AirData {
+            density_kg_m3: rho.iter().sum::<f64>() / rho.len() as f64,
+            source: "density_kg_m3".into(),
+        });
     }
     if let Some(h) = rec.column("altitude_m").filter(|h| !h.is_empty()) {
         let mean = h.iter().sum::<f64>() / h.len() as f64;
