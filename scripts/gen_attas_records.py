@@ -16,7 +16,8 @@ Files written to --out DIR:
 
   attas_elv.asc       elevator 3-2-1-1 (jittered timing, unequal pulses), then free response;
   attas_ailrud.asc    an aileron doublet, then a rudder doublet (the book's fAttasAilRud1 plan);
-  attas.truth.json    the coefficients (flightid's names), the trim, the constants, the seeds.
+  attas.truth.json    the coefficients (flightid's names), the trim, the constants, the seeds;
+  attas_elv.mat, attas_ailrud.mat   with --mat: the same numbers as MATLAB MAT-files (a matrix named as the file).
 
 Column layout (1-based, as the book's test cases read its records): 1 time s; 2-4 a_x a_y a_z m/s2 at the
 IMU; 7-9 p q r deg/s; 10-12 phi theta psi deg; 13-14 alpha beta deg at the nose boom; 15 true airspeed m/s at
@@ -58,6 +59,7 @@ import math
 import os
 
 import numpy as np
+import scipy.io
 import scipy.linalg
 
 G = 9.80665
@@ -299,6 +301,8 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--turb-ms", type=float, default=0.5, help="sigma of each Dryden gust component, m/s")
+    ap.add_argument("--mat", action="store_true",
+                    help="also write each record as a MATLAB MAT-file (attas_elv.mat compressed, attas_ailrud.mat not)")
     args = ap.parse_args()
     if args.turb_ms < 0:
         ap.error("--turb-ms must be >= 0")
@@ -311,6 +315,15 @@ def main():
         tmp = os.path.join(args.out, name + ".part")
         np.savetxt(tmp, rows, delimiter="", fmt="%16.7e")
         os.replace(tmp, os.path.join(args.out, name))
+        if args.mat:
+            # The same numbers as the text file (read back from it), as the book's supplement also ships its
+            # ATTAS records: a MATLAB matrix named as the file, here beside a scalar and a character array.
+            # The elevator record compressed (MATLAB's -v7 default), the other not (-v6).
+            stem = f"attas_{kind}"
+            scipy.io.savemat(os.path.join(args.out, stem + ".mat"),
+                             {stem: np.loadtxt(os.path.join(args.out, name)), "dt": 1.0 / (SIM_HZ / LOG_EVERY),
+                              "source": "gen_attas_records.py"},
+                             do_compression=(kind == "elv"))
         records.append({"file": name, "samples": len(rows), "pulses_rad": plan})
     truth = {
         "source": "scripts/gen_attas_records.py: ATTAS mass, inertia, geometry, engine and sensor positions of "

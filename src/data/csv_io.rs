@@ -8,7 +8,8 @@
 //! Text files as data systems and textbooks also write them are read too: columns separated by spaces
 //! or tabs instead of commas (the first line that is not metadata has no comma), and files without a
 //! header row (that line is all numbers). A headerless file's columns are named by their position,
-//! `1`, `2`, …, which a column map renames (`1 = { to = "time_s" }`).
+//! `1`, `2`, …, which a column map renames (`1 = { to = "time_s" }`). A MATLAB MAT-file (`.mat`) is read
+//! as such a headerless file: its matrix of samples × channels ([`mat`]).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{BufWriter, Read, Write};
@@ -21,6 +22,7 @@ use super::error::{DataError, Warning};
 use super::record::FlightRecord;
 
 mod chunk;
+mod mat;
 mod text;
 use chunk::{parse_chunk, shift_lines, split_chunks, Chunk};
 use text::{is_numbers_row, whitespace_separated, whitespace_to_commas};
@@ -39,6 +41,23 @@ pub fn read_csv(path: &Path) -> Result<FlightRecord, DataError> {
 /// schema's SI columns while reading (see [`ColumnMap`]); without a map this is [`read_csv`].
 pub fn read_csv_mapped(path: &Path, map: Option<&ColumnMap>) -> Result<FlightRecord, DataError> {
     let io_err = |action: &'static str| DataError::io(path, action);
+    if mat::is_mat_file(path) {
+        let (text, note) = mat::matrix_as_text(path)?;
+        let file = path.display().to_string();
+        let mut rec = parse_csv_bytes_mapped(&text, &file, map).map_err(|e| match e {
+            DataError::NoHeader { columns, .. } => DataError::Mat {
+                file,
+                message: format!(
+                    "{}, without column names: name its {columns} channels by position in a column map (`--columns MAP.toml` with e.g. `1 = {{ to = \"time_s\" }}`, \
+                     `2 = {{ to = \"elevator_rad\", unit = \"deg\" }}`)",
+                    note.trim()
+                ),
+            },
+            other => other,
+        })?;
+        rec.metadata.insert(0, note);
+        return Ok(rec);
+    }
     let mut f = File::open(path).map_err(io_err("cannot read the CSV file"))?;
     let size = f.metadata().map(|m| m.len()).unwrap_or(0);
     let file = path.display().to_string();

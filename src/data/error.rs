@@ -117,6 +117,9 @@ pub enum DataError {
     /// An argument is out of range (e.g. a non-positive resampling rate).
     #[error("invalid argument: {0}")]
     InvalidArgument(String),
+    /// A MATLAB MAT-file could not be read as flight data.
+    #[error("{file}: {message}")]
+    Mat { file: String, message: String },
     /// A MAVLink telemetry log could not be turned into a flight record.
     #[error("{file}: {message}")]
     Tlog { file: String, message: String },

@@ -1,0 +1,112 @@
+//! MATLAB MAT-files (level 5, compressed or not; MATLAB's default up to `-v7`) as flight data: the file's
+//! numeric matrix of samples × channels, read as a headerless text file would be (columns named `1`, `2`, …
+//! by position, which a column map renames), so that the same map serves a book's `.asc` and `.mat` records.
+//!
+//! Which matrix: the one named as the file (`fAttasElv1` in `fAttasElv1.mat`), else the largest real 2-D
+//! numeric array. Character, cell and structure variables are passed over. The record's metadata names the
+//! matrix read and any other numeric arrays.
+
+use std::path::Path;
+
+use super::super::error::DataError;
+
+/// Whether `path` names a MAT-file (extension `.mat`, any case).
+pub(super) fn is_mat_file(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("mat"))
+}
+
+/// The MAT-file's sample matrix as the text of a headerless, comma-separated file (one row per line, so a
+/// message's line N is the matrix's row N; numbers in their shortest round-trip form, so nothing is lost),
+/// and a metadata line naming the matrix.
+pub(super) fn matrix_as_text(path: &Path) -> Result<(Vec<u8>, String), DataError> {
+    let file = path.display().to_string();
+    let fail = |message: String| DataError::Mat {
+        file: file.clone(),
+        message,
+    };
+    let reader = std::fs::File::open(path)
+        .map_err(|e| DataError::io(path, "cannot read the MAT-file")(e))?;
+    let mat = matfile::MatFile::parse(std::io::BufReader::new(reader)).map_err(|e| {
+        fail(format!(
+            "not a readable MATLAB level-5 MAT-file ({e}); a `-v7.3` file is HDF5 and is not read: \
+             save it with `save(..., '-v7')` or export the matrix as text"
+        ))
+    })?;
+    let matrices: Vec<&matfile::Array> = mat
+        .arrays()
+        .iter()
+        .filter(|a| a.ndims() == 2 && a.size()[0] >= 2 && a.size()[1] >= 2)
+        .collect();
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+    let chosen = matrices
+        .iter()
+        .find(|a| a.name() == stem)
+        .or_else(|| matrices.iter().max_by_key(|a| a.size()[0] * a.size()[1]))
+        .ok_or_else(|| {
+            let found: Vec<String> = mat
+                .arrays()
+                .iter()
+                .map(|a| format!("`{}` {:?}", a.name(), a.size()))
+                .collect();
+            fail(format!(
+                "no numeric matrix of samples × channels (at least 2 × 2) in the file (numeric arrays: {})",
+                if found.is_empty() { "none".to_string() } else { found.join(", ") }
+            ))
+        })?;
+    let (rows, cols) = (chosen.size()[0], chosen.size()[1]);
+    let values = real_values(chosen.data()).ok_or_else(|| {
+        fail(format!(
+            "the matrix `{}` is complex; flight data are real numbers",
+            chosen.name()
+        ))
+    })?;
+    let others: Vec<String> = matrices
+        .iter()
+        .filter(|a| a.name() != chosen.name())
+        .map(|a| format!("`{}` {} × {}", a.name(), a.size()[0], a.size()[1]))
+        .collect();
+    let note = format!(
+        " MAT-file matrix `{}`: {rows} samples × {cols} channels{}",
+        chosen.name(),
+        if others.is_empty() {
+            String::new()
+        } else {
+            format!(" (also in the file: {})", others.join(", "))
+        }
+    );
+    let mut text = Vec::with_capacity(rows * cols * 12);
+    for i in 0..rows {
+        for j in 0..cols {
+            if j > 0 {
+                text.push(b',');
+            }
+            // MATLAB stores column by column.
+            text.extend_from_slice(format!("{:?}", values[j * rows + i]).as_bytes());
+        }
+        text.push(b'\n');
+    }
+    Ok((text, note))
+}
+
+/// The array's values as f64, column-major; `None` for a complex array.
+fn real_values(data: &matfile::NumericData) -> Option<Vec<f64>> {
+    use matfile::NumericData as D;
+    fn cast<T: Copy + Into<f64>>(real: &[T]) -> Vec<f64> {
+        real.iter().map(|&v| v.into()).collect()
+    }
+    Some(match data {
+        D::Double { real, imag: None } => real.clone(),
+        D::Single { real, imag: None } => cast(real),
+        D::Int8 { real, imag: None } => cast(real),
+        D::UInt8 { real, imag: None } => cast(real),
+        D::Int16 { real, imag: None } => cast(real),
+        D::UInt16 { real, imag: None } => cast(real),
+        D::Int32 { real, imag: None } => cast(real),
+        D::UInt32 { real, imag: None } => cast(real),
+        D::Int64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
+        D::UInt64 { real, imag: None } => real.iter().map(|&v| v as f64).collect(),
+        _ => return None,
+    })
+}
