@@ -60,7 +60,8 @@ import os
 
 import numpy as np
 import scipy.io
-import scipy.linalg
+
+from dryden import dryden_series
 
 G = 9.80665
 MASS = 17631.0
@@ -178,35 +179,9 @@ def trim(psi0):
 
 
 def dryden(sigma, n, dt, rng):
-    """u_g, v_g, w_g (m/s) on n samples dt apart: H_u = sigma sqrt(2T)/(1 + Ts), H_v = H_w =
-    sigma sqrt(T) (1 + sqrt(3) T s)/(1 + T s)^2 with T = L/V, discretised exactly (Van Loan) from the
-    stationary distribution; zeros when sigma == 0."""
-    T = L_TURB / V_TRIM
-    forms = [
-        (np.array([[-1.0 / T]]), np.array([[1.0]]), np.array([[sigma * math.sqrt(2.0 * T) / T]])),
-        (np.array([[0.0, 1.0], [-1.0 / T**2, -2.0 / T]]), np.array([[0.0], [1.0]]),
-         np.array([[1.0, math.sqrt(3.0) * T]]) * sigma * math.sqrt(T) / T**2),
-    ]
-    out = []
-    for A, B, C in (forms[0], forms[1], forms[1]):
-        k = A.shape[0]
-        M = np.zeros((2 * k, 2 * k))
-        M[:k, :k] = -A
-        M[:k, k:] = B @ B.T
-        M[k:, k:] = A.T
-        E = scipy.linalg.expm(M * dt)
-        Phi = E[k:, k:].T
-        Qd = Phi @ E[:k, k:]
-        Lq = np.linalg.cholesky(0.5 * (Qd + Qd.T) + 1e-30 * np.eye(k))
-        Lp = np.linalg.cholesky(scipy.linalg.solve_continuous_lyapunov(A, -B @ B.T))
-        x = Lp @ rng.standard_normal(k)
-        w = rng.standard_normal((n, k))
-        y = np.empty(n)
-        for i in range(n):
-            y[i] = (C @ x)[0]
-            x = Phi @ x + Lq @ w[i]
-        out.append(y)
-    return np.array(out).T
+    """u_g, v_g, w_g (m/s) on n samples dt apart, one row per sample (scripts/dryden.py: the MIL-F-8785C
+    forms, T = L/V, exact discretisation from the stationary distribution); zeros when sigma == 0."""
+    return np.array(dryden_series(("u", "w", "w"), sigma, L_TURB / V_TRIM, n, dt, rng)).T
 
 
 def schedule(kind, rng):

@@ -108,8 +108,9 @@ import math
 import os
 
 import numpy as np
-import scipy.linalg
 import scipy.optimize
+
+from dryden import dryden_series
 
 # ---------------------------------------------------------------- constants
 MASS = 7472.0
@@ -265,38 +266,8 @@ def modes_at_trim(tr):
 # ---------------------------------------------------------------- turbulence
 def dryden(sigma, n, dt, rng):
     """u_g and w_g (m/s) on n samples dt apart (module doc); zeros when sigma == 0 (draws made anyway)."""
-    T = L_TURB / V_TRIM
-    # u: x' = -x/T + η, u = σ√(2T)/T · x   (H_u = σ√(2T)/(1+Ts))
-    Au = np.array([[-1.0 / T]])
-    Bu = np.array([[1.0]])
-    Cu = np.array([[sigma * math.sqrt(2.0 * T) / T]])
-    # w: controllable canonical form of σ√T (1+√3 T s)/(T s + 1)²
-    Aw = np.array([[0.0, 1.0], [-1.0 / T**2, -2.0 / T]])
-    Bw = np.array([[0.0], [1.0]])
-    Cw = np.array([[1.0, math.sqrt(3.0) * T]]) * sigma * math.sqrt(T) / T**2
-    out = []
-    for A, B, C in ((Au, Bu, Cu), (Aw, Bw, Cw)):
-        k = A.shape[0]
-        # Van Loan: exp([[-A, BB'], [0, A']] dt) gives Φ and Qd
-        M = np.zeros((2 * k, 2 * k))
-        M[:k, :k] = -A
-        M[:k, k:] = B @ B.T
-        M[k:, k:] = A.T
-        E = scipy.linalg.expm(M * dt)
-        Phi = E[k:, k:].T
-        Qd = Phi @ E[:k, k:]
-        Qd = 0.5 * (Qd + Qd.T)
-        Pss = scipy.linalg.solve_continuous_lyapunov(A, -B @ B.T)
-        Lq = np.linalg.cholesky(Qd + 1e-30 * np.eye(k))
-        Lp = np.linalg.cholesky(Pss)
-        x = Lp @ rng.standard_normal(k)
-        w = rng.standard_normal((n, k))
-        y = np.empty(n)
-        for i in range(n):
-            y[i] = (C @ x)[0]
-            x = Phi @ x + Lq @ w[i]
-        out.append(y)
-    return out[0], out[1]
+    u, w = dryden_series(("u", "w"), sigma, L_TURB / V_TRIM, n, dt, rng)
+    return u, w
 
 
 # ---------------------------------------------------------------- inputs

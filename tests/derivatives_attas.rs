@@ -16,6 +16,50 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
+/// The generator's records of seed 1 (and `extra` arguments) in a fresh temporary directory of the test `tag`
+/// (removed when the returned handle drops).
+fn generated(tag: &str, extra: &[&str]) -> tempfile::TempDir {
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!("flightid-attas-{tag}-"))
+        .tempdir()
+        .unwrap();
+    let python = flightid::sim::env::python().expect("the project's Python environment");
+    common::run_ok(
+        Command::new(python)
+            .arg(root().join("scripts/gen_attas_records.py"))
+            .args(["--seed", "1"])
+            .args(extra)
+            .arg("--out")
+            .arg(tmp.path()),
+    );
+    tmp
+}
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `derivatives --method METHOD --json` on both records of `dir` as `.EXT` files, through the shipped map and
+/// airframe: the JSON document.
+fn derivatives(dir: &Path, ext: &str, method: &str) -> serde_json::Value {
+    let out = dir.join(format!("{method}-{ext}.json"));
+    common::run_ok(
+        Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .arg("derivatives")
+            .arg("--data")
+            .arg(dir.join(format!("attas_elv.{ext}")))
+            .arg("--data")
+            .arg(dir.join(format!("attas_ailrud.{ext}")))
+            .arg("--columns")
+            .arg(root().join("models/attas.columns.toml"))
+            .arg("--airframe")
+            .arg(root().join("models/attas.airframe.toml"))
+            .args(["--method", method, "--json"])
+            .arg(&out),
+    );
+    common::read_json(&out)
+}
+
 /// The derivatives judged: every target of a measured-data estimate, and the side force's β derivative.
 const JUDGED: [&str; 11] = [
     "Cm_alpha", "Cm_q", "Cm_de", "CL_alpha", "Cl_p", "Cl_da", "Cl_beta", "Cn_beta", "Cn_r",
@@ -31,37 +75,11 @@ const JUDGED: [&str; 11] = [
 /// still one (the longitudinal derivatives missing).
 #[test]
 fn the_shipped_attas_map_and_airframe_give_the_derivatives_of_records_in_the_books_layout() {
-    let tmp = tempfile::Builder::new()
-        .prefix("flightid-attas-")
-        .tempdir()
-        .unwrap();
+    let tmp = generated("derivatives", &[]);
     let dir = tmp.path();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let python = flightid::sim::env::python().expect("the project's Python environment");
-    common::run_ok(
-        Command::new(python)
-            .arg(root.join("scripts/gen_attas_records.py"))
-            .args(["--seed", "1", "--out"])
-            .arg(dir),
-    );
     let truth = &common::read_json(&dir.join("attas.truth.json"))["flightid_equivalent"];
     for (method, tolerance) in [("ee", 0.10), ("fem", 0.05)] {
-        let out = dir.join(format!("{method}.json"));
-        common::run_ok(
-            Command::new(env!("CARGO_BIN_EXE_flightid"))
-                .arg("derivatives")
-                .arg("--data")
-                .arg(dir.join("attas_elv.asc"))
-                .arg("--data")
-                .arg(dir.join("attas_ailrud.asc"))
-                .arg("--columns")
-                .arg(root.join("models/attas.columns.toml"))
-                .arg("--airframe")
-                .arg(root.join("models/attas.airframe.toml"))
-                .args(["--method", method, "--json"])
-                .arg(&out),
-        );
-        let fit = common::read_json(&out);
+        let fit = derivatives(dir, "asc", method);
         assert_eq!(
             fit["axis"], "both",
             "{method}: both records excite their axis"
@@ -88,19 +106,9 @@ fn the_shipped_attas_map_and_airframe_give_the_derivatives_of_records_in_the_boo
 /// (q: 0.003403 rad/s against 0.003409).
 #[test]
 fn check_moves_the_nose_boom_vanes_to_the_cg_and_their_apparent_skew_goes() {
-    let tmp = tempfile::Builder::new()
-        .prefix("flightid-attas-check-")
-        .tempdir()
-        .unwrap();
+    let tmp = generated("check", &[]);
     let dir = tmp.path();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let python = flightid::sim::env::python().expect("the project's Python environment");
-    common::run_ok(
-        Command::new(python)
-            .arg(root.join("scripts/gen_attas_records.py"))
-            .args(["--seed", "1", "--out"])
-            .arg(dir),
-    );
+    let root = root();
     let check = |airframe: bool| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_flightid"));
         cmd.arg("check")
@@ -144,37 +152,10 @@ fn check_moves_the_nose_boom_vanes_to_the_cg_and_their_apparent_skew_goes() {
 /// matrix is complex are refused with exit 2, saying which and what the file holds.
 #[test]
 fn mat_files_are_read_as_the_books_text_files_are() {
-    let tmp = tempfile::Builder::new()
-        .prefix("flightid-attas-mat-")
-        .tempdir()
-        .unwrap();
+    let tmp = generated("mat", &["--mat"]);
     let dir = tmp.path();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let python = flightid::sim::env::python().expect("the project's Python environment");
-    common::run_ok(
-        Command::new(&python)
-            .arg(root.join("scripts/gen_attas_records.py"))
-            .args(["--seed", "1", "--mat", "--out"])
-            .arg(dir),
-    );
-    let estimates = |ext: &str| {
-        let out = dir.join(format!("{ext}.json"));
-        common::run_ok(
-            Command::new(env!("CARGO_BIN_EXE_flightid"))
-                .arg("derivatives")
-                .arg("--data")
-                .arg(dir.join(format!("attas_elv.{ext}")))
-                .arg("--data")
-                .arg(dir.join(format!("attas_ailrud.{ext}")))
-                .arg("--columns")
-                .arg(root.join("models/attas.columns.toml"))
-                .arg("--airframe")
-                .arg(root.join("models/attas.airframe.toml"))
-                .arg("--json")
-                .arg(&out),
-        );
-        common::read_json(&out)["derivatives"].clone()
-    };
+    let estimates = |ext: &str| derivatives(dir, ext, "ee")["derivatives"].clone();
     let text = estimates("asc");
     assert!(text["Cm_alpha"]["value"].is_f64() && text["Cl_p"]["value"].is_f64());
     assert_eq!(estimates("mat"), text);
