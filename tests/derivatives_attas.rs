@@ -104,45 +104,70 @@ fn the_shipped_attas_map_and_airframe_give_the_derivatives_of_records_in_the_boo
 /// 106 ± 10 ms, significant); with the airframe's sensor positions the record is moved to the CG first and the
 /// skew is gone (measured 4 ± 10 ms, not significant), while the gyro biases (the book's) are found either way
 /// (q: 0.003403 rad/s against 0.003409).
+///
+/// A dropout (1.6 s of the record cut out): the piece after it starts from its own initial state. Measured: gyro
+/// biases within 5.0 % of the truth (p the largest; 3.4 % on the whole record), where integrating across the
+/// missing samples, as `check` did before, put p 14.8 % off; tolerance 6 %.
 #[test]
-fn check_moves_the_nose_boom_vanes_to_the_cg_and_their_apparent_skew_goes() {
+fn check_moves_the_nose_boom_vanes_to_the_cg_and_starts_a_piece_after_a_dropout_afresh() {
     let tmp = generated("check", &[]);
     let dir = tmp.path();
-    let root = root();
-    let check = |airframe: bool| {
+    let check = |file: &str, airframe: bool| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_flightid"));
         cmd.arg("check")
-            .arg(dir.join("attas_ailrud.asc"))
+            .arg(dir.join(file))
             .arg("--columns")
-            .arg(root.join("models/attas.columns.toml"))
+            .arg(root().join("models/attas.columns.toml"))
             .arg("--json");
         if airframe {
             cmd.arg("--airframe")
-                .arg(root.join("models/attas.airframe.toml"));
+                .arg(root().join("models/attas.airframe.toml"));
         }
         let out = common::run_ok(&mut cmd);
-        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        let find = |name: &str| {
-            report["instrument"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .find(|e| e["name"] == name)
-                .cloned()
-                .unwrap_or_else(|| panic!("{name} not in {report}"))
-        };
-        (find("skew_beta_s"), find("bias_q_rad_s"))
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
     };
-    let (skew, bias_q) = check(false);
-    eprintln!("without the airframe: skew_beta_s {skew}, bias_q {bias_q}");
+    let find = |report: &serde_json::Value, name: &str| {
+        report["instrument"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["name"] == name)
+            .cloned()
+            .unwrap_or_else(|| panic!("{name} not in {report}"))
+    };
+    let report = check("attas_ailrud.asc", false);
+    let skew = find(&report, "skew_beta_s");
+    eprintln!("without the airframe: skew_beta_s {skew}");
     assert_eq!(skew["significant"], true);
     assert!(skew["value"].as_f64().unwrap() > 0.07);
-    let (skew, bias_q) = check(true);
-    eprintln!("with the airframe: skew_beta_s {skew}, bias_q {bias_q}");
+    let report = check("attas_ailrud.asc", true);
+    let skew = find(&report, "skew_beta_s");
+    eprintln!("with the airframe: skew_beta_s {skew}");
     assert_eq!(skew["significant"], false);
     assert!(skew["value"].as_f64().unwrap().abs() < 0.03);
-    let truth_q = 0.1953f64.to_radians();
-    assert!((bias_q["value"].as_f64().unwrap() - truth_q).abs() < 0.03 * truth_q);
+    assert_eq!(report["pieces"], 1);
+
+    let text = std::fs::read_to_string(dir.join("attas_ailrud.asc")).unwrap();
+    let gap: Vec<&str> = text
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| !(300..340).contains(i))
+        .map(|(_, l)| l)
+        .collect();
+    std::fs::write(dir.join("gap.asc"), gap.join("\n") + "\n").unwrap();
+    let report = check("gap.asc", true);
+    assert_eq!(report["pieces"], 2);
+    assert!(report["initial_state"]
+        .to_string()
+        .contains("initial_phi_rad_piece2"));
+    for (name, truth_deg_s) in [("p", 0.0588f64), ("q", 0.1953), ("r", 0.0571)] {
+        let bias = find(&report, &format!("bias_{name}_rad_s"))["value"]
+            .as_f64()
+            .unwrap();
+        let truth = truth_deg_s.to_radians();
+        eprintln!("dropout: bias_{name} {bias:.6} rad/s, truth {truth:.6}");
+        assert!((bias - truth).abs() < 0.06 * truth, "bias_{name}");
+    }
 }
 
 /// The book's supplement ships most of its ATTAS records as MATLAB MAT-files. The same records written as

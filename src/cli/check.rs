@@ -122,6 +122,13 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         },
         report.iterations,
     );
+    if report.pieces > 1 {
+        println!(
+            "{} pieces between dropouts, each reconstructed from its own initial state; the instrument errors \
+             are common to all",
+            report.pieces
+        );
+    }
     println!(
         "significant = |value| > 3 standard errors (Cramér–Rao, corrected for coloured residuals) and \
          above the practical floor\n(gyro bias 0.05 °/s, accelerometer bias 0.02 m/s², airspeed bias 0.1 m/s, \

@@ -72,12 +72,18 @@ pub struct Estimate {
     pub significant: bool,
 }
 
+/// Fewest samples a piece between dropouts needs to start from its own initial state.
+const MIN_PIECE_SAMPLES: usize = 20;
+
 /// Result of [`check_compatibility`].
 #[derive(Debug, Clone, Serialize)]
 pub struct CheckReport {
+    /// Pieces of the record between dropouts, each reconstructed from its own initial state (1 without).
+    pub pieces: usize,
     /// Instrument errors: biases, scale factors, time skews.
     pub instrument: Vec<Estimate>,
-    /// Estimated initial state (u, v, w in m/s, φ, θ, ψ in rad).
+    /// Estimated initial state (u, v, w in m/s, φ, θ, ψ in rad, altitude in m), and that of every further piece
+    /// after a dropout (`initial_…_piece2`, …).
     pub initial_state: Vec<Estimate>,
     /// RMS of the output residuals after the fit, per measured column.
     pub residual_rms: Vec<(String, f64)>,
@@ -254,11 +260,29 @@ pub fn check_compatibility(
         psi,
         altitude,
     ];
+    // A piece after a dropout starts from its own initial state; a piece of fewer than MIN_PIECE_SAMPLES
+    // samples could not determine one and is integrated over as before.
+    let mut piece_starts = super::dropout_starts(&rec.time_s);
+    let mut bounds: Vec<usize> = std::iter::once(0)
+        .chain(piece_starts.iter().copied())
+        .collect();
+    bounds.push(rec.len());
+    let short: Vec<bool> = bounds
+        .windows(2)
+        .map(|w| w[1] - w[0] < MIN_PIECE_SAMPLES)
+        .collect();
+    piece_starts = piece_starts
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| !short[i + 1])
+        .map(|(_, k)| k)
+        .collect();
     let data = Data {
         t: rec.time_s.clone(),
         gyro,
         accel: if translational { accel } else { None },
         out,
+        piece_starts,
     };
 
     // Parameter set: biases and the initial state first; scale factors and skews after a first fit shows
@@ -282,19 +306,28 @@ pub fn check_compatibility(
             .filter(|&k| data.out[k].is_some())
             .map(Param::Init),
     );
+    let initial: Vec<usize> = params.iter().filter_map(|p| p.initial_state()).collect();
+    for piece in 1..=data.piece_starts.len() {
+        params.extend(initial.iter().map(|&k| Param::PieceInit(piece, k)));
+    }
 
-    // Initial guess: zero instrument errors, initial state from the first measurements.
+    // Initial guess: zero instrument errors, the initial state of every piece from its first measurements.
     let mut theta_p: Vec<f64> = params
         .iter()
-        .map(|p| match *p {
-            Param::Init(k) if k < 3 => {
-                let v = data.out[0].as_ref().map_or(0.0, |x| x[0]);
-                let a = data.out[1].as_ref().map_or(0.0, |x| x[0]);
-                let b = data.out[2].as_ref().map_or(0.0, |x| x[0]);
-                [v * a.cos() * b.cos(), v * b.sin(), v * a.sin() * b.cos()][k]
+        .map(|p| {
+            let at = match *p {
+                Param::PieceInit(piece, _) => data.piece_starts[piece - 1],
+                _ => 0,
+            };
+            let first = |j: usize| data.out[j].as_ref().map_or(0.0, |x| x[at]);
+            match p.initial_state() {
+                Some(k) if k < 3 => {
+                    let (v, a, b) = (first(0), first(1), first(2));
+                    [v * a.cos() * b.cos(), v * b.sin(), v * a.sin() * b.cos()][k]
+                }
+                Some(k) => first(k),
+                None => 0.0,
             }
-            Param::Init(k) => data.out[k].as_ref().map_or(0.0, |x| x[0]),
-            _ => 0.0,
         })
         .collect();
 
@@ -315,12 +348,14 @@ pub fn check_compatibility(
                 data.out[5].clone(),
                 None,
             ],
+            piece_starts: data.piece_starts.clone(),
         };
         let att_params: Vec<Param> = params
             .iter()
             .copied()
             .filter(|p| {
-                matches!(p, Param::GyroBias(_)) || matches!(p, Param::Init(k) if (3..6).contains(k))
+                matches!(p, Param::GyroBias(_))
+                    || p.initial_state().is_some_and(|k| (3..6).contains(&k))
             })
             .collect();
         let start: Vec<f64> = att_params
@@ -405,11 +440,13 @@ pub fn check_compatibility(
         for (k, p) in params.iter().enumerate() {
             if keep[k] {
                 kept_params.push(*p);
-                start.push(if matches!(p, Param::Init(_) | Param::GyroBias(_)) {
-                    theta_p[k]
-                } else {
-                    0.0
-                });
+                start.push(
+                    if p.initial_state().is_some() || matches!(p, Param::GyroBias(_)) {
+                        theta_p[k]
+                    } else {
+                        0.0
+                    },
+                );
             } else {
                 not_identifiable.push(p.name().0);
             }
@@ -445,12 +482,13 @@ pub fn check_compatibility(
             std_error: se,
             significant: value.abs() > 3.0 * se && value.abs() > floor,
         };
-        match p {
-            Param::Init(_) => initial_state.push(Estimate {
+        if p.initial_state().is_some() {
+            initial_state.push(Estimate {
                 significant: false,
                 ..est
-            }),
-            _ => instrument.push(est),
+            });
+        } else {
+            instrument.push(est);
         }
     }
     let residual_rms = outputs
@@ -459,6 +497,7 @@ pub fn check_compatibility(
         .map(|(&j, rj)| (OUT_NAMES[j].to_string(), (sum_sq(rj) / n as f64).sqrt()))
         .collect();
     Ok(CheckReport {
+        pieces: data.piece_starts.len() + 1,
         instrument,
         initial_state,
         residual_rms,
@@ -492,6 +531,7 @@ mod tests {
         // 10 Hz record: the bound is one sample, 0.1 s (above the 50 ms floor)
         let rec = FlightRecord::new((0..50).map(|k| k as f64 * 0.1).collect());
         let report = CheckReport {
+            pieces: 1,
             instrument: vec![
                 estimate("bias_q_rad_s", 0.5, true),
                 estimate("skew_alpha_s", 0.05, true),

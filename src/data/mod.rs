@@ -18,7 +18,9 @@ pub use csv_io::{
 };
 pub use error::{DataError, Warning, WarningKind, IN_MEMORY};
 pub use record::{sampling_warning, unit_warnings, FlightRecord, G0_M_S2, SCHEMA_COLUMNS};
-pub use resample::{resample_uniform, uniform_pieces, UniformPieces, RESAMPLE_METHOD};
+pub use resample::{
+    dropout_starts, resample_uniform, uniform_pieces, UniformPieces, RESAMPLE_METHOD,
+};
 
 pub mod servo_map;
 pub mod tlog;

@@ -81,6 +81,21 @@ pub struct UniformPieces {
     pub notes: Vec<String>,
 }
 
+/// The indices of the samples that follow a dropout: a time step over [`DROPOUT_STEPS`] median steps.
+pub fn dropout_starts(t: &[f64]) -> Vec<usize> {
+    let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return Vec::new();
+    }
+    let median = super::record::median_in_place(&mut steps.clone());
+    steps
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| **s > DROPOUT_STEPS * median)
+        .map(|(k, _)| k + 1)
+        .collect()
+}
+
 /// A measured record in uniformly sampled pieces, the way a flight log needs it before a time-domain
 /// estimator: split at every dropout (a step over [`DROPOUT_STEPS`] median steps: interpolating over missing
 /// samples would invent the motion in them), pieces shorter than [`MIN_PIECE_S`] left out, and a piece whose
@@ -102,15 +117,14 @@ pub fn uniform_pieces(rec: &FlightRecord) -> Result<UniformPieces, DataError> {
     let median = super::record::median_in_place(&mut sorted);
     let mut notes = Vec::new();
     let mut bounds = vec![0];
-    for (k, s) in steps.iter().enumerate() {
-        if *s > DROPOUT_STEPS * median {
-            bounds.push(k + 1);
-            notes.push(format!(
-                "a dropout of {s:.3} s ({:.0} samples missing) after t = {} s: the record is split there",
-                s / median - 1.0,
-                t[k]
-            ));
-        }
+    for k in dropout_starts(t) {
+        let s = t[k] - t[k - 1];
+        bounds.push(k);
+        notes.push(format!(
+            "a dropout of {s:.3} s ({:.0} samples missing) after t = {} s: the record is split there",
+            s / median - 1.0,
+            t[k - 1]
+        ));
     }
     bounds.push(t.len());
     let mut pieces = Vec::new();

@@ -15,7 +15,10 @@ pub(super) enum Param {
     OutBias(usize),
     OutScale(usize),
     OutSkew(usize),
+    /// A state at the start of the record.
     Init(usize),
+    /// A state at the start of piece `.0` (1, 2, …) of a record with dropouts.
+    PieceInit(usize, usize),
 }
 
 /// Number of outputs (and of states).
@@ -62,6 +65,10 @@ impl Param {
                 OUT_NAMES[j].into(),
             ),
             Param::Init(k) => (format!("initial_{}", STATE_NAMES[k]), STATE_NAMES[k].into()),
+            Param::PieceInit(p, k) => (
+                format!("initial_{}_piece{}", STATE_NAMES[k], p + 1),
+                STATE_NAMES[k].into(),
+            ),
         }
     }
 
@@ -75,9 +82,17 @@ impl Param {
             Param::OutBias(_) => (1e-7, 0.1_f64.to_radians()),
             Param::OutScale(_) => (1e-6, 0.01),
             Param::OutSkew(_) => (1e-4, 0.01),
-            Param::Init(k) if k < 3 => (1e-5, 0.0),
-            Param::Init(ALTITUDE) => (1e-3, 0.0),
-            Param::Init(_) => (1e-7, 0.0),
+            Param::Init(k) | Param::PieceInit(_, k) if k < 3 => (1e-5, 0.0),
+            Param::Init(ALTITUDE) | Param::PieceInit(_, ALTITUDE) => (1e-3, 0.0),
+            Param::Init(_) | Param::PieceInit(..) => (1e-7, 0.0),
+        }
+    }
+
+    /// The state this parameter starts, for an initial state (of any piece).
+    pub(super) fn initial_state(self) -> Option<usize> {
+        match self {
+            Param::Init(k) | Param::PieceInit(_, k) => Some(k),
+            _ => None,
         }
     }
 }
@@ -89,6 +104,9 @@ pub(super) struct Data {
     pub(super) accel: Option<[Vec<f64>; 3]>,
     /// Measured outputs; `None` when the column is absent.
     pub(super) out: [Option<Vec<f64>>; N_OUT],
+    /// The samples after a dropout ([`crate::data::dropout_starts`]): each begins a piece that starts
+    /// from its own initial state, as integrating over the missing samples would invent the motion in them.
+    pub(super) piece_starts: Vec<usize>,
 }
 
 /// Rigid-body kinematics: state derivative for rates ω and specific force f.
@@ -136,7 +154,7 @@ pub(super) fn residuals(
     let mut bias = [0.0; N_OUT];
     let mut scale = [0.0; N_OUT];
     let mut skew = [0.0; N_OUT];
-    let mut x0 = [0.0; N_OUT];
+    let mut x0 = vec![[0.0; N_OUT]; data.piece_starts.len() + 1];
     for (p, &v) in params.iter().zip(th) {
         match *p {
             Param::GyroBias(i) => gyro_bias[i] = v,
@@ -144,7 +162,8 @@ pub(super) fn residuals(
             Param::OutBias(j) => bias[j] = v,
             Param::OutScale(j) => scale[j] = v,
             Param::OutSkew(j) => skew[j] = v,
-            Param::Init(k) => x0[k] = v,
+            Param::Init(k) => x0[0][k] = v,
+            Param::PieceInit(piece, k) => x0[piece][k] = v,
         }
     }
     let translational = data.accel.is_some();
@@ -158,8 +177,13 @@ pub(super) fn residuals(
     };
     // Model outputs at every sample.
     let mut y: Vec<[f64; N_OUT]> = Vec::with_capacity(n);
-    let mut x = x0;
+    let mut x = x0[0];
+    let mut next_piece = 0;
     for k in 0..n {
+        if data.piece_starts.get(next_piece) == Some(&k) {
+            next_piece += 1;
+            x = x0[next_piece];
+        }
         y.push(outputs_of(&x));
         if k + 1 == n {
             break;
