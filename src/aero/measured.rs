@@ -469,8 +469,16 @@ pub fn reference_condition(recs: &[data::FlightRecord], air: &[AirData]) -> Refe
 
 /// Dimensional derivatives (Etkin & Reid §4.9 / Klein & Morelli Table 3.x conventions) from nondimensional
 /// estimates at the reference condition: M_α = q̄Sc̄ C_mα/I_yy, M_q = q̄Sc̄² C_mq/(2V I_yy),
-/// M_δe = q̄Sc̄ C_mδe/I_yy, Z_α = −q̄S C_Lα/(mV), L_β, L_p = q̄Sb² C_lp/(2V I_xx), L_δa, L_δr, N_β, N_r,
-/// N_δa, N_δr likewise with I_zz, Y_β = q̄S C_Yβ/m. σ scales by the same factor.
+/// M_δe = q̄Sc̄ C_mδe/I_yy, Z_α = −q̄S C_Lα/(mV), L_β, L_p = q̄Sb² C_lp/(2V I_xx), L_r, L_δa, L_δr, N_β, N_p,
+/// N_r, N_δa, N_δr likewise with I_zz, Y_β = q̄S C_Yβ/m. σ scales by the same factor.
+///
+/// And the primed roll and yaw derivatives (`Lprime_p`, `Nprime_da`, …), the inertia coupling I_xz folded in
+/// so that ṗ = Σ L′_x x and ṙ = Σ N′_x x (McRuer, Ashkenas & Graham, *Aircraft Dynamics and Automatic
+/// Control*, ch. 4): with
+/// Γ = 1 − I_xz²/(I_xx I_zz), L′ = (L + (I_xz/I_xx) N)/Γ and N′ = (N + (I_xz/I_zz) L)/Γ. These are what a
+/// model written as ṗ = L_p p + … estimates (Jategaonkar's lateral test cases). A derivative held at 0 counts
+/// as 0; σ is |1/Γ| σ_L + |I_xz/(I_xx Γ)| σ_N (and likewise), an upper bound, as the correlation of the
+/// two estimates is not carried here.
 pub fn dimensional(
     est: &BTreeMap<String, Estimate>,
     airframe: &Airframe,
@@ -482,7 +490,7 @@ pub fn dimensional(
     let b = airframe.wing.span_m.unwrap_or(f64::NAN);
     let i = airframe.inertia_kg_m2;
     let m = airframe.mass_kg.unwrap_or(f64::NAN);
-    let table: [(&str, &str, f64); 16] = [
+    let table: [(&str, &str, f64); 18] = [
         ("M_alpha", "Cm_alpha", qs * c / i.iyy),
         ("M_q", "Cm_q", qs * c * c / (2.0 * v * i.iyy)),
         ("M_alphadot", "Cm_alphadot", qs * c * c / (2.0 * v * i.iyy)),
@@ -493,14 +501,16 @@ pub fn dimensional(
         ("Y_beta", "CY_beta", qs / m),
         ("L_beta", "Cl_beta", qs * b / i.ixx),
         ("L_p", "Cl_p", qs * b * b / (2.0 * v * i.ixx)),
+        ("L_r", "Cl_r", qs * b * b / (2.0 * v * i.ixx)),
         ("L_da", "Cl_da", qs * b / i.ixx),
         ("L_dr", "Cl_dr", qs * b / i.ixx),
         ("N_beta", "Cn_beta", qs * b / i.izz),
+        ("N_p", "Cn_p", qs * b * b / (2.0 * v * i.izz)),
         ("N_r", "Cn_r", qs * b * b / (2.0 * v * i.izz)),
         ("N_da", "Cn_da", qs * b / i.izz),
         ("N_dr", "Cn_dr", qs * b / i.izz),
     ];
-    table
+    let mut out: BTreeMap<String, Estimate> = table
         .iter()
         .filter(|(_, _, k)| k.is_finite() && *k != 0.0)
         .filter_map(|(name, nondim, k)| {
@@ -514,7 +524,28 @@ pub fn dimensional(
                 )
             })
         })
-        .collect()
+        .collect();
+    let gamma = 1.0 - i.ixz * i.ixz / (i.ixx * i.izz);
+    if i.ixx > 0.0 && i.izz > 0.0 && gamma.is_finite() {
+        let zero = Estimate {
+            value: 0.0,
+            std_error: 0.0,
+        };
+        for x in ["beta", "p", "r", "da", "dr"] {
+            let (l, n) = (out.get(&format!("L_{x}")), out.get(&format!("N_{x}")));
+            if l.is_none() && n.is_none() {
+                continue;
+            }
+            let (l, n) = (*l.unwrap_or(&zero), *n.unwrap_or(&zero));
+            let combine = |own: Estimate, other: Estimate, k: f64| Estimate {
+                value: (own.value + k * other.value) / gamma,
+                std_error: (own.std_error + (k * other.std_error).abs()) / gamma.abs(),
+            };
+            out.insert(format!("Lprime_{x}"), combine(l, n, i.ixz / i.ixx));
+            out.insert(format!("Nprime_{x}"), combine(n, l, i.ixz / i.izz));
+        }
+    }
+    out
 }
 
 /// What `derivatives --data … --airframe …` reports, whatever the method.

@@ -77,3 +77,56 @@ fn a_slowly_logged_pulse_train_is_excitation_and_its_steps_are_not_noise() {
     let noisy: Vec<f64> = (0..500).map(|i| 20.0 * noise(i)).collect();
     assert!(!surface_moves(&noisy));
 }
+
+/// The primed derivatives solve the coupled moment equations: I_xx ṗ − I_xz ṙ = I_xx L and
+/// I_zz ṙ − I_xz ṗ = I_zz N with ṗ = L′, ṙ = N′ (per unit of each variable), to rounding.
+#[test]
+fn primed_roll_and_yaw_derivatives_fold_in_the_product_of_inertia() {
+    let airframe = Airframe::from_toml_str(
+        "name = \"t\"\nmass_kg = 17631.0\ninertia_kg_m2 = { ixx = 133367.0, iyy = 252687.0, izz = 359593.0, \
+         ixz = 11442.0 }\nwing = { area_m2 = 64.0, span_m = 21.5, mac_m = 3.159 }\n",
+        "t.toml",
+    )
+    .unwrap();
+    let cond = ReferenceCondition {
+        airspeed_m_s: 129.0,
+        density_kg_m3: 0.705,
+        alpha_rad: 0.05,
+        theta_rad: 0.05,
+        elevator_rad: 0.0,
+        thrust_n: 0.0,
+    };
+    let est: BTreeMap<String, Estimate> = [
+        ("Cl_da", 0.096, 0.001),
+        ("Cn_da", 0.005, 0.002),
+        ("Cl_p", -0.385, 0.004),
+    ]
+    .into_iter()
+    .map(|(n, v, s)| {
+        (
+            n.to_string(),
+            Estimate {
+                value: v,
+                std_error: s,
+            },
+        )
+    })
+    .collect();
+    let d = dimensional(&est, &airframe, &cond);
+    let i = airframe.inertia_kg_m2;
+    for x in ["da", "p"] {
+        let at = |n: &str| d.get(&format!("{n}_{x}")).map_or(0.0, |e| e.value);
+        let (l, n, lp, np) = (at("L"), at("N"), at("Lprime"), at("Nprime"));
+        assert!(
+            (i.ixx * lp - i.ixz * np - i.ixx * l).abs() < 1e-9 * (i.ixx * l).abs().max(1.0),
+            "{x}"
+        );
+        assert!(
+            (i.izz * np - i.ixz * lp - i.izz * n).abs() < 1e-9 * (i.izz * l).abs().max(1.0),
+            "{x}"
+        );
+    }
+    // N′_δa: the aileron's rolling moment reaches the yaw through I_xz (here three times N_δa).
+    assert!(d["Nprime_da"].value > 2.5 * d["N_da"].value);
+    assert!(d["Nprime_da"].std_error >= d["N_da"].std_error);
+}
