@@ -8,7 +8,8 @@
 //! Text files as data systems and textbooks also write them are read too: columns separated by spaces
 //! or tabs instead of commas (the first line that is not metadata has no comma), and files without a
 //! header row (that line is all numbers). A headerless file's columns are named by their position,
-//! `1`, `2`, …, which a column map renames (`1 = { to = "time_s" }`). A MATLAB MAT-file (`.mat`) is read
+//! `1`, `2`, …, which a column map renames (`1 = { to = "time_s" }`). `%` lines before the header are
+//! metadata as `#` lines are, and a row of units under the header is kept as metadata. A MATLAB MAT-file (`.mat`) is read
 //! as such a headerless file: its matrix of samples × channels ([`mat`]).
 
 use std::fs::{self, File, OpenOptions};
@@ -25,7 +26,7 @@ mod chunk;
 mod mat;
 mod text;
 use chunk::{parse_chunk, shift_lines, split_chunks, Chunk};
-use text::{is_numbers_row, whitespace_separated, whitespace_to_commas};
+use text::{comment, is_numbers_row, is_units_row, whitespace_separated, whitespace_to_commas};
 
 /// Reads and validates a flight-data CSV; soft findings are available from [`FlightRecord::validate`]
 /// or directly from [`read_csv_with_warnings`].
@@ -199,7 +200,11 @@ fn header_complete(bytes: &[u8]) -> bool {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let mut lines = bytes.split(|&b| b == b'\n');
     let _unfinished = lines.next_back();
-    lines.any(|l| !l.starts_with(b"#") && !l.iter().all(u8::is_ascii_whitespace))
+    // the header and the line after it (a units row, or the first data row)
+    lines
+        .filter(|l| comment(l).is_none() && !l.iter().all(u8::is_ascii_whitespace))
+        .nth(1)
+        .is_some()
 }
 
 /// Reads a flight-data CSV and returns it with its unit-sanity and sampling warnings.
@@ -275,7 +280,7 @@ fn parse_preamble(
         let end = next_line_end(bytes, pos);
         let text = trim_cr(&bytes[pos..end]);
         line += 1;
-        if let Some(meta) = text.strip_prefix(b"#") {
+        if let Some(meta) = comment(text) {
             metadata.push(String::from_utf8_lossy(meta).into_owned());
         } else if !text.iter().all(u8::is_ascii_whitespace) {
             break (pos, end);
@@ -320,12 +325,22 @@ fn parse_preamble(
             (names, vec![1.0; n], Vec::new())
         }
     };
-    // A headerless file's first row is data: the body starts there, after an implied header line.
-    let (header_line, body_start) = if headerless {
+    // A headerless file's first row is data: the body starts there, after an implied header line. A row of
+    // units under the header (no field a number, as data systems export them) is kept as metadata.
+    let (mut header_line, mut body_start) = if headerless {
         (line - 1, header_span.0)
     } else {
         (line, (header_span.1 + 1).min(bytes.len()))
     };
+    if !headerless && body_start < bytes.len() {
+        let end = next_line_end(bytes, body_start);
+        let row = trim_cr(&bytes[body_start..end]);
+        if is_units_row(row, names.len()) {
+            metadata.push(format!(" units: {}", String::from_utf8_lossy(row).trim()));
+            header_line += 1;
+            body_start = (end + 1).min(bytes.len());
+        }
+    }
     let time_index =
         names
             .iter()
