@@ -18,9 +18,7 @@
 //! candidate fit, sensitivity and score test then works on. With no process noise `K = 0` and `ν = r`: the
 //! output-error search.
 //!
-//! The gusts are states of the filter, a Dryden shaping filter per body axis that moves the velocity relative
-//! to the air ([`with_gust_states`]). The process-noise variances, one driving the gusts and one on the body
-//! rates, are chosen
+//! The process-noise variances, one on the body velocities (the gusts) and one on the body rates, are chosen
 //! by maximum likelihood on the unextended model's residual with the innovation variances relaxed,
 //! `−2 ln L = N Σ_c ln R_c(q)`, `R_c = mean ν_c²` (Jategaonkar §5.2, the relaxation of eq. 5.11), on a grid.
 //! They are kept only when the likelihood gain beats the Schwarz penalty counted in effective samples of the
@@ -31,9 +29,6 @@ use faer::Mat;
 use super::replay::ReplayCase;
 pub use super::residual_filter::ResidualFilter;
 use crate::estimate::fem;
-
-/// One knot, m/s.
-const KNOT_M_S: f64 = 0.514_444;
 
 /// How much of every segment the error dynamics are fitted on, s: long enough for the short-period and
 /// Dutch-roll responses, short enough that the trajectory's own changes do not enter `A`.
@@ -47,55 +42,14 @@ fn variance_grid() -> Vec<f64> {
         .collect()
 }
 
-/// Perturbation indices of the body rates, the body velocities and the altitude in `initial_state_columns`'
-/// order.
+/// Perturbation indices of the body rates and the body velocities in `initial_state_columns`' order.
 const RATES: [usize; 3] = [2, 3, 4];
 const VELOCITIES: [usize; 3] = [5, 6, 7];
-const ALTITUDE: usize = 8;
-
-/// Scale length of the gusts' Dryden spectrum at and above 2000 ft (MIL-F-8785C: L_u = L_v = L_w = 1750 ft), m.
-const GUST_SCALE_LENGTH_M: f64 = 533.4;
-
-/// The error dynamics `(A, C)` augmented with the wind as three states of its own, one per body axis in the
-/// perturbation units of the body velocities, each a first-order Gauss–Markov process `g_{k+1} = ρ g_k + w_k`
-/// with `ρ = exp(−V Δt / L)`: the Dryden spectrum's shaping filter (MIL-F-8785C), the coloured process noise
-/// turned into white noise by augmenting the state with its shaping filter (Gelb, *Applied Optimal
-/// Estimation*, 1974, §4.2, correlated process noise). The gusts do not push the inertial velocity: they
-/// change the velocity relative to the air, which is all the forces, the moments, the vanes, the airspeed and
-/// the accelerometers see, while the attitudes and the altitude integrate the inertial motion. So a wind `g`
-/// acts on the next state as the velocity perturbation `−g` does less its kinematics (the velocity's carry-over
-/// to the next step, the altitude's integration of it): `B = −(A_{·,v} − E_v)` with the altitude row zero, and
-/// on the outputs as `−C_{·,v}`. White noise on the inertial velocities (the model before) makes a steady
-/// updraft a drift that the filter must re-inject at every step; its innovations stay coloured over the
-/// gusts' ten seconds, and a slow effect (a lift nonlinearity, a θ-sensor offset) is judged against them.
-fn with_gust_states(a: &Mat<f64>, c: &Mat<f64>, rho: f64) -> (Mat<f64>, Mat<f64>) {
-    let (n, m) = (a.nrows(), c.nrows());
-    let g = VELOCITIES.len();
-    let a_aug = Mat::<f64>::from_fn(n + g, n + g, |i, j| match (i < n, j < n) {
-        (true, true) => a[(i, j)],
-        (true, false) if i == ALTITUDE => 0.0,
-        (true, false) => {
-            let v = VELOCITIES[j - n];
-            -(a[(i, v)] - if i == v { 1.0 } else { 0.0 })
-        }
-        (false, false) if i == j => rho,
-        _ => 0.0,
-    });
-    let c_aug = Mat::<f64>::from_fn(m, n + g, |o, j| {
-        if j < n {
-            c[(o, j)]
-        } else {
-            -c[(o, VELOCITIES[j - n])]
-        }
-    });
-    (a_aug, c_aug)
-}
 
 /// What the process-noise estimate found (reported with the diagnosis).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct ProcessNoise {
-    /// Variance of the white noise that drives the wind states (the gusts, see [`with_gust_states`]),
-    /// (0.5 m/s)²/s.
+    /// Variance on the body velocities, (0.5 m/s)²/s.
     pub velocity_variance: f64,
     /// Variance on the body rates, (0.005 rad/s)²/s.
     pub rate_variance: f64,
@@ -240,21 +194,13 @@ pub fn estimate(
 ) -> Option<(Option<ResidualFilter>, ProcessNoise)> {
     let (a, c) = error_dynamics(case, columns)?;
     let (len, dt_s) = (case.len(), case.dt_s());
-    if a.nrows() <= ALTITUDE {
-        return None;
-    }
-    let speed_m_s = case.point.speed_kts * KNOT_M_S;
-    let (n, (a, c)) = (
-        a.nrows(),
-        with_gust_states(&a, &c, (-speed_m_s * dt_s / GUST_SCALE_LENGTH_M).exp()),
-    );
     let oe = innovations(None, r0, columns);
     let r_oe = channel_variance(&oe, len);
     // −2 ln L at q: the innovation variances relaxed twice from output error's
     let evaluate = |qv: f64, qr: f64| -> Option<(f64, ResidualFilter)> {
-        // (no process noise on the heading, a state the rates drive; the gusts' on the wind states)
+        // (no process noise on the heading, a state the rates drive)
         let mut q = vec![0.0; a.nrows()];
-        (n..a.nrows()).for_each(|i| q[i] = qv);
+        VELOCITIES.iter().for_each(|&i| q[i] = qv);
         RATES.iter().for_each(|&i| q[i] = qr);
         let mut r = r_oe.clone();
         let mut best = None;
@@ -315,7 +261,7 @@ pub fn estimate(
 
 #[cfg(test)]
 mod tests {
-    use super::{filter_for, fit_error_dynamics, with_gust_states, ALTITUDE, VELOCITIES};
+    use super::{filter_for, fit_error_dynamics};
     use faer::Mat;
 
     /// A, C, the responses, the segment starts and the number of samples.
@@ -369,33 +315,6 @@ mod tests {
             for j in 0..9 {
                 assert!((c_fit[(o, j)] - c[(o, j)]).abs() < 1e-12, "C[{o}][{j}]");
             }
-        }
-    }
-
-    #[test]
-    fn a_wind_the_aircraft_moves_with_changes_nothing_the_air_sees() {
-        let (a, c, ..) = system();
-        let (a_aug, c_aug) = with_gust_states(&a, &c, 0.9);
-        let n = a.nrows();
-        assert_eq!((a_aug.nrows(), c_aug.ncols()), (n + 3, n + 3));
-        for (g, &v) in VELOCITIES.iter().enumerate() {
-            // the body velocity perturbed by as much as the wind: no air-relative change
-            let mut x = Mat::<f64>::zeros(n + 3, 1);
-            x[(v, 0)] = 1.0;
-            x[(n + g, 0)] = 1.0;
-            let next = &a_aug * &x;
-            for i in 0..n {
-                // only the velocity's carry-over and the altitude's integration of it are left
-                let want = match i {
-                    _ if i == v => 1.0,
-                    ALTITUDE => a[(ALTITUDE, v)],
-                    _ => 0.0,
-                };
-                assert!((next[(i, 0)] - want).abs() < 1e-12, "state {i}, wind {g}");
-            }
-            assert!((next[(n + g, 0)] - 0.9).abs() < 1e-12);
-            let y = &c_aug * &x;
-            assert!((0..c.nrows()).all(|o| y[(o, 0)].abs() < 1e-12));
         }
     }
 
