@@ -173,7 +173,8 @@ fn check_moves_the_nose_boom_vanes_to_the_cg_and_starts_a_piece_after_a_dropout_
 /// The book's supplement ships most of its ATTAS records as MATLAB MAT-files. The same records written as
 /// MAT-files (`--mat`: the text files' numbers, one compressed as MATLAB's `-v7` saves, one not, each beside a
 /// scalar and a character array) read through the same positional map give the same equation-error estimates
-/// to the last digit. A file that is not a MAT-file, one without a matrix of samples × channels, and one whose
+/// to the last digit; the matrix stored transposed (channels × samples) gives the same maneuvers. A file that is
+/// not a MAT-file, one without a matrix of samples × channels, and one whose
 /// matrix is complex are refused with exit 2, saying which and what the file holds.
 #[test]
 fn mat_files_are_read_as_the_books_text_files_are() {
@@ -189,8 +190,27 @@ fn mat_files_are_read_as_the_books_text_files_are() {
                   d = sys.argv[1]\n\
                   scipy.io.savemat(d + '/scalars.mat', {'dt': 0.04, 'gain': np.array([1.0, 2.0])})\n\
                   scipy.io.savemat(d + '/complex.mat', {'data': np.ones((5, 3)) + 1j})\n\
+                  m = scipy.io.loadmat(d + '/attas_ailrud.mat')['attas_ailrud']\n\
+                  scipy.io.savemat(d + '/rows.mat', {'rows': m.T})\n\
                   open(d + '/garbage.mat', 'w').write('time,elevator\\n0,1\\n')\n";
     common::run_ok(Command::new(&python).args(["-c", script]).arg(dir));
+    // The same matrix stored as channels × samples is read transposed: the same maneuvers are found.
+    let segments = |file: &str| {
+        let out = common::run_ok(
+            Command::new(env!("CARGO_BIN_EXE_flightid"))
+                .arg("segments")
+                .arg(dir.join(file))
+                .arg("--columns")
+                .arg(root().join("models/attas.columns.toml")),
+        );
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    let found = segments("attas_ailrud.mat");
+    assert!(
+        found.contains("aileron_rad") && found.contains("rudder_rad"),
+        "{found}"
+    );
+    assert_eq!(segments("rows.mat"), found);
     for (file, needles) in [
         (
             "garbage.mat",

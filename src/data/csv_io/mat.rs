@@ -3,8 +3,9 @@
 //! by position, which a column map renames), so that the same map serves a book's `.asc` and `.mat` records.
 //!
 //! Which matrix: the one named as the file (`fAttasElv1` in `fAttasElv1.mat`), else the largest real 2-D
-//! numeric array. Character, cell and structure variables are passed over. The record's metadata names the
-//! matrix read and any other numeric arrays.
+//! numeric array; one with fewer rows than columns is taken as channels × samples and read transposed.
+//! Character, cell and structure variables are passed over. The record's metadata names the matrix read and
+//! any other numeric arrays.
 
 use std::path::Path;
 
@@ -56,6 +57,14 @@ pub(super) fn matrix_as_text(path: &Path) -> Result<(Vec<u8>, String), DataError
             ))
         })?;
     let (rows, cols) = (chosen.size()[0], chosen.size()[1]);
+    // A record has more samples than channels: a matrix stored the other way round (channels as rows, as
+    // some tools save it) is read transposed.
+    let transposed = rows < cols;
+    let (samples, channels) = if transposed {
+        (cols, rows)
+    } else {
+        (rows, cols)
+    };
     let values = real_values(chosen.data()).ok_or_else(|| {
         fail(format!(
             "the matrix `{}` is complex; flight data are real numbers",
@@ -68,8 +77,13 @@ pub(super) fn matrix_as_text(path: &Path) -> Result<(Vec<u8>, String), DataError
         .map(|a| format!("`{}` {} × {}", a.name(), a.size()[0], a.size()[1]))
         .collect();
     let note = format!(
-        " MAT-file matrix `{}`: {rows} samples × {cols} channels{}",
+        " MAT-file matrix `{}`: {samples} samples × {channels} channels{}{}",
         chosen.name(),
+        if transposed {
+            " (stored as channels × samples, read transposed)"
+        } else {
+            ""
+        },
         if others.is_empty() {
             String::new()
         } else {
@@ -77,13 +91,14 @@ pub(super) fn matrix_as_text(path: &Path) -> Result<(Vec<u8>, String), DataError
         }
     );
     let mut text = Vec::with_capacity(rows * cols * 12);
-    for i in 0..rows {
-        for j in 0..cols {
+    for i in 0..samples {
+        for j in 0..channels {
             if j > 0 {
                 text.push(b',');
             }
-            // MATLAB stores column by column.
-            text.extend_from_slice(format!("{:?}", values[j * rows + i]).as_bytes());
+            // MATLAB stores column by column: element (r, c) is at c·rows + r.
+            let (r, c) = if transposed { (j, i) } else { (i, j) };
+            text.extend_from_slice(format!("{:?}", values[c * rows + r]).as_bytes());
         }
         text.push(b'\n');
     }
