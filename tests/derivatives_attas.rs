@@ -100,7 +100,7 @@ fn the_shipped_attas_map_and_airframe_give_the_derivatives_of_records_in_the_boo
 }
 
 /// `check --airframe`: the nose boom 13 m ahead of the CG makes the β vane read β + r x/V, which the
-/// reconstruction's CG kinematics take for a lead of about x/V (measured without the airframe: skew_beta_s
+/// reconstruction's CG kinematics take for a lag of about x/V (measured without the airframe: skew_beta_s
 /// 106 ± 10 ms, significant); with the airframe's sensor positions the record is moved to the CG first and the
 /// skew is gone (measured 4 ± 10 ms, not significant), while the gyro biases (the book's) are found either way
 /// (q: 0.003403 rad/s against 0.003409).
