@@ -262,20 +262,12 @@ pub fn check_compatibility(
     ];
     // A piece after a dropout starts from its own initial state; a piece of fewer than MIN_PIECE_SAMPLES
     // samples could not determine one and is integrated over as before.
-    let mut piece_starts = super::dropout_starts(&rec.time_s);
-    let mut bounds: Vec<usize> = std::iter::once(0)
-        .chain(piece_starts.iter().copied())
-        .collect();
-    bounds.push(rec.len());
-    let short: Vec<bool> = bounds
-        .windows(2)
-        .map(|w| w[1] - w[0] < MIN_PIECE_SAMPLES)
-        .collect();
-    piece_starts = piece_starts
-        .into_iter()
+    let starts = super::dropout_starts(&rec.time_s);
+    let piece_starts: Vec<usize> = starts
+        .iter()
         .enumerate()
-        .filter(|(i, _)| !short[i + 1])
-        .map(|(_, k)| k)
+        .filter(|&(i, &k)| starts.get(i + 1).copied().unwrap_or(rec.len()) - k >= MIN_PIECE_SAMPLES)
+        .map(|(_, &k)| k)
         .collect();
     let data = Data {
         t: rec.time_s.clone(),
