@@ -26,6 +26,7 @@ use crate::data::{self, G0_M_S2};
 
 mod air_data;
 mod modes;
+mod structure;
 pub use air_data::{
     advanced, air_data, deskewed, moved_to_cg, skew_from_force_equation, standard_density_kg_m3,
     AirData, FORCE_EQUATION_SKEWS,
@@ -34,6 +35,7 @@ pub use modes::{
     lateral_modes_at, longitudinal_modes_at, model_constants, modes_with_uncertainty, theta_from,
     ModeEstimate,
 };
+pub use structure::{screen as structure_screen, Nonlinearity};
 
 /// Why a measured-data estimate cannot be made.
 #[derive(Debug, thiserror::Error)]
@@ -570,6 +572,8 @@ pub struct MeasuredReport {
     /// Whether every fit converged (output and filter error; absent for equation error).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub converged: Option<bool>,
+    /// Nonlinear terms the equation-error residuals follow ([`structure_screen`]); reported, not estimated.
+    pub nonlinearities: Vec<Nonlinearity>,
     /// What the reader should know (skipped equations, fixed terms, convergence).
     pub notes: Vec<String>,
 }
@@ -734,6 +738,8 @@ pub fn equation_error_report(
         ));
     }
     notes.extend(sign_convention_notes(&ee.derivatives));
+    let nonlinearities = structure_screen(&ee.equations);
+    notes.extend(nonlinearities.iter().map(Nonlinearity::note));
     notes.push(
         "equation error: standard errors corrected for coloured residuals (Morelli & Klein eq. 5.73); \
          the phugoid needs the drag equation, which only output error estimates"
@@ -753,6 +759,7 @@ pub fn equation_error_report(
             .collect(),
         fit_percent: BTreeMap::new(),
         converged: None,
+        nonlinearities,
         notes,
     })
 }

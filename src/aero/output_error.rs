@@ -49,9 +49,10 @@ use super::flight_models::{
     LATERAL_STATES, LONGITUDINAL_PARAMETERS, LONGITUDINAL_STATES,
 };
 use super::measured::{
-    air_data, dimensional, lateral_modes_at, longitudinal_modes_at, model_constants,
-    modes_with_uncertainty, moved_to_cg, reference_condition, AirData, AxisChoice, Estimate,
-    MeasuredError, MeasuredReport, ModeEstimate, ReferenceCondition,
+    air_data, dimensional, equation_error_measured, lateral_modes_at, longitudinal_modes_at,
+    model_constants, modes_with_uncertainty, moved_to_cg, reference_condition, structure_screen,
+    AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, Nonlinearity,
+    ReferenceCondition,
 };
 use crate::data::{self, Channel, G0_M_S2};
 use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signature, StateModel};
@@ -686,6 +687,12 @@ pub fn output_error_report(
             .map_or("Cramér-Rao bounds", |f| f.1.estimate.covariance_method)
     ));
     notes.extend(super::measured::sign_convention_notes(&derivatives));
+    // The structure screen runs on equation error's regressions (the module doc of `structure`): one more
+    // regression of the same records, cheap beside the fits; where it cannot be formed nothing is screened.
+    let nonlinearities = equation_error_measured(records, airframe, axis, false)
+        .map(|ee| structure_screen(&ee.equations))
+        .unwrap_or_default();
+    notes.extend(nonlinearities.iter().map(Nonlinearity::note));
     Ok(MeasuredReport {
         method: match options.method {
             Method::Oe => "output_error",
@@ -702,6 +709,7 @@ pub fn output_error_report(
             .collect(),
         fit_percent,
         converged: Some(converged),
+        nonlinearities,
         notes,
     })
 }
