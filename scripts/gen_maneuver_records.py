@@ -9,9 +9,10 @@ Written the way a pilot flies and a data system logs, not the way flightid's `fl
 
 Record `maneuvers.csv` (about 330 s) holds, in order: an elevator 3-2-1-1, an unequal elevator doublet,
 an aileron doublet, a rudder doublet, an aileron bank-to-bank (three rolls with holds at wings level),
-an elevator 2-1-1, an elevator frequency sweep, a rudder 3-2-1-1 with loose timing; between them two
-things that are not maneuvers: a turn (roll in, hold 1 deg of aileron for 20 s, roll out) and an
-elevator trim change (1 deg, held). Record `level.csv` (120 s) is level flight: noise and wander only.
+an elevator 2-1-1, an elevator frequency sweep, a rudder 3-2-1-1 with loose timing, an aileron doublet
+followed half a second later by a recovery held for 12 s; between them things that are not maneuvers: a
+turn (roll in, hold 1 deg of aileron for 20 s, roll out), the recovery hold and an elevator trim change
+(1 deg, held). Record `level.csv` (120 s) is level flight: noise and wander only.
 
 Usage: gen_maneuver_records.py OUT_DIR SEED
 Writes OUT_DIR/maneuvers.csv, OUT_DIR/level.csv and OUT_DIR/truth.json: per maneuver the surface,
@@ -111,6 +112,15 @@ def main():
     s = 240.0
     e = ru.pulses(s, [1.5, 1.0, 0.5, 0.5], d(3.0), [1, -1, 1, -1])
     add(ru, "rudder_rad", s, e, ["3-2-1-1", "multistep"])
+    # an aileron doublet and, half a second after it, the pilot's recovery: 2 deg held for 12 s (the doublet
+    # is a maneuver, the hold is not). Its jitter comes from a generator of its own, so that everything else
+    # in the record is as before this case was added.
+    extra = Surface(t, np.random.default_rng(seed + 1000))
+    s = 255.0
+    e = extra.pulses(s, [1.0, 1.0], d(5.0), [1, -1])
+    extra.hold(e + 0.5, 12.0, d(-2.0))
+    ai.u += extra.u
+    add(ai, "aileron_rad", s, e, ["doublet"])
     # an elevator trim change (not a maneuver): 1 deg, held to the end
     el.u += d(1.0) * smooth_step(t, 280.0, 1.0)
 

@@ -18,6 +18,8 @@
 //!    multistep on the other surfaces.
 //! 6. What is not a maneuver is listed with the reason (`SegmentScan::rejected`): a spike shorter
 //!    than 0.2 s, a deflection held longer than 8 s (a trim change, a turn, a step), a lone pulse.
+//!    An event with a held deflection in it is first cut at the hold (`split_at_holds`), so that a
+//!    maneuver the hold follows (a doublet, then the pilot's recovery held for seconds) is found.
 //! 7. Near-steady check: over the 2 s before the start the body rates (when present) stay within
 //!    0.05 rad/s of their mean.
 
@@ -110,6 +112,9 @@ pub struct SegmentScan {
 /// the pulses of a pulse train).
 const MAX_PULSE_S: f64 = 8.0;
 
+/// Longest transition at a pulse's edge (a surface moving from one deflection to the next), s.
+const RISE_S: f64 = 0.3;
+
 /// Shortest activity that is an input rather than a spike, s.
 const MIN_ACTIVITY_S: f64 = 0.2;
 
@@ -176,10 +181,21 @@ pub fn scan_segments(rec: &FlightRecord, opts: &SegmentOptions) -> Result<Segmen
         let amplitude = |s: usize, e: usize| dev[s..e].iter().fold(0.0_f64, |m, d| m.max(d.abs()));
         // (start, end, class, sign of a single pulse)
         let mut found: Vec<(usize, usize, Class, f64)> = Vec::new();
-        for (s, e) in events(&active, gap) {
+        let pieces = events(&active, gap).into_iter().flat_map(|(s, e)| {
+            let pieces = split_at_holds(&dev[s..e], &active[s..e], dt_s, thr);
+            let split = pieces.len() > 1;
+            pieces
+                .into_iter()
+                .map(move |(ps, pe)| (s + ps, s + pe, split))
+        });
+        for (s, e, split) in pieces {
             let span_s = rec.time_s[e.min(last)] - rec.time_s[s];
-            let settled =
-                settles_back(&rec.time_s, u, s, e, (2.0 * thr).max(0.1 * amplitude(s, e)));
+            // a piece cut off a hold ends where the hold begins: it cannot settle back there
+            let settled = if split {
+                Ok(())
+            } else {
+                settles_back(&rec.time_s, u, s, e, (2.0 * thr).max(0.1 * amplitude(s, e)))
+            };
             match settled.and_then(|()| classify(&dev[s..e], &active[s..e], span_s)) {
                 Ok(class) => {
                     let sign = dev[s..e]
@@ -344,6 +360,159 @@ fn events(active: &[bool], gap: usize) -> Vec<(usize, usize)> {
     out
 }
 
+/// The most samples a pulse of [`MAX_PULSE_S`] has at a sample interval `dt_s`.
+fn max_pulse_samples(dt_s: f64) -> usize {
+    (MAX_PULSE_S / dt_s.max(1e-9)).floor() as usize
+}
+
+/// One pulse of an event: a run of one sign among its active samples, `[start, end)` relative to the
+/// event, with its number of active samples and its largest deviation.
+#[derive(Clone, Copy, Debug)]
+struct PulseSpan {
+    sign: f64,
+    start: usize,
+    end: usize,
+    width: usize,
+    peak: f64,
+}
+
+/// The signed pulses of an event (samples of the other sign split pulses, quiet samples do not), with the
+/// slivers (under a quarter of the median pulse) that noise leaves at the edges of a step dropped and the
+/// pulses they separated joined. The median is over the pulses of at most `max_width` samples (all when
+/// none is): a long hold must not make a maneuver's pulses beside it slivers.
+fn pulse_spans(dev: &[f64], active: &[bool], max_width: usize) -> Vec<PulseSpan> {
+    let mut pulses: Vec<PulseSpan> = Vec::new();
+    for (i, (d, a)) in dev.iter().zip(active).enumerate() {
+        if !a {
+            continue;
+        }
+        let sign = d.signum();
+        match pulses.last_mut() {
+            Some(p) if p.sign == sign => {
+                p.end = i + 1;
+                p.width += 1;
+                p.peak = p.peak.max(d.abs());
+            }
+            _ => pulses.push(PulseSpan {
+                sign,
+                start: i,
+                end: i + 1,
+                width: 1,
+                peak: d.abs(),
+            }),
+        }
+    }
+    let mut widths: Vec<f64> = pulses
+        .iter()
+        .filter(|p| p.width <= max_width)
+        .map(|p| p.width as f64)
+        .collect();
+    if widths.is_empty() {
+        widths = pulses.iter().map(|p| p.width as f64).collect();
+    }
+    if widths.is_empty() {
+        return pulses;
+    }
+    let med = median_in_place(&mut widths);
+    let mut merged: Vec<PulseSpan> = Vec::new();
+    for p in pulses.into_iter().filter(|p| p.width as f64 >= 0.25 * med) {
+        match merged.last_mut() {
+            Some(q) if q.sign == p.sign => {
+                q.end = p.end;
+                q.width += p.width;
+                q.peak = q.peak.max(p.peak);
+            }
+            _ => merged.push(p),
+        }
+    }
+    merged
+}
+
+/// An event cut at the deflections held longer than [`MAX_PULSE_S`]: `[start, end)` pieces relative to the
+/// event, in order; the whole event when nothing in it is held. A pilot's recovery (a roll back to wings
+/// level held for seconds) or a trim change right after a maneuver joins it into one event, which as a
+/// whole is a held deflection; cut, the maneuver is a piece of its own and the hold another (which
+/// [`classify`] then rejects). Where a held pulse begins (or ends) deeper than its own plateau, the deeper
+/// part is a pulse of the maneuver beside it (a doublet's second half that the hold continues in the same
+/// direction): the plateau is the pulse's median deviation, and the part beyond it by more than
+/// max(`thr`, 30 % of the plateau) is cut off. Pulses at a piece's edge smaller than a quarter of its
+/// largest are the trim settling, not the maneuver, and are left out of it.
+fn split_at_holds(dev: &[f64], active: &[bool], dt_s: f64, thr: f64) -> Vec<(usize, usize)> {
+    let spans = pulse_spans(dev, active, max_pulse_samples(dt_s));
+    let held = |p: &PulseSpan| p.width as f64 * dt_s > MAX_PULSE_S;
+    if !spans.iter().any(held) {
+        return vec![(0, dev.len())];
+    }
+    // (span, held)
+    let mut parts: Vec<(PulseSpan, bool)> = Vec::new();
+    for p in spans {
+        if !held(&p) {
+            parts.push((p, false));
+            continue;
+        }
+        let mut inside: Vec<f64> = dev[p.start..p.end].iter().map(|d| d * p.sign).collect();
+        let plateau = median_in_place(&mut inside);
+        let deeper = |i: &usize| dev[*i] * p.sign > plateau + thr.max(0.3 * plateau);
+        // the deeper run that starts (ends) within the edge's transition, RISE_S, of the pulse's edge
+        let edge = (RISE_S / dt_s.max(1e-9)).ceil() as usize;
+        let run = |mut samples: Box<dyn Iterator<Item = usize>>| -> usize {
+            let Some(skip) = samples.by_ref().position(|i| deeper(&i)) else {
+                return 0;
+            };
+            if skip > edge {
+                return 0;
+            }
+            skip + 1 + samples.take_while(deeper).count()
+        };
+        let lead = run(Box::new(p.start..p.end));
+        let trail = run(Box::new((p.start..p.end).rev())).min(p.end - p.start - lead);
+        let piece = |start: usize, end: usize| PulseSpan {
+            start,
+            end,
+            width: active[start..end].iter().filter(|a| **a).count(),
+            peak: dev[start..end].iter().fold(0.0_f64, |m, d| m.max(d.abs())),
+            ..p
+        };
+        let (hold_start, hold_end) = (p.start + lead, p.end - trail);
+        if lead > 0 {
+            parts.push((piece(p.start, hold_start), false));
+        }
+        if hold_end > hold_start {
+            parts.push((piece(hold_start, hold_end), true));
+        }
+        if trail > 0 && hold_end > hold_start {
+            parts.push((piece(hold_end, p.end), false));
+        }
+    }
+    let mut pieces = Vec::new();
+    let mut group: Vec<PulseSpan> = Vec::new();
+    let flush = |group: &mut Vec<PulseSpan>, pieces: &mut Vec<(usize, usize)>| {
+        let largest = group.iter().fold(0.0_f64, |m, p| m.max(p.peak));
+        let kept: Vec<&PulseSpan> = {
+            let lo = group.iter().position(|p| p.peak >= 0.25 * largest);
+            let hi = group.iter().rposition(|p| p.peak >= 0.25 * largest);
+            match (lo, hi) {
+                (Some(lo), Some(hi)) => group[lo..=hi].iter().collect(),
+                _ => Vec::new(),
+            }
+        };
+        if let (Some(first), Some(last)) = (kept.first(), kept.last()) {
+            pieces.push((first.start, last.end));
+        }
+        group.clear();
+    };
+    for (p, is_held) in parts {
+        if is_held {
+            flush(&mut group, &mut pieces);
+            pieces.push((p.start, p.end));
+        } else {
+            group.push(p);
+        }
+    }
+    flush(&mut group, &mut pieces);
+    pieces
+}
+
 /// Classifies one event from its signed pulses (runs of one sign among active samples), or says
 /// why it is not a maneuver.
 fn classify(dev: &[f64], active: &[bool], span_s: f64) -> Result<Class, String> {
@@ -352,34 +521,12 @@ fn classify(dev: &[f64], active: &[bool], span_s: f64) -> Result<Class, String> 
             "a spike of {span_s:.2} s (an input lasts at least {MIN_ACTIVITY_S} s)"
         ));
     }
-    // Pulses: (sign, number of active samples); samples of the other sign split pulses, quiet
-    // samples do not.
-    let mut pulses: Vec<(f64, usize)> = Vec::new();
-    for (d, a) in dev.iter().zip(active) {
-        if !a {
-            continue;
-        }
-        let s = d.signum();
-        match pulses.last_mut() {
-            Some(p) if p.0 == s => p.1 += 1,
-            _ => pulses.push((s, 1)),
-        }
-    }
-    // Ignore slivers (< 1/4 of the median pulse) left by noise at the edges of a step.
-    let mut widths: Vec<f64> = pulses.iter().map(|p| p.1 as f64).collect();
-    if widths.is_empty() {
+    let dt_s = span_s / dev.len().max(1) as f64;
+    let merged = pulse_spans(dev, active, max_pulse_samples(dt_s));
+    if merged.is_empty() {
         return Err("no deflection above the threshold".into());
     }
-    let med = median_in_place(&mut widths);
-    let mut merged: Vec<(f64, usize)> = Vec::new();
-    for p in pulses.into_iter().filter(|p| p.1 as f64 >= 0.25 * med) {
-        match merged.last_mut() {
-            Some(q) if q.0 == p.0 => q.1 += p.1,
-            _ => merged.push(p),
-        }
-    }
-    let w: Vec<f64> = merged.iter().map(|p| p.1 as f64).collect();
-    let dt_s = span_s / dev.len().max(1) as f64;
+    let w: Vec<f64> = merged.iter().map(|p| p.width as f64).collect();
     let longest_s = w.iter().fold(0.0_f64, |m, v| m.max(*v)) * dt_s;
     if longest_s > MAX_PULSE_S {
         return Err(format!(
