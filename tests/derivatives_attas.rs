@@ -173,9 +173,10 @@ fn check_moves_the_nose_boom_vanes_to_the_cg_and_starts_a_piece_after_a_dropout_
 /// The book's supplement ships most of its ATTAS records as MATLAB MAT-files. The same records written as
 /// MAT-files (`--mat`: the text files' numbers, one compressed as MATLAB's `-v7` saves, one not, each beside a
 /// scalar and a character array) read through the same positional map give the same equation-error estimates
-/// to the last digit; the matrix stored transposed (channels × samples) gives the same maneuvers. A file that is
-/// not a MAT-file, one without a matrix of samples × channels, and one whose
-/// matrix is complex are refused with exit 2, saying which and what the file holds.
+/// to the last digit; the matrix stored transposed (channels × samples) gives the same maneuvers, and so do the
+/// same signals saved one vector per variable. A file that is not a MAT-file, one without a matrix of samples ×
+/// channels or vectors of one length, one whose matrix is complex and one that holds its signals in a structure
+/// are refused with exit 2, saying which and what the file holds.
 #[test]
 fn mat_files_are_read_as_the_books_text_files_are() {
     let tmp = generated("mat", &["--mat"]);
@@ -192,6 +193,12 @@ fn mat_files_are_read_as_the_books_text_files_are() {
                   scipy.io.savemat(d + '/complex.mat', {'data': np.ones((5, 3)) + 1j})\n\
                   m = scipy.io.loadmat(d + '/attas_ailrud.mat')['attas_ailrud']\n\
                   scipy.io.savemat(d + '/rows.mat', {'rows': m.T})\n\
+                  r = np.deg2rad\n\
+                  v = {'time_s': m[:, 0], 'p_rad_s': r(m[:, 6]), 'q_rad_s': r(m[:, 7]), 'r_rad_s': r(m[:, 8]),\n\
+                       'elevator_rad': r(m[:, 21]), 'aileron_rad': r(0.5 * (m[:, 27] - m[:, 28])),\n\
+                       'rudder_rad': r(m[:, 29]), 'dt': 0.04, 'gains': np.ones(3), 'pilot': 'test'}\n\
+                  scipy.io.savemat(d + '/vectors.mat', v)\n\
+                  scipy.io.savemat(d + '/struct.mat', {'flight': {'time_s': m[:, 0], 'rudder_rad': m[:, 29]}})\n\
                   open(d + '/garbage.mat', 'w').write('time,elevator\\n0,1\\n')\n";
     common::run_ok(Command::new(&python).args(["-c", script]).arg(dir));
     // The same matrix stored as channels × samples is read transposed: the same maneuvers are found.
@@ -211,6 +218,14 @@ fn mat_files_are_read_as_the_books_text_files_are() {
         "{found}"
     );
     assert_eq!(segments("rows.mat"), found);
+    // One vector per signal, named as the schema's columns (a logger's export, or `save -struct`): read as
+    // columns by name, without a map; the same maneuvers.
+    let out = common::run_ok(
+        Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .arg("segments")
+            .arg(dir.join("vectors.mat")),
+    );
+    assert_eq!(String::from_utf8_lossy(&out.stdout), found);
     for (file, needles) in [
         (
             "garbage.mat",
@@ -225,6 +240,14 @@ fn mat_files_are_read_as_the_books_text_files_are() {
             ],
         ),
         ("complex.mat", vec!["complex.mat", "`data` is complex"]),
+        (
+            "struct.mat",
+            vec![
+                "struct.mat",
+                "structure and cell variables are not read",
+                "'-struct'",
+            ],
+        ),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_flightid"))
             .arg("segments")

@@ -6,6 +6,11 @@
 //! numeric array; one with fewer rows than columns is taken as channels × samples and read transposed.
 //! Character, cell and structure variables are passed over. The record's metadata names the matrix read and
 //! any other numeric arrays.
+//!
+//! A file without such a matrix that holds one vector per signal (`t`, `alpha`, `q`, …, as a logger's
+//! export or MATLAB's `save(f, '-struct', 'S')` writes them) is read as a file with a header row: the
+//! vectors of the length most of them share are the columns, named as the variables (so a column map
+//! renames them by name); vectors of other lengths and scalars are listed in the metadata.
 
 use std::path::Path;
 
@@ -41,21 +46,25 @@ pub(super) fn matrix_as_text(path: &Path) -> Result<(Vec<u8>, String), DataError
         .filter(|a| a.ndims() == 2 && a.size()[0] >= 2 && a.size()[1] >= 2)
         .collect();
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("");
-    let chosen = matrices
+    let Some(chosen) = matrices
         .iter()
         .find(|a| a.name() == stem)
         .or_else(|| matrices.iter().max_by_key(|a| a.size()[0] * a.size()[1]))
-        .ok_or_else(|| {
+    else {
+        return vectors_as_text(&mat).map_err(|why| {
             let found: Vec<String> = mat
                 .arrays()
                 .iter()
                 .map(|a| format!("`{}` {:?}", a.name(), a.size()))
                 .collect();
             fail(format!(
-                "no numeric matrix of samples × channels (at least 2 × 2) in the file (numeric arrays: {})",
+                "no numeric matrix of samples × channels (at least 2 × 2) in the file, and {why} (numeric \
+                 arrays: {}); structure and cell variables are not read: save a structure's signals as \
+                 variables with `save(file, '-struct', 'S', '-v7')`",
                 if found.is_empty() { "none".to_string() } else { found.join(", ") }
             ))
-        })?;
+        });
+    };
     let (rows, cols) = (chosen.size()[0], chosen.size()[1]);
     // A record has more samples than channels: a matrix stored the other way round (channels as rows, as
     // some tools save it) is read transposed.
@@ -102,6 +111,57 @@ pub(super) fn matrix_as_text(path: &Path) -> Result<(Vec<u8>, String), DataError
         }
         text.push(b'\n');
     }
+    Ok((text, note))
+}
+
+/// The MAT-file's vectors of one common length as the text of a comma-separated file with a header row of
+/// their names (module doc), and the metadata line; `Err` says why there are none to read.
+fn vectors_as_text(mat: &matfile::MatFile) -> Result<(Vec<u8>, String), String> {
+    let vectors: Vec<(&matfile::Array, Vec<f64>)> = mat
+        .arrays()
+        .iter()
+        .filter(|a| a.ndims() == 2 && a.size().iter().min() == Some(&1))
+        .filter(|a| a.size().iter().max().is_some_and(|&n| n >= 2))
+        .filter_map(|a| real_values(a.data()).map(|v| (a, v)))
+        .collect();
+    // the length most vectors share (the longer on a tie): the samples
+    let mut counts: std::collections::BTreeMap<usize, usize> = std::collections::BTreeMap::new();
+    for (_, v) in &vectors {
+        *counts.entry(v.len()).or_default() += 1;
+    }
+    let Some((&samples, &count)) = counts.iter().max_by_key(|(len, n)| (**n, **len)) else {
+        return Err("no vectors of samples".into());
+    };
+    if count < 2 {
+        return Err("no two vectors of the same length (one per signal)".into());
+    }
+    let (columns, others): (Vec<_>, Vec<_>) = vectors.iter().partition(|(_, v)| v.len() == samples);
+    let names: Vec<&str> = columns.iter().map(|(a, _)| a.name()).collect();
+    let mut text = names.join(",").into_bytes();
+    text.push(b'\n');
+    for i in 0..samples {
+        for (j, (_, v)) in columns.iter().enumerate() {
+            if j > 0 {
+                text.push(b',');
+            }
+            text.extend_from_slice(format!("{:?}", v[i]).as_bytes());
+        }
+        text.push(b'\n');
+    }
+    let passed_over: Vec<String> = others
+        .iter()
+        .map(|(a, v)| format!("`{}` ({} values)", a.name(), v.len()))
+        .collect();
+    let note = format!(
+        " MAT-file vectors: {samples} samples × {} channels ({}){}",
+        names.len(),
+        names.join(", "),
+        if passed_over.is_empty() {
+            String::new()
+        } else {
+            format!(" (other lengths, not read: {})", passed_over.join(", "))
+        }
+    );
     Ok((text, note))
 }
 
