@@ -759,6 +759,71 @@ def do_load(server, req, _payload):
             "jsbsim_version": jsbsim.__version__}, None
 
 
+# What an airframe description needs from a JSBSim model (`airframe`).
+MASS_AND_WING = ("inertia/mass-slugs", "inertia/ixx-slugs_ft2", "inertia/iyy-slugs_ft2", "inertia/izz-slugs_ft2",
+                 "inertia/ixz-slugs_ft2", "metrics/Sw-sqft", "metrics/bw-ft", "metrics/cbarw-ft")
+
+
+def do_airframe(server, req, _payload):
+    """Mass, inertia and wing of a JSBSim model at its initial condition, without a trim: what an airframe
+    description needs from an aircraft name. The model is loaded from a private copy (no listeners, no logs) in a
+    root of its own under `scratch_dir`, run to its initial condition (JSBSim sums the empty weight, point masses
+    and tank contents then) and dropped with the root; an aircraft loaded before is dropped too."""
+    server.close()
+    scratch = req["scratch_dir"]
+    if not os.path.isdir(scratch):
+        raise BridgeError("protocol", f"'airframe' needs an existing scratch_dir, got {scratch!r}")
+    root = tempfile.mkdtemp(prefix="airframe-", dir=scratch)
+    try:
+        os.makedirs(os.path.join(root, "output"))
+        make_private_aircraft(root, req["aircraft"], {}, req.get("aircraft_dir"))
+        fdm = jsbsim.FGFDMExec(root)
+        fdm.set_debug_level(0)
+        fdm.set_output_path(os.path.join(root, "output"))
+        if not fdm.load_model(req["aircraft"]):
+            raise BridgeError("load_failed", f"JSBSim could not load aircraft '{req['aircraft']}'")
+        fdm.disable_output()
+        fdm.run_ic()
+        xml = os.path.join(root, "aircraft", req["aircraft"], req["aircraft"] + ".xml")
+        cg_in = [fdm[f"inertia/cg-{a}-in"] for a in "xyz"]
+        return {"values": {p: fdm[p] for p in MASS_AND_WING}, "thrust": thrust_line(xml, cg_in)}, None
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+LENGTH_TO_M = {"IN": 0.0254, "FT": 0.3048, "M": 1.0}
+ANGLE_TO_RAD = {"DEG": math.pi / 180.0, "RAD": 1.0}
+
+
+def thrust_line(xml_path, cg_in):
+    """The engines' mean thrust line about the CG from their thrusters' <location> and <orient> (JSBSim's
+    structural frame: x aft, y right, z up): {"moment_arm_m": pitching moment per unit thrust (body axes, positive
+    nose up: a thrust line below the CG), "inclination_rad": the line's angle above body x, "engines": count}, or
+    None for a model without a located thruster."""
+    arms, inclinations = [], []
+    for engine in ET.parse(xml_path).getroot().iter("engine"):
+        thruster = engine.find("thruster")
+        loc = thruster.find("location") if thruster is not None else None
+        if loc is None:
+            continue
+        to_m = LENGTH_TO_M.get(loc.get("unit", "IN").upper(), 0.0254)
+        pos_m = [float(loc.findtext(a, "0")) * to_m for a in "xyz"]
+        cg_m = [c * 0.0254 for c in cg_in]
+        # from the CG to the thruster in body axes (x forward, z down)
+        r_x, r_z = -(pos_m[0] - cg_m[0]), -(pos_m[2] - cg_m[2])
+        orient = thruster.find("orient")
+        to_rad = ANGLE_TO_RAD.get(orient.get("unit", "DEG").upper(), 1.0) if orient is not None else 0.0
+        pitch = float(orient.findtext("pitch", "0")) * to_rad if orient is not None else 0.0
+        yaw = float(orient.findtext("yaw", "0")) * to_rad if orient is not None else 0.0
+        # thrust direction (cos θ cos ψ, cos θ sin ψ, −sin θ); M_y = r_z F_x − r_x F_z per unit thrust
+        arms.append(r_z * math.cos(pitch) * math.cos(yaw) + r_x * math.sin(pitch))
+        inclinations.append(math.atan2(math.sin(pitch), math.cos(pitch) * math.cos(yaw)))
+    if not arms:
+        return None
+    return {"moment_arm_m": sum(arms) / len(arms), "inclination_rad": sum(inclinations) / len(inclinations),
+            "engines": len(arms)}
+
+
 def do_quit(_server, _req, _payload):
     return {}, None
 
@@ -812,6 +877,7 @@ COMMANDS = {
     "load": Command(do_load, ("aircraft", "dt_s", "surfaces", "scratch_dir"),
                     ("engine_running", "gear_up", "engines", "aircraft_dir"), needs_load=False),
     "quit": Command(do_quit, needs_load=False),
+    "airframe": Command(do_airframe, ("aircraft", "scratch_dir"), ("aircraft_dir",), needs_load=False),
     "trim": Command(do_trim, ("altitude_ft", "speed_kts"),
                     ("heading_deg", "gamma_deg", "latitude_deg", "longitude_deg", "ic", "knobs", "report",
                      "reuse")),

@@ -136,7 +136,28 @@ pub struct Airframe {
     pub source: String,
 }
 
+/// The `source` of an airframe taken from a JSBSim model by name (`JSBSim p51d`).
+pub const JSBSIM_SOURCE_PREFIX: &str = "JSBSim ";
+
 impl Airframe {
+    /// What the reader of an estimate should know about this description: an airframe taken from a JSBSim model
+    /// by name puts every sensor at the CG, which a model cannot know.
+    pub fn assumptions(&self) -> Vec<String> {
+        if self.source.starts_with(JSBSIM_SOURCE_PREFIX)
+            && self.sensors == SensorPositions::default()
+        {
+            vec![format!(
+                "airframe from the {} model: mass, inertia, wing{} from the model; the accelerometers and vanes \
+                 are taken at the CG (a model knows no data system): where they are elsewhere, give their \
+                 positions in an airframe description (FILE.toml, [sensors]; docs/airframe.md)",
+                self.source,
+                if self.thrust.is_some() { " and thrust line" } else { "" }
+            )]
+        } else {
+            Vec::new()
+        }
+    }
+
     /// Parses a description; `file` names it in errors.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Self, AirframeError> {
         let mut af: Airframe = toml::from_str(text).map_err(|e| AirframeError::Invalid {

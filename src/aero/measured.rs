@@ -738,6 +738,7 @@ pub fn equation_error_report(
         ));
     }
     notes.extend(sign_convention_notes(&ee.derivatives));
+    notes.extend(airframe.assumptions());
     let nonlinearities = structure_screen(&ee.equations);
     notes.extend(nonlinearities.iter().map(Nonlinearity::note));
     notes.push(

@@ -687,6 +687,7 @@ pub fn output_error_report(
             .map_or("Cramér-Rao bounds", |f| f.1.estimate.covariance_method)
     ));
     notes.extend(super::measured::sign_convention_notes(&derivatives));
+    notes.extend(airframe.assumptions());
     // The structure screen runs on equation error's regressions (the module doc of `structure`): one more
     // regression of the same records, cheap beside the fits; where it cannot be formed nothing is screened.
     let nonlinearities = equation_error_measured(records, airframe, axis, false)

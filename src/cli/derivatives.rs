@@ -304,41 +304,68 @@ fn load_airframe(args: &DerivativesCmd, arg: &str) -> anyhow::Result<crate::aero
     if arg.ends_with(".toml") || path.is_file() {
         return Airframe::load(path).map_err(|e| UsageError(e.to_string()).into());
     }
+    if let Err(crate::aircraft::AircraftError::Unknown { known, .. }) = crate::aircraft::load(arg) {
+        // not a configured aircraft: any JSBSim model, its mass, inertia and wing at its initial condition
+        let m = crate::sim::aero_truth::model_mass_and_wing(arg).map_err(|e| match e {
+            crate::sim::SimError::UnknownModel(why) => UsageError(format!(
+                "--airframe {arg}: not an airframe description (FILE.toml), not a configured aircraft ({known}), \
+                 and not a JSBSim model: {why}"
+            ))
+            .into(),
+            other => anyhow::Error::from(other),
+        })?;
+        return Ok(airframe_of_mass_and_wing(arg, &m, None));
+    }
     let trim = TrimArgs {
         aircraft: arg.to_string(),
         ..args.trim.clone()
     };
     let (mut sim, _) = trim.start_and_trim()?;
     let truth = sim.aero_truth()?;
-    Ok(airframe_of_model(arg, &truth))
+    let m = crate::sim::aero_truth::ModelMassAndWing {
+        mass_kg: truth.mass_kg,
+        inertia_kg_m2: [
+            truth.ixx_kg_m2,
+            truth.iyy_kg_m2,
+            truth.izz_kg_m2,
+            truth.ixz_kg_m2,
+        ],
+        wing_area_m2: truth.wing_area_m2,
+        span_m: truth.span_m,
+        chord_m: truth.chord_m,
+        thrust_line: None,
+    };
+    Ok(airframe_of_mass_and_wing(arg, &m, Some(truth.rho_kg_m3)))
 }
 
-/// The mass, inertia and geometry a JSBSim model uses at its trim (sensors at the CG, no thrust line, the
-/// trim's density).
-fn airframe_of_model(
+/// The airframe of a JSBSim model from its mass, inertia, wing and thrust line (sensors at the CG; the trim's
+/// density when it was trimmed, else none: the records' own air data are needed then).
+fn airframe_of_mass_and_wing(
     name: &str,
-    truth: &crate::sim::aero_truth::AeroTruth,
+    m: &crate::sim::aero_truth::ModelMassAndWing,
+    density_kg_m3: Option<f64>,
 ) -> crate::aero::Airframe {
-    use crate::aero::airframe::{Airframe, FlightDefaults, Inertia, SensorPositions, Wing};
+    use crate::aero::airframe::{
+        Airframe, FlightDefaults, Inertia, SensorPositions, ThrustLine, Wing,
+    };
+    let [ixx, iyy, izz, ixz] = m.inertia_kg_m2;
     Airframe {
         name: name.to_string(),
-        mass_kg: Some(truth.mass_kg),
-        inertia_kg_m2: Inertia {
-            ixx: truth.ixx_kg_m2,
-            iyy: truth.iyy_kg_m2,
-            izz: truth.izz_kg_m2,
-            ixz: truth.ixz_kg_m2,
-        },
+        mass_kg: Some(m.mass_kg),
+        inertia_kg_m2: Inertia { ixx, iyy, izz, ixz },
         wing: Wing {
-            area_m2: Some(truth.wing_area_m2),
-            span_m: Some(truth.span_m),
-            mac_m: Some(truth.chord_m),
+            area_m2: Some(m.wing_area_m2),
+            span_m: Some(m.span_m),
+            mac_m: Some(m.chord_m),
         },
-        thrust: None,
+        thrust: m
+            .thrust_line
+            .map(|(moment_arm_m, inclination_rad)| ThrustLine {
+                inclination_rad,
+                moment_arm_m,
+            }),
         sensors: SensorPositions::default(),
-        flight: FlightDefaults {
-            density_kg_m3: Some(truth.rho_kg_m3),
-        },
-        source: format!("JSBSim {name}"),
+        flight: FlightDefaults { density_kg_m3 },
+        source: format!("{}{name}", crate::aero::airframe::JSBSIM_SOURCE_PREFIX),
     }
 }

@@ -357,6 +357,52 @@ impl JsbsimSim {
     }
 }
 
+/// Mass, inertia and wing of a JSBSim model at its initial condition (no trim), SI units: what an airframe
+/// description takes from an aircraft name that has no flightid configuration (`aircraft/NAME.toml`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelMassAndWing {
+    /// Mass, kg (empty weight, point masses and the tanks' initial contents).
+    pub mass_kg: f64,
+    /// Roll, pitch and yaw inertia and the product of inertia ∫xz dm (the sign of [`AeroTruth::ixz_kg_m2`]), kg·m².
+    pub inertia_kg_m2: [f64; 4],
+    /// Wing area, m².
+    pub wing_area_m2: f64,
+    /// Wing span, m.
+    pub span_m: f64,
+    /// Mean aerodynamic chord, m.
+    pub chord_m: f64,
+    /// The engines' mean thrust line about the CG from their thrusters' positions and orientations:
+    /// (pitching moment per unit thrust, positive nose up, m; inclination above body x, rad); `None` when unknown.
+    pub thrust_line: Option<(f64, f64)>,
+}
+
+/// [`ModelMassAndWing`] of the JSBSim model `aircraft`, from a bridge process of its own (the bridge's
+/// `airframe` command: loaded, run to its initial condition, dropped). A name JSBSim has no model of is
+/// [`SimError::UnknownModel`].
+pub fn model_mass_and_wing(aircraft: &str) -> Result<ModelMassAndWing, SimError> {
+    let mut bridge = super::bridge::Bridge::spawn()?;
+    let req = Request::Airframe {
+        aircraft: aircraft.to_string(),
+        scratch_dir: bridge.scratch_dir().display().to_string(),
+        aircraft_dir: None,
+    };
+    let got: super::protocol::AirframeReply = bridge.request(&req, &[])?.reply;
+    let c = |k: &str| got.values.get(k).copied().unwrap_or(f64::NAN);
+    Ok(ModelMassAndWing {
+        mass_kg: c("inertia/mass-slugs") * SLUG_TO_KG,
+        inertia_kg_m2: [
+            c("inertia/ixx-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+            c("inertia/iyy-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+            c("inertia/izz-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+            -c("inertia/ixz-slugs_ft2") * SLUG_FT2_TO_KG_M2,
+        ],
+        wing_area_m2: c("metrics/Sw-sqft") * FT_TO_M * FT_TO_M,
+        span_m: c("metrics/bw-ft") * FT_TO_M,
+        chord_m: c("metrics/cbarw-ft") * FT_TO_M,
+        thrust_line: got.thrust.map(|t| (t.moment_arm_m, t.inclination_rad)),
+    })
+}
+
 /// JSBSim's wind-to-body rotation (`FGAuxiliary::Tw2b`) applied to a wind-axis vector.
 pub(crate) fn wind_to_body(alpha_rad: f64, beta_rad: f64, v: [f64; 3]) -> [f64; 3] {
     let (sa, ca) = alpha_rad.sin_cos();

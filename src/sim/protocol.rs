@@ -119,6 +119,17 @@ pub enum Request {
         /// Added term name (`Cm_alpha2`) → coefficient.
         added: PropertyValues,
     },
+    /// Mass, inertia and wing of a model at its initial condition, without a trim (an airframe description from
+    /// an aircraft name); drops any aircraft loaded before. Reply: [`AirframeReply`].
+    Airframe {
+        /// JSBSim model name (`p51d`).
+        aircraft: String,
+        /// Directory the bridge works in; flightid makes and removes it.
+        scratch_dir: String,
+        /// Directory holding `<aircraft>.xml` to use instead of JSBSim's own.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        aircraft_dir: Option<String>,
+    },
     /// Ends the bridge process (it removes its private copy first). Reply: [`EmptyReply`].
     Quit,
 }
@@ -136,6 +147,7 @@ impl Request {
             Request::Probe { .. } => "probe",
             Request::Fly { .. } => "fly",
             Request::Export { .. } => "export",
+            Request::Airframe { .. } => "airframe",
             Request::Quit => "quit",
         }
     }
@@ -225,6 +237,27 @@ pub struct LoadReply {
 pub struct ValuesReply {
     /// Property → value.
     pub values: PropertyValues,
+}
+
+/// The reply to `airframe`: the model's mass, inertia and wing properties (JSBSim units) and its engines' mean
+/// thrust line about the CG (absent for a model without a located thruster).
+#[derive(Debug, Clone, Deserialize)]
+pub struct AirframeReply {
+    /// Property → value.
+    pub values: PropertyValues,
+    /// The thrust line.
+    pub thrust: Option<ThrustLineReply>,
+}
+
+/// The engines' mean thrust line (`thrust_line` in the bridge).
+#[derive(Debug, Clone, Copy, Deserialize)]
+pub struct ThrustLineReply {
+    /// Pitching moment per unit thrust about the CG, positive nose up, m.
+    pub moment_arm_m: f64,
+    /// The line's angle above body x, rad.
+    pub inclination_rad: f64,
+    /// Engines with a located thruster.
+    pub engines: usize,
 }
 
 /// The reply to `probe`.
