@@ -174,9 +174,9 @@ fn check_moves_the_nose_boom_vanes_to_the_cg_and_starts_a_piece_after_a_dropout_
 /// MAT-files (`--mat`: the text files' numbers, one compressed as MATLAB's `-v7` saves, one not, each beside a
 /// scalar and a character array) read through the same positional map give the same equation-error estimates
 /// to the last digit; the matrix stored transposed (channels × samples) gives the same maneuvers, and so do the
-/// same signals saved one vector per variable. A file that is not a MAT-file, one without a matrix of samples ×
-/// channels or vectors of one length, one whose matrix is complex and one that holds its signals in a structure
-/// are refused with exit 2, saying which and what the file holds.
+/// same signals saved one vector per variable or as the fields of a structure. A file that is not a MAT-file,
+/// one without a matrix of samples × channels, vectors of one length or a structure of them, and one whose
+/// matrix is complex are refused with exit 2, saying which and what the file holds.
 #[test]
 fn mat_files_are_read_as_the_books_text_files_are() {
     let tmp = generated("mat", &["--mat"]);
@@ -198,7 +198,11 @@ fn mat_files_are_read_as_the_books_text_files_are() {
                        'elevator_rad': r(m[:, 21]), 'aileron_rad': r(0.5 * (m[:, 27] - m[:, 28])),\n\
                        'rudder_rad': r(m[:, 29]), 'dt': 0.04, 'gains': np.ones(3), 'pilot': 'test'}\n\
                   scipy.io.savemat(d + '/vectors.mat', v)\n\
-                  scipy.io.savemat(d + '/struct.mat', {'flight': {'time_s': m[:, 0], 'rudder_rad': m[:, 29]}})\n\
+                  rates = ('p_rad_s', 'q_rad_s', 'r_rad_s')\n\
+                  flight = {k: x for k, x in v.items() if k not in rates}\n\
+                  flight['imu'] = {k: v[k] for k in rates}\n\
+                  scipy.io.savemat(d + '/struct.mat', {'flight': flight})\n\
+                  scipy.io.savemat(d + '/notes.mat', {'notes': {'pilot': 'test', 'dt': 0.04}})\n\
                   open(d + '/garbage.mat', 'w').write('time,elevator\\n0,1\\n')\n";
     common::run_ok(Command::new(&python).args(["-c", script]).arg(dir));
     // The same matrix stored as channels × samples is read transposed: the same maneuvers are found.
@@ -226,6 +230,13 @@ fn mat_files_are_read_as_the_books_text_files_are() {
             .arg(dir.join("vectors.mat")),
     );
     assert_eq!(String::from_utf8_lossy(&out.stdout), found);
+    // The same signals in a structure (a nested one for the rates), read through scipy: the same maneuvers.
+    let out = common::run_ok(
+        Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .arg("segments")
+            .arg(dir.join("struct.mat")),
+    );
+    assert_eq!(String::from_utf8_lossy(&out.stdout), found);
     for (file, needles) in [
         (
             "garbage.mat",
@@ -241,12 +252,8 @@ fn mat_files_are_read_as_the_books_text_files_are() {
         ),
         ("complex.mat", vec!["complex.mat", "`data` is complex"]),
         (
-            "struct.mat",
-            vec![
-                "struct.mat",
-                "structure and cell variables are not read",
-                "'-struct'",
-            ],
+            "notes.mat",
+            vec!["notes.mat", "no structure of signals", "'-struct'"],
         ),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_flightid"))

@@ -10,7 +10,11 @@
 //! A file without such a matrix that holds one vector per signal (`t`, `alpha`, `q`, …, as a logger's
 //! export or MATLAB's `save(f, '-struct', 'S')` writes them) is read as a file with a header row: the
 //! vectors of the length most of them share are the columns, named as the variables (so a column map
-//! renames them by name); vectors of other lengths and scalars are listed in the metadata.
+//! renames them by name); vectors of other lengths and scalars are listed in the metadata. A file that keeps its
+//! signals in a structure (`Maneuver.t`, `Maneuver.p`, …) is read the same way through the project's Python
+//! environment (`scripts/mat_struct_columns.py`: scipy reads structures, the `matfile` crate passes over them):
+//! the numeric fields of the length most share are the columns, named by the field (a dotted path where a name
+//! repeats; an N × k field as `name_1` … `name_k`).
 
 use std::path::Path;
 
@@ -51,18 +55,20 @@ pub(super) fn matrix_as_text(path: &Path) -> Result<(Vec<u8>, String), DataError
         .find(|a| a.name() == stem)
         .or_else(|| matrices.iter().max_by_key(|a| a.size()[0] * a.size()[1]))
     else {
-        return vectors_as_text(&mat).map_err(|why| {
-            let found: Vec<String> = mat
-                .arrays()
-                .iter()
-                .map(|a| format!("`{}` {:?}", a.name(), a.size()))
-                .collect();
-            fail(format!(
-                "no numeric matrix of samples × channels (at least 2 × 2) in the file, and {why} (numeric \
-                 arrays: {}); structure and cell variables are not read: save a structure's signals as \
-                 variables with `save(file, '-struct', 'S', '-v7')`",
-                if found.is_empty() { "none".to_string() } else { found.join(", ") }
-            ))
+        return vectors_as_text(&mat).or_else(|why_vectors| {
+            struct_as_text(path).map_err(|why_struct| {
+                let found: Vec<String> = mat
+                    .arrays()
+                    .iter()
+                    .map(|a| format!("`{}` {:?}", a.name(), a.size()))
+                    .collect();
+                fail(format!(
+                    "no numeric matrix of samples × channels (at least 2 × 2) in the file, {why_vectors}, and \
+                     no structure of signals ({why_struct}) (numeric arrays: {}); save the signals as a matrix \
+                     or as variables (`save(file, '-struct', 'S', '-v7')`)",
+                    if found.is_empty() { "none".to_string() } else { found.join(", ") }
+                ))
+            })
         });
     };
     let (rows, cols) = (chosen.size()[0], chosen.size()[1]);
@@ -163,6 +169,36 @@ fn vectors_as_text(mat: &matfile::MatFile) -> Result<(Vec<u8>, String), String> 
         }
     );
     Ok((text, note))
+}
+
+/// `scripts/mat_struct_columns.py`, run by the project's Python environment (scipy reads MATLAB structures; the
+/// `matfile` crate passes over them).
+const STRUCT_SCRIPT: &str = include_str!("../../../scripts/mat_struct_columns.py");
+
+/// The signals of the MAT-file's structures as the text of a comma-separated file with a header row (module
+/// doc), and the metadata line; `Err` says why there are none.
+fn struct_as_text(path: &Path) -> Result<(Vec<u8>, String), String> {
+    let python = crate::sim::env::python().map_err(|e| {
+        format!("the Python environment that reads structures is not available: {e}")
+    })?;
+    let out = std::process::Command::new(python)
+        .arg("-c")
+        .arg(STRUCT_SCRIPT)
+        .arg(path)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .map_err(|e| format!("the Python environment did not start: {e}"))?;
+    if !out.status.success() {
+        return Err(String::from_utf8_lossy(&out.stderr).trim().to_string());
+    }
+    let text = out.stdout;
+    let first_line_end = text.iter().position(|&b| b == b'\n').unwrap_or(text.len());
+    let note = String::from_utf8_lossy(&text[..first_line_end])
+        .trim_start_matches('#')
+        .trim_end()
+        .to_string();
+    let body = text.get(first_line_end + 1..).unwrap_or_default().to_vec();
+    Ok((body, format!(" {}", note.trim_start())))
 }
 
 /// The array's values as f64, column-major; `None` for a complex array.
