@@ -222,6 +222,9 @@ pub struct MeasuredEquationError {
     /// Apparent vane lags the reconstruction found but that are longer than a data system's skew can be
     /// ([`data::skew_bound_s`]), left in: (record, column, lag s).
     pub refused_skews: Vec<(String, String, f64)>,
+    /// Per coefficient, the angle of attack of its regression's rows (records stacked as the rows are) where
+    /// every record has one: the structure screen's cross terms ([`structure_screen`]).
+    pub alpha: BTreeMap<String, Vec<f64>>,
 }
 
 /// One coefficient's regression over all records: term names, regressor columns, response.
@@ -268,6 +271,8 @@ pub fn equation_error_measured(
         geometry.chord_m = geometry.span_m;
     }
     let mut stacked: BTreeMap<&'static str, Stacked> = BTreeMap::new();
+    // α along each coefficient's rows; None once a record without it was stacked
+    let mut alpha_rows: BTreeMap<&'static str, Option<Vec<f64>>> = BTreeMap::new();
     let mut air = Vec::new();
     let mut skipped = Vec::new();
     let mut skews = Vec::new();
@@ -379,6 +384,13 @@ pub fn equation_error_measured(
                 col.extend_from_slice(x);
             }
             entry.2.extend_from_slice(&eq.response);
+            let rows = alpha_rows.entry(eq.coefficient).or_insert(Some(Vec::new()));
+            match (rows.as_mut(), rec.column(data::Channel::Alpha)) {
+                (Some(a), Some(alpha)) if alpha.len() == eq.response.len() => {
+                    a.extend_from_slice(alpha)
+                }
+                _ => *rows = None,
+            }
         }
         air.push(ad);
     }
@@ -416,6 +428,10 @@ pub fn equation_error_measured(
         skipped,
         skews,
         refused_skews,
+        alpha: alpha_rows
+            .into_iter()
+            .filter_map(|(c, a)| Some((c.to_string(), a?)))
+            .collect(),
     })
 }
 
@@ -739,7 +755,7 @@ pub fn equation_error_report(
     }
     notes.extend(sign_convention_notes(&ee.derivatives));
     notes.extend(airframe.assumptions());
-    let nonlinearities = structure_screen(&ee.equations);
+    let nonlinearities = structure_screen(&ee.equations, &ee.alpha);
     notes.extend(nonlinearities.iter().map(Nonlinearity::note));
     notes.push(
         "equation error: standard errors corrected for coloured residuals (Morelli & Klein eq. 5.73); \

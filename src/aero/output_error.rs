@@ -691,7 +691,7 @@ pub fn output_error_report(
     // The structure screen runs on equation error's regressions (the module doc of `structure`): one more
     // regression of the same records, cheap beside the fits; where it cannot be formed nothing is screened.
     let nonlinearities = equation_error_measured(records, airframe, axis, false)
-        .map(|ee| structure_screen(&ee.equations))
+        .map(|ee| structure_screen(&ee.equations, &ee.alpha))
         .unwrap_or_default();
     notes.extend(nonlinearities.iter().map(Nonlinearity::note));
     Ok(MeasuredReport {

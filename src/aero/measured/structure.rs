@@ -11,12 +11,16 @@
 //! - (x − x̄)² for x = α, δe (curvature about the records' mean),
 //! - x² and |x| for x = β, δa, δr (a symmetric aircraft's coefficients are odd in these about zero; an even
 //!   part is a nonlinearity or an asymmetry),
+//! - β (α − ᾱ) in C_Y, C_l and C_n when every record has α (a dihedral effect or a fin that changes with
+//!   the angle of attack, as lift and the wing's wake change),
 //!
 //! the regression is repeated with the candidate added. A candidate is reported when it removes at least
 //! [`MIN_SHARE`] of the linear model's residual sum of squares and its coefficient stands at least
 //! [`MIN_T`] coloured-residual standard errors from zero (the standard error of [`lesq`], Morelli & Klein's
 //! correction, because equation-error residuals are coloured and the white-noise F-test would pass almost
 //! anything on thousands of samples). Per coefficient only the candidate that removes most is reported.
+
+use std::collections::BTreeMap;
 
 use serde::Serialize;
 
@@ -43,6 +47,8 @@ pub struct Nonlinearity {
     pub t: f64,
     /// R² of the linear regression and with the term added.
     pub r_squared: [f64; 2],
+    /// What it means for the coefficient (`not linear in β`, `its slope in β changes with α`).
+    pub meaning: String,
 }
 
 impl Nonlinearity {
@@ -50,9 +56,9 @@ impl Nonlinearity {
     pub fn note(&self) -> String {
         format!(
             "model structure: what the linear model leaves of {} follows {} ({:.0} % of its residual; |t| {:.1} \
-             with coloured residuals; R² {:.3} → {:.3} with it): {} is not linear in {} over the range the \
-             records fly; the linear estimates are slopes over that range, bent by whatever of the \
-             nonlinearity correlates with the other terms, and can be far from the local derivatives at the trim",
+             with coloured residuals; R² {:.3} → {:.3} with it): {} {} over the range the records fly; the \
+             linear estimates are slopes over that range, bent by whatever of the nonlinearity correlates with \
+             the other terms, and can be far from the local derivatives at the trim",
             self.coefficient,
             self.term,
             100.0 * self.share,
@@ -60,7 +66,7 @@ impl Nonlinearity {
             self.r_squared[0],
             self.r_squared[1],
             self.coefficient,
-            variable(&self.of).map_or("its variable", |(symbol, _)| symbol),
+            self.meaning,
         )
     }
 }
@@ -78,23 +84,46 @@ fn variable(term: &str) -> Option<(&'static str, bool)> {
     })
 }
 
-/// The candidates of one regressor column: (written form, values).
-fn candidates(term: &str, x: &[f64]) -> Vec<(String, Vec<f64>)> {
+fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+/// The candidates of one regressor column, with α along the rows when known: (written form, values, what it
+/// means for the coefficient).
+fn candidates(term: &str, x: &[f64], alpha: Option<&[f64]>) -> Vec<(String, Vec<f64>, String)> {
     let Some((symbol, odd)) = variable(term) else {
         return Vec::new();
     };
-    let mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
-    if odd {
-        vec![
-            (format!("{symbol}²"), x.iter().map(|v| v * v).collect()),
-            (format!("|{symbol}|"), x.iter().map(|v| v.abs()).collect()),
-        ]
-    } else {
-        vec![(
+    let not_linear = format!("is not linear in {symbol}");
+    if !odd {
+        let m = mean(x);
+        return vec![(
             format!("({symbol} − mean)²"),
-            x.iter().map(|v| (v - mean).powi(2)).collect(),
-        )]
+            x.iter().map(|v| (v - m).powi(2)).collect(),
+            not_linear,
+        )];
     }
+    let mut out = vec![
+        (
+            format!("{symbol}²"),
+            x.iter().map(|v| v * v).collect(),
+            not_linear.clone(),
+        ),
+        (
+            format!("|{symbol}|"),
+            x.iter().map(|v| v.abs()).collect(),
+            not_linear,
+        ),
+    ];
+    if let (Some(alpha), "β") = (alpha, symbol) {
+        let m = mean(alpha);
+        out.push((
+            "β·(α − mean)".to_string(),
+            x.iter().zip(alpha).map(|(b, a)| b * (a - m)).collect(),
+            "has a slope in β that changes with α".to_string(),
+        ));
+    }
+    out
 }
 
 fn residual_sum_of_squares(columns: &[Vec<f64>], theta: &[f64], z: &[f64]) -> f64 {
@@ -107,10 +136,17 @@ fn residual_sum_of_squares(columns: &[Vec<f64>], theta: &[f64], z: &[f64]) -> f6
         .sum()
 }
 
-/// The screen (module doc) over the regressions of an equation-error estimate.
-pub fn screen(equations: &[RegressionResult]) -> Vec<Nonlinearity> {
+/// The screen (module doc) over the regressions of an equation-error estimate; `alpha`, per coefficient, the
+/// angle of attack along its rows where known.
+pub fn screen(
+    equations: &[RegressionResult],
+    alpha: &BTreeMap<String, Vec<f64>>,
+) -> Vec<Nonlinearity> {
     let mut found = Vec::new();
     for eq in equations {
+        let alpha = alpha.get(eq.coefficient).map(Vec::as_slice).filter(|a| {
+            a.len() == eq.response.len() && matches!(eq.coefficient, "CY" | "Cl" | "Cn")
+        });
         let names: Vec<String> = eq.terms.iter().map(|t| t.name.clone()).collect();
         let theta: Vec<f64> = eq.terms.iter().map(|t| t.value).collect();
         let rss = residual_sum_of_squares(&eq.regressors, &theta, &eq.response);
@@ -119,7 +155,7 @@ pub fn screen(equations: &[RegressionResult]) -> Vec<Nonlinearity> {
         }
         let mut best: Option<Nonlinearity> = None;
         for (k, name) in names.iter().enumerate() {
-            for (term, column) in candidates(name, &eq.regressors[k]) {
+            for (term, column, meaning) in candidates(name, &eq.regressors[k], alpha) {
                 let mut cols = eq.regressors.clone();
                 cols.push(column);
                 let mut with = names.clone();
@@ -138,6 +174,7 @@ pub fn screen(equations: &[RegressionResult]) -> Vec<Nonlinearity> {
                     share,
                     t,
                     r_squared: [eq.r_squared, res.r_squared],
+                    meaning,
                 };
                 if share >= MIN_SHARE
                     && t.abs() >= MIN_T
@@ -185,12 +222,13 @@ mod tests {
         let linear: Vec<f64> = (0..beta.len())
             .map(|i| 0.001 - 0.08 * beta[i] - 0.45 * p[i] + noise[i])
             .collect();
-        assert!(screen(&[regression(&beta, &p, &linear)]).is_empty());
+        let none = BTreeMap::new();
+        assert!(screen(&[regression(&beta, &p, &linear)], &none).is_empty());
         // the DHC6's C_l(β) at low α: 0.41 |β|, besides a small linear part
         let kinked: Vec<f64> = (0..beta.len())
             .map(|i| linear[i] + 0.41 * beta[i].abs())
             .collect();
-        let found = screen(&[regression(&beta, &p, &kinked)]);
+        let found = screen(&[regression(&beta, &p, &kinked)], &none);
         assert_eq!(found.len(), 1, "{found:?}");
         assert_eq!(found[0].coefficient, "Cl");
         assert_eq!(found[0].of, "Cl_beta");
@@ -198,6 +236,18 @@ mod tests {
         assert!(found[0].share > 0.9, "{found:?}");
         assert!(found[0].r_squared[1] > found[0].r_squared[0]);
         assert!(found[0].note().contains("Cl is not linear in β"));
+        // the same linear response with a dihedral that grows with α: named as the cross term, with α known
+        let alpha: Vec<f64> = (0..beta.len())
+            .map(|i| 0.05 + 0.03 * (0.21 * i as f64 * 0.02).sin())
+            .collect();
+        let crossed: Vec<f64> = (0..beta.len())
+            .map(|i| linear[i] - 2.0 * beta[i] * (alpha[i] - 0.05))
+            .collect();
+        let with_alpha = BTreeMap::from([("Cl".to_string(), alpha)]);
+        let found = screen(&[regression(&beta, &p, &crossed)], &with_alpha);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!(found[0].term, "β·(α − mean)");
+        assert!(found[0].note().contains("slope in β that changes with α"));
     }
 
     #[test]
@@ -207,6 +257,6 @@ mod tests {
         let z: Vec<f64> = (0..beta.len())
             .map(|i| -0.08 * beta[i] - 0.45 * p[i] + 20.0 * noise[i] + 0.002 * beta[i].abs())
             .collect();
-        assert!(screen(&[regression(&beta, &p, &z)]).is_empty());
+        assert!(screen(&[regression(&beta, &p, &z)], &BTreeMap::new()).is_empty());
     }
 }
