@@ -59,8 +59,9 @@ pub struct DerivativesCmd {
     #[command(flatten)]
     pub columns: ColumnsArg,
     /// With --data: the aircraft that flew, as an airframe description (FILE.toml: mass, inertia, geometry,
-    /// thrust line, sensor positions; docs/airframe.md) or a JSBSim aircraft name (quantities read from
-    /// its model). Nothing falls back to another aircraft: a missing key is named (exit 2).
+    /// thrust line, sensor positions; docs/airframe.md) or the name of any model JSBSim ships (p51d, c310,
+    /// T37, …: mass, inertia, wing and thrust line read from the model, sensors taken at the CG). Nothing
+    /// falls back to another aircraft: a missing key is named (exit 2).
     #[arg(long, value_name = "FILE.toml|NAME", requires = "data")]
     pub airframe: Option<String>,
     /// With --airframe: the axis to estimate [default: what the records excite].
