@@ -323,20 +323,11 @@ fn load_airframe(args: &DerivativesCmd, arg: &str) -> anyhow::Result<crate::aero
     };
     let (mut sim, _) = trim.start_and_trim()?;
     let truth = sim.aero_truth()?;
-    let m = crate::sim::aero_truth::ModelMassAndWing {
-        mass_kg: truth.mass_kg,
-        inertia_kg_m2: [
-            truth.ixx_kg_m2,
-            truth.iyy_kg_m2,
-            truth.izz_kg_m2,
-            truth.ixz_kg_m2,
-        ],
-        wing_area_m2: truth.wing_area_m2,
-        span_m: truth.span_m,
-        chord_m: truth.chord_m,
-        thrust_line: None,
-    };
-    Ok(airframe_of_mass_and_wing(arg, &m, Some(truth.rho_kg_m3)))
+    Ok(airframe_of_mass_and_wing(
+        arg,
+        &truth.mass_and_wing(),
+        Some(truth.rho_kg_m3),
+    ))
 }
 
 /// The airframe of a JSBSim model from its mass, inertia, wing and thrust line (sensors at the CG; the trim's

@@ -376,6 +376,26 @@ pub struct ModelMassAndWing {
     pub thrust_line: Option<(f64, f64)>,
 }
 
+impl AeroTruth {
+    /// The mass, inertia and wing of the trimmed model (no thrust line: the trim's forces are not split by
+    /// engine).
+    pub fn mass_and_wing(&self) -> ModelMassAndWing {
+        ModelMassAndWing {
+            mass_kg: self.mass_kg,
+            inertia_kg_m2: [
+                self.ixx_kg_m2,
+                self.iyy_kg_m2,
+                self.izz_kg_m2,
+                self.ixz_kg_m2,
+            ],
+            wing_area_m2: self.wing_area_m2,
+            span_m: self.span_m,
+            chord_m: self.chord_m,
+            thrust_line: None,
+        }
+    }
+}
+
 /// [`ModelMassAndWing`] of the JSBSim model `aircraft`, from a bridge process of its own (the bridge's
 /// `airframe` command: loaded, run to its initial condition, dropped). A name JSBSim has no model of is
 /// [`SimError::UnknownModel`].
