@@ -21,7 +21,7 @@ pub struct CheckArgs {
     /// Only use samples up to this time, s.
     #[arg(long, value_parser = crate::limits::TIME_S.parser())]
     pub to_s: Option<f64>,
-    /// Do not estimate scale factors on V, α, β.
+    /// Do not estimate scale factors on V, α, β, φ, θ.
     #[arg(long)]
     pub no_scale_factors: bool,
     /// Do not estimate time skews on α, β.

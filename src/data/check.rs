@@ -13,7 +13,8 @@
 //! with `p = p_m − b_p`, …, `ax = ax_m − b_ax`, … (instrument biases). The reconstructed outputs
 //! `V = |(u,v,w)|`, `α = atan2(w, u)`, `β = asin(v/V)`, φ, θ, ψ are compared with the measured
 //! ones through the output model `y_m(t) = (1 + s) · y(t − τ) + b` (scale factor s, time skew τ,
-//! bias b, for V, α and β). Biases, scale factors, skews and the initial state are estimated by
+//! bias b, for V, α and β; a scale factor also for φ and θ, against the attitude the rates integrate to,
+//! so that a roll or pitch gyro's scale error shows as the inverse scale factor on φ or θ). Biases, scale factors, skews and the initial state are estimated by
 //! output-error Gauss–Newton (Levenberg–Marquardt damped) with the residual covariance re-estimated
 //! every iteration (Klein & Morelli §6.2, eq. 6.51–6.56). Standard errors are Cramér–Rao bounds
 //! corrected for coloured residuals (Morelli & Klein, "Accounting for the effects of colored
@@ -34,12 +35,12 @@ use super::error::DataError;
 use super::record::FlightRecord;
 use crate::signal::{std_dev, sum_sq};
 use fit::{coloured_residual_covariance, fit, invert, jacobian};
-use kinematics::{Data, Param, N_OUT, OUT_NAMES};
+use kinematics::{Data, Param, N_OUT, OUT_NAMES, PHI, THETA};
 
 /// Options of [`check_compatibility`].
 #[derive(Debug, Clone)]
 pub struct CheckOptions {
-    /// Also estimate scale factors on V, α and β.
+    /// Also estimate scale factors on V, α and β, and on φ and θ.
     pub scale_factors: bool,
     /// Also estimate time skews on α and β.
     pub time_skews: bool,
@@ -132,7 +133,7 @@ const EXCITATION_Z: f64 = 5.0;
 const EXPLAINED_RATIO: f64 = 2.0;
 
 /// Smallest movement that counts at all, rms in the signal's unit (noise-free records): 0.05 m/s for V,
-/// 0.05° for α and β.
+/// 0.05° for the angles.
 fn excitation_floor(output: usize) -> f64 {
     if output == 0 {
         0.05
@@ -141,7 +142,7 @@ fn excitation_floor(output: usize) -> f64 {
     }
 }
 
-/// Whether an air-data signal (`output` 0 = V, 1 = α, 2 = β) moves clearly enough for a scale factor or a
+/// Whether a signal (`output` 0 = V, 1 = α, 2 = β, 3 = φ, 4 = θ) moves clearly enough for a scale factor or a
 /// time skew on it to be estimated, given the residual of a fit without them (`with_it` false: tests 1 and
 /// 2) or with them (true: all three; the residual of a fit without the skew still holds the skew's own
 /// effect): (1) the measured signal's
@@ -293,6 +294,10 @@ pub fn check_compatibility(
         }
         params.extend((0..3).map(Param::Init));
     }
+    if opts.scale_factors {
+        // φ and θ against the attitude the rates integrate to: what a gyro's scale error would look like too
+        wanted.extend([Param::OutScale(PHI), Param::OutScale(THETA)]);
+    }
     params.extend(
         (3..N_OUT)
             .filter(|&k| data.out[k].is_some())
@@ -369,13 +374,15 @@ pub fn check_compatibility(
     if !wanted.is_empty() {
         let base = fit(&data, &params, theta_p.clone(), opts.max_iterations);
         theta_p = base.theta;
+        // the fit's residuals come one per output present, in output order
+        let at = |j: usize| (0..j).filter(|&k| data.out[k].is_some()).count();
         let mut candidates = Vec::new();
         for p in wanted {
             let (Param::OutSkew(j) | Param::OutScale(j)) = p else {
                 continue;
             };
             let signal = data.out[j].as_deref().unwrap_or(&[]);
-            match excitation(j, signal, &base.residuals[j], false) {
+            match excitation(j, signal, &base.residuals[at(j)], false) {
                 Ok(()) => candidates.push((p, j)),
                 Err(evidence) => {
                     not_excited.push(format!("{}: {} {evidence}", p.name().0, OUT_NAMES[j]))
@@ -391,7 +398,7 @@ pub fn check_compatibility(
             let mut kept = Vec::new();
             for (p, j) in candidates {
                 let signal = data.out[j].as_deref().unwrap_or(&[]);
-                match excitation(j, signal, &trial.residuals[j], true) {
+                match excitation(j, signal, &trial.residuals[at(j)], true) {
                     Ok(()) => kept.push(p),
                     Err(evidence) => {
                         not_excited.push(format!("{}: {} {evidence}", p.name().0, OUT_NAMES[j]))

@@ -35,6 +35,10 @@ pub(super) const OUT_NAMES: [&str; N_OUT] = [
     "altitude_m",
 ];
 
+/// Indices of the roll and pitch attitude among the outputs and the states.
+pub(super) const PHI: usize = 3;
+pub(super) const THETA: usize = 4;
+
 /// Index of the altitude among the outputs and the states.
 pub(super) const ALTITUDE: usize = 6;
 const GYRO: [&str; 3] = ["p_rad_s", "q_rad_s", "r_rad_s"];
