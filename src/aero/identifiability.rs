@@ -686,6 +686,14 @@ pub(crate) fn analyse_with_weights(
         .collect();
 
     let candidates = unused_outputs(outputs);
+    // The core with further measured transfer functions (full numerators), unwhitened.
+    let core_adding = |extra: &[TfOutput]| {
+        let mut outs = outputs.to_vec();
+        outs.extend(extra);
+        let mut lens = num_lengths.to_vec();
+        lens.extend(extra.iter().map(|&o| natural_num_length(o)));
+        core(model, derivatives, &outs, &lens, None)
+    };
 
     let mut verdicts = Vec::with_capacity(p);
     for k in 0..p {
@@ -727,11 +735,7 @@ pub(crate) fn analyse_with_weights(
         let mut separated_by = Vec::new();
         if !matches!(verdict, Verdict::Determined { .. }) {
             for &extra in &candidates {
-                let mut outs = outputs.to_vec();
-                outs.push(extra);
-                let mut lens = num_lengths.to_vec();
-                lens.push(natural_num_length(extra));
-                let ce = core(model, derivatives, &outs, &lens, None)?;
+                let ce = core_adding(&[extra])?;
                 match verdict_of(&ce, k, derivatives, &scale) {
                     Verdict::Determined { .. } => separated_by.push(measurement_words(extra)),
                     Verdict::Weak { .. } => {
@@ -742,11 +746,7 @@ pub(crate) fn analyse_with_weights(
             }
             if separated_by.is_empty() && !candidates.is_empty() {
                 // No single extra measurement suffices: try them all together.
-                let mut outs = outputs.to_vec();
-                outs.extend(&candidates);
-                let mut lens = num_lengths.to_vec();
-                lens.extend(candidates.iter().map(|&o| natural_num_length(o)));
-                let ce = core(model, derivatives, &outs, &lens, None)?;
+                let ce = core_adding(&candidates)?;
                 let all = candidates
                     .iter()
                     .map(|o| o.label())

@@ -218,13 +218,19 @@ impl AeroModel {
         d.get(D::CD0) + d.get(D::CDCL2) * self.flight.cl_trim * self.flight.cl_trim
     }
 
+    /// Validates the model and gives the trim airspeed V (m/s) and q̄S (N), the scales of both submodels'
+    /// dimensional derivatives.
+    fn airspeed_and_qs(&self) -> Result<(f64, f64), AeroError> {
+        self.validate()?;
+        let qs = self.flight.dynamic_pressure_pa() * self.geometry.wing_area_m2;
+        Ok((self.flight.airspeed_m_s, qs))
+    }
+
     /// The longitudinal submodel (states u, α, q, θ; input δe).
     pub fn longitudinal(&self) -> Result<LinearModel, AeroError> {
-        self.validate()?;
+        let (v, qs) = self.airspeed_and_qs()?;
         let (f, m, g) = (&self.flight, &self.mass, &self.geometry);
         let (d, a) = (&self.derivatives, &self.assumptions);
-        let v = f.airspeed_m_s;
-        let qs = f.dynamic_pressure_pa() * g.wing_area_m2;
         let kc = g.chord_m / (2.0 * v);
         let cl0 = f.cl_trim;
         let k_ind = d.get(D::CDCL2);
@@ -290,11 +296,9 @@ impl AeroModel {
 
     /// The lateral-directional submodel (states β, p, r, φ; inputs δa, δr).
     pub fn lateral(&self) -> Result<LinearModel, AeroError> {
-        self.validate()?;
+        let (v, qs) = self.airspeed_and_qs()?;
         let (f, m, g) = (&self.flight, &self.mass, &self.geometry);
         let (d, a) = (&self.derivatives, &self.assumptions);
-        let v = f.airspeed_m_s;
-        let qs = f.dynamic_pressure_pa() * g.wing_area_m2;
         let kb = g.span_m / (2.0 * v);
         let gamma0 = self.gamma0();
         let mass = m.mass_kg;

@@ -214,9 +214,9 @@ fn modal_section(results: &[CaseResult], key: &str) -> Section {
              a single marker is a configuration flown at one condition."
                 .into(),
         ],
-        tables: vec![Table {
-            caption: format!("{key}: identified modal parameters"),
-            header: [
+        tables: vec![Table::new(
+            format!("{key}: identified modal parameters"),
+            &[
                 "configuration",
                 "altitude ft",
                 "speed kts",
@@ -228,12 +228,9 @@ fn modal_section(results: &[CaseResult], key: &str) -> Section {
                 "real pole rad/s",
                 "leading num",
                 "fit %",
-            ]
-            .iter()
-            .map(|s| s.to_string())
-            .collect(),
+            ],
             rows,
-        }],
+        )],
         plots,
     }
 }

@@ -610,9 +610,9 @@ fn overview_section(models: &BTreeMap<String, Vec<ModelFit>>) -> Section {
              below."
                 .into(),
         ],
-        tables: vec![Table {
-            caption: "Modal parameters and fit per model".into(),
-            header: [
+        tables: vec![Table::new(
+            "Modal parameters and fit per model",
+            &[
                 "transfer function",
                 "model",
                 "oscillatory mode",
@@ -621,12 +621,9 @@ fn overview_section(models: &BTreeMap<String, Vec<ModelFit>>) -> Section {
                 "real pole, rad/s",
                 "fit %",
                 "note",
-            ]
-            .iter()
-            .map(|s| s.to_string())
-            .collect(),
+            ],
             rows,
-        }],
+        )],
         plots: vec![],
     }
 }
@@ -743,23 +740,19 @@ pub fn nonsmooth_section(
     Some(Section {
         heading: "What the linearization cannot see: non-smooth terms at the trim".into(),
         paragraphs,
-        tables: vec![Table {
-            caption: "Coefficient functions with a kink at the trim point (nondimensional slopes per rad; rates \
-                      per unit of p·b/2V, q·c̄/2V, r·b/2V)"
-                .into(),
-            header: [
+        tables: vec![Table::new(
+            "Coefficient functions with a kink at the trim point (nondimensional slopes per rad; rates \
+             per unit of p·b/2V, q·c̄/2V, r·b/2V)",
+            &[
                 "coefficient",
                 "axis",
                 "variable",
                 "slope below trim",
                 "slope above trim",
                 "linearization uses",
-            ]
-            .iter()
-            .map(|s| s.to_string())
-            .collect(),
+            ],
             rows,
-        }],
+        )],
         plots: vec![],
     })
 }

@@ -35,33 +35,25 @@ pub trait ReplaySim: Simulator + Send {
             ))),
         }
     }
-    /// Whether the simulation can set its state mid-flight ([`ReplaySim::fly_with_resets`]).
+    /// Whether the simulation can set its state mid-flight ([`ReplaySim::fly_recording_every`] with resets).
     fn supports_resets(&self) -> bool {
         false
     }
-    /// Flies `plan` and sets the state at each reset (multiple shooting); without resets, [`Simulator::fly`].
-    fn fly_with_resets(
-        &mut self,
-        plan: &FlightPlan,
-        resets: &[StateReset],
-    ) -> Result<FlightRecord, SimError> {
-        if resets.is_empty() {
-            self.fly(plan)
-        } else {
-            Err(SimError::Usage(
-                "this simulation cannot set its state mid-flight".into(),
-            ))
-        }
-    }
-    /// [`ReplaySim::fly_with_resets`] keeping only every `every`-th sample (the first included): a replay
-    /// integrating at a multiple of its record's rate needs only the record's samples.
+    /// Flies `plan`, setting the state at each reset (multiple shooting; without resets, [`Simulator::fly`]),
+    /// and keeps only every `every`-th sample (the first included): a replay integrating at a multiple of its
+    /// record's rate needs only the record's samples.
     fn fly_recording_every(
         &mut self,
         plan: &FlightPlan,
         resets: &[StateReset],
         every: usize,
     ) -> Result<FlightRecord, SimError> {
-        let rec = self.fly_with_resets(plan, resets)?;
+        if !resets.is_empty() {
+            return Err(SimError::Usage(
+                "this simulation cannot set its state mid-flight".into(),
+            ));
+        }
+        let rec = self.fly(plan)?;
         Ok(if every > 1 { rec.every_nth(every) } else { rec })
     }
     /// Writes the model with the current coefficient factors and added terms in it to `dir`.
@@ -97,13 +89,6 @@ impl ReplaySim for JsbsimSim {
     }
     fn supports_resets(&self) -> bool {
         true
-    }
-    fn fly_with_resets(
-        &mut self,
-        plan: &FlightPlan,
-        resets: &[StateReset],
-    ) -> Result<FlightRecord, SimError> {
-        JsbsimSim::fly_with_resets(self, plan, resets)
     }
     fn fly_recording_every(
         &mut self,

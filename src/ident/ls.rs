@@ -46,12 +46,17 @@ pub(crate) fn arx_regressor(
     nb: usize,
     delay_samples: usize,
 ) -> (Mat<f64>, Vec<f64>) {
-    let first = n.max(nb + delay_samples);
+    let first = first_row(n, nb, delay_samples);
     let rows = y.len().saturating_sub(first);
     let phi = Mat::<f64>::from_fn(rows, n + nb, |r, c| {
         arx_entry(u, y, n, delay_samples, r + first, c)
     });
     (phi, y[first..].to_vec())
+}
+
+/// The first sample k whose regressor row of eq. 60–62 exists: every `y(k−n)` and `u(k−nb−d)` is in the record.
+fn first_row(n: usize, nb: usize, delay_samples: usize) -> usize {
+    n.max(nb + delay_samples)
 }
 
 /// Entry of row k, column c of the regressor of eq. 60–62: `−y(k−1−c)` for c < n, else `u(k−1−(c−n)−d)`.
@@ -72,7 +77,7 @@ pub(crate) fn arx_ls(
     nb: usize,
     delay_samples: usize,
 ) -> Result<Arx, IdentError> {
-    let first = n.max(nb + delay_samples);
+    let first = first_row(n, nb, delay_samples);
     let rows = y.len().saturating_sub(first);
     let theta = match (rows >= TSQR_MIN_ROWS)
         .then(|| arx_lstsq_tsqr(u, y, n, nb, delay_samples))
@@ -109,7 +114,7 @@ fn arx_lstsq_tsqr(
     delay_samples: usize,
 ) -> Option<Vec<f64>> {
     let p = n + nb;
-    let first = n.max(nb + delay_samples);
+    let first = first_row(n, nb, delay_samples);
     let mid = first + (y.len() - first) / 2;
     let block_r = |from: usize, to: usize| -> Mat<f64> {
         let aug = Mat::<f64>::from_fn(to - from, p + 1, |r, c| {

@@ -4,6 +4,7 @@
 use super::super::extension::Extension;
 use super::super::prepare::Prepared;
 use super::super::progress::Progress;
+use super::super::projection::{orthonormal_basis, project_off};
 use super::super::search::{null_sensitivity, par_map, residuals, Weighted, Worker};
 use super::super::{sim_err, DiagnoseError, DiagnoseOptions, Skipped};
 
@@ -27,27 +28,11 @@ pub fn profiled_information(s: &[f64], others: &[Vec<f64>], mask: &[bool]) -> f6
         }
         v
     };
-    let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
-    let mut basis: Vec<Vec<f64>> = Vec::new();
-    for o in others {
-        let mut u = demean(o);
-        let norm0 = dot(&u, &u).sqrt();
-        for b in &basis {
-            let c = dot(&u, b);
-            u.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
-        }
-        let norm = dot(&u, &u).sqrt();
-        if norm > 1e-9 * norm0.max(1e-300) {
-            u.iter_mut().for_each(|x| *x /= norm);
-            basis.push(u);
-        }
-    }
+    let demeaned: Vec<Vec<f64>> = others.iter().map(|o| demean(o)).collect();
+    let basis = orthonormal_basis(&demeaned);
     let mut v = demean(s);
-    for b in &basis {
-        let c = dot(&v, b);
-        v.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
-    }
-    dot(&v, &v)
+    project_off(&mut v, &basis);
+    v.iter().map(|x| x * x).sum()
 }
 
 /// The channels (order of `case.outputs`) on which a sensor offset is a nuisance term of `e`: those whose
