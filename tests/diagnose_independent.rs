@@ -4,7 +4,7 @@
 //! (`cargo bench --bench diagnose_eval`): a clean record, a signal-path effect, a sensor effect, a derivative,
 //! a pair, a derivative in light turbulence, an effect the filter error refit must name in place of one it
 //! drops, a yaw-rate gyro bias that only the heading tells from a roll-angle bias, and an attitude scale that
-//! only the flight-path reconstruction sees in the gusts. The named set must be
+//! only the flight-path reconstruction sees in the gusts (a scale, and a bias read as an a_y bias). The named set must be
 //! exactly the hidden one, each value within 15 % of the effect's size.
 
 use std::path::Path;
@@ -360,8 +360,8 @@ fn yaw_gyro_bias_is_told_from_a_roll_bias_by_heading() {
 
 /// A θ logged × 1.12 in light turbulence (45 s, seed 31). The replay weights θ by its misfit in the gusts and does
 /// not name the scale; the flight-path reconstruction finds +0.124 ± 0.001 against the integrated pitch rate,
-/// and the replay prefers it to its kinematic twin, a pitch gyro scaled by 1/1.12 (docs/diagnose.md, "Attitude
-/// scale factors"). Checked: the named set exactly, the value within 15 %, and that the kinematic stage named it.
+/// and the replay prefers it to its kinematic twin, a pitch gyro scaled by 1/1.12 (docs/diagnose.md, "Sensor errors from
+/// the flight-path reconstruction"). Checked: the named set exactly, the value within 15 %, and that the kinematic stage named it.
 #[test]
 fn an_attitude_scale_lost_in_the_gusts_is_named_from_the_kinematics() {
     let d = check_flown(
@@ -374,6 +374,35 @@ fn an_attitude_scale_lost_in_the_gusts_is_named_from_the_kinematics() {
         d.candidates
             .iter()
             .any(|c| c.criterion == "kinematics" && c.target == "theta_rad"),
+        "named by the replay, not the kinematics: {:?}",
+        d.named_cause
+    );
+}
+
+/// A φ bias of 1.13° in light turbulence (case 2 of `cargo bench --bench diagnose_eval -- --seed 3
+/// --turbulence`, 41 s at 40 Hz), which the selection does not name. The flight-path reconstruction reads it as an
+/// a_y bias of 0.218 ± 0.006 m/s² (g cos θ times it), and the replay prefers the φ bias to an a_y bias
+/// (docs/diagnose.md, "Sensor errors from the flight-path reconstruction"): 0.0222 rad named for 0.0197. Checked:
+/// the named set exactly, the value within 15 %, and that the kinematic stage named it.
+#[test]
+fn a_roll_attitude_bias_lost_in_the_gusts_is_named_from_the_kinematics() {
+    let d = check_generated(
+        &[
+            "--cases",
+            "1",
+            "--first",
+            "2",
+            "--seed",
+            "3",
+            "--turbulence",
+            "--stratified",
+        ],
+        2,
+    );
+    assert!(
+        d.candidates
+            .iter()
+            .any(|c| c.criterion == "kinematics" && c.target == "phi_rad"),
         "named by the replay, not the kinematics: {:?}",
         d.named_cause
     );

@@ -1,40 +1,105 @@
-//! Attitude scale factors from the flight-path reconstruction, for the records a replay cannot judge them on.
+//! Sensor errors from the flight-path reconstruction, for the records a replay cannot judge them on.
 //!
-//! A scale error on the logged φ or θ changes the measurement, not the flight. The replay sees it only against
-//! the attitude the model flies open loop, and in turbulence that attitude wanders by degrees from the
-//! aircraft's: the selection weights φ by its residual (×99 on a record of the independent generator) and a φ
-//! logged × 0.85 came out 0.87 ± 0.07, not named. The rates, though, integrate to the aircraft's own attitude
-//! whatever the air does (Klein & Morelli eq. 10.2), and the compatibility check ([`data::check_compatibility`])
-//! estimates the scale of φ and θ against that: −0.161 ± 0.003 on the same record.
+//! An error of the logged φ or θ changes the measurement, not the flight. The replay sees it only against the
+//! attitude the model flies open loop, and in turbulence that attitude wanders by degrees from the aircraft's:
+//! the selection weights φ by its misfit (×99 on a record of the independent generator) and a φ logged × 0.85
+//! came out 0.87 ± 0.07, not named. The rates, though, integrate to the aircraft's own attitude whatever the air
+//! does (Klein & Morelli eq. 10.2), and the compatibility check ([`data::check_compatibility`]) estimates the
+//! scale of φ and θ against that: −0.161 ± 0.003 on the same record.
 //!
-//! After the selection, a scale factor the reconstruction finds ([`KINEMATIC_Z`] standard errors, beyond the
-//! entry's resolution) on an attitude the selection left alone is tested in the replay against its only
-//! kinematic twin, the gyro of that axis scaled the other way (p for φ, q for θ, value 1/k): the rates
-//! integrate to the same attitude either way, and only the aerodynamics tell them apart. The one of lower cost
-//! is named with the reconstruction's value and standard error when it lowers the cost of the selected model;
-//! the other joins its ambiguity group when the two costs are within the selection's own rule (n_eff ln(J/J₀)
-//! < 10).
+//! Each finding of the reconstruction has two readings the kinematics cannot tell apart ([`FINDINGS`]): a
+//! scale on φ is the roll gyro scaled the other way (both integrate to the same attitude), and an a_y bias b is
+//! a φ bias b/(g cos θ₀) (gravity's g cos θ sin φ in v̇ takes either). After the selection, a finding at
+//! [`KINEMATIC_Z`] standard errors or more whose readings the selection both left alone is tested in the replay,
+//! where the aerodynamics and the other channels tell them apart: the reading of lower cost is named, held at the
+//! reconstruction's value and standard error, when it is beyond its entry's resolution and lowers the cost of
+//! the selected model; the other joins its ambiguity group when the two costs are within the selection's own
+//! rule (n_eff ln(J/J₀) < 10).
 
 use super::extension::Extension;
 use super::prepare::Prepared;
 use super::search::{residuals, Active, Worker};
 use super::select::Selection;
 use super::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
-use crate::data::{self, FlightRecord};
+use crate::data::{self, Channel, FlightRecord, G0_M_S2};
 
-/// Least |s| / σ of the reconstruction's scale factor for the stage to test it (the check's own line is 3; its
-/// clean turbulent records stay under 2.5).
+/// Least |estimate| / σ of a reconstruction finding for the stage to test it (the check's own line is 3; on its
+/// clean turbulent records the attitude scales stay under 2.5, the a_y bias under 4).
 pub const KINEMATIC_Z: f64 = 10.0;
 
-/// The attitudes with a scale factor in the reconstruction: (its column, its name there, the gyro of its axis).
-const ATTITUDES: [(&str, &str, &str); 2] = [
-    ("phi_rad", "scale_phi", "p_rad_s"),
-    ("theta_rad", "scale_theta", "q_rad_s"),
+/// One reading of a finding: the catalogue entry, and the entry's value and standard error from the
+/// reconstruction's estimate x and σ (and cos θ₀, the record's mean pitch attitude).
+struct Reading {
+    effect: &'static str,
+    target: &'static str,
+    value: fn(f64, f64) -> f64,
+    std_error: fn(f64, f64, f64) -> f64,
+}
+
+/// A reconstruction estimate and its two readings.
+struct Finding {
+    estimate: &'static str,
+    readings: [Reading; 2],
+}
+
+/// The findings the stage tests (module doc).
+const FINDINGS: [Finding; 3] = [
+    Finding {
+        estimate: "scale_phi",
+        readings: [
+            Reading {
+                effect: "sensor_scale",
+                target: "phi_rad",
+                value: |s, _| 1.0 + s,
+                std_error: |_, se, _| se,
+            },
+            Reading {
+                effect: "sensor_scale",
+                target: "p_rad_s",
+                value: |s, _| 1.0 / (1.0 + s),
+                std_error: |s, se, _| se / (1.0 + s).powi(2),
+            },
+        ],
+    },
+    Finding {
+        estimate: "scale_theta",
+        readings: [
+            Reading {
+                effect: "sensor_scale",
+                target: "theta_rad",
+                value: |s, _| 1.0 + s,
+                std_error: |_, se, _| se,
+            },
+            Reading {
+                effect: "sensor_scale",
+                target: "q_rad_s",
+                value: |s, _| 1.0 / (1.0 + s),
+                std_error: |s, se, _| se / (1.0 + s).powi(2),
+            },
+        ],
+    },
+    Finding {
+        estimate: "bias_ay_m_s2",
+        readings: [
+            Reading {
+                effect: "sensor_bias",
+                target: "ay_m_s2",
+                value: |b, _| b,
+                std_error: |_, se, _| se,
+            },
+            Reading {
+                effect: "sensor_bias",
+                target: "phi_rad",
+                value: |b, cos_theta| b / (G0_M_S2 * cos_theta),
+                std_error: |_, se, cos_theta| se / (G0_M_S2 * cos_theta),
+            },
+        ],
+    },
 ];
 
-/// Names the attitude scale factors the reconstruction of `train` finds and the selection did not (module
-/// doc), adding them to `sel` held at the reconstruction's value.
-pub fn attitude_scales<'e>(
+/// Names the sensor errors the reconstruction of `train` finds and the selection did not (module doc), adding
+/// them to `sel` held at the reconstruction's value.
+pub fn kinematic_findings<'e>(
     worker: &mut Worker,
     train: &FlightRecord,
     p: &'e Prepared,
@@ -44,39 +109,38 @@ pub fn attitude_scales<'e>(
     let Ok(report) = data::check_compatibility(train, &data::CheckOptions::default()) else {
         return Ok(());
     };
-    if !report.converged {
+    let Some(theta) = train.column(Channel::Theta).filter(|_| report.converged) else {
         return Ok(());
-    }
+    };
+    let cos_theta = crate::signal::mean(theta).cos();
     let w = p.training();
-    let m = w.case.len();
-    for (column, name, gyro) in ATTITUDES {
-        let Some(est) = report.instrument.iter().find(|e| e.name == name) else {
-            continue;
-        };
-        let entry = |target: &str| {
-            let i = sel
-                .entries
-                .catalogue
-                .iter()
-                .position(|e| e.effect() == "sensor_scale" && e.target() == target)?;
-            Some((sel.entries.catalogue[i], sel.entries.resolution[i]))
-        };
-        let Some((own, resolution)) = entry(column) else {
-            continue;
-        };
-        let taken = sel
-            .selected
+    for finding in &FINDINGS {
+        let Some(est) = report
+            .instrument
             .iter()
-            .any(|a| a.ext.effect() == "sensor_scale" && [column, gyro].contains(&a.ext.target()));
+            .find(|e| e.name == finding.estimate)
+        else {
+            continue;
+        };
         let z = est.value.abs() / est.std_error.max(f64::MIN_POSITIVE);
-        if taken
-            || sel.named.len() >= opts.max_effects
-            || z < KINEMATIC_Z
-            || est.value.abs() < resolution
-        {
+        if z < KINEMATIC_Z {
             continue;
         }
-        let k = 1.0 + est.value;
+        let named: Vec<&Reading> = finding
+            .readings
+            .iter()
+            .filter(|r| sel.selected.iter().any(|a| r.is(a.ext)))
+            .collect();
+        match named.as_slice() {
+            [] if sel.named.len() < opts.max_effects => {}
+            [r] if ATTITUDES.contains(&r.target) => {
+                let value = (r.value)(est.value, cos_theta);
+                let std_error = (r.std_error)(est.value, est.std_error, cos_theta);
+                attitude_from_kinematics(sel, r, value, std_error);
+                continue;
+            }
+            _ => continue,
+        }
         let cost_of = |worker: &mut Worker, extra: Option<Active<'e>>| {
             let mut active = sel.selected.clone();
             active.extend(extra);
@@ -85,46 +149,56 @@ pub fn attitude_scales<'e>(
                 .map_err(sim_err("replay"))
         };
         let (before, _) = cost_of(worker, None)?;
-        let mut tried = vec![(own, k, cost_of(worker, Some(held(own, k)))?)];
-        if let Some((twin, _)) = entry(gyro) {
-            tried.push((twin, 1.0 / k, cost_of(worker, Some(held(twin, 1.0 / k)))?));
+        // (entry, its resolution, value, standard error, (cost, residual)) of each reading the record identifies
+        let mut tried = Vec::new();
+        for r in &finding.readings {
+            let Some(i) = sel
+                .entries
+                .catalogue
+                .iter()
+                .position(|e| e.effect() == r.effect && e.target() == r.target)
+            else {
+                continue;
+            };
+            let ext = sel.entries.catalogue[i];
+            let value = (r.value)(est.value, cos_theta);
+            let std_error = (r.std_error)(est.value, est.std_error, cos_theta);
+            let cost = cost_of(worker, Some(held(ext, value)))?;
+            tried.push((ext, sel.entries.resolution[i], value, std_error, cost));
         }
-        tried.sort_by(|a, b| a.2 .0.total_cmp(&b.2 .0));
-        let (ext, value, (after, r)) = &tried[0];
-        let n_eff = super::residual::effective_n(r, m);
-        if *after >= before {
+        tried.sort_by(|a, b| a.4 .0.total_cmp(&b.4 .0));
+        let Some((ext, resolution, value, std_error, (after, r))) = tried.first() else {
+            continue;
+        };
+        let null = ext.params()[0].null;
+        if *after >= before || (value - null).abs() < *resolution {
             continue;
         }
+        let n_eff = super::residual::effective_n(r, w.case.len());
         let ambiguous_with = tried[1..]
             .iter()
-            .filter(|(_, _, (c, _))| n_eff * (c / after).ln() < 10.0)
-            .map(|(e, _, _)| e.key())
+            .filter(|t| n_eff * (t.4 .0 / after).ln() < 10.0)
+            .map(|t| t.0.key())
             .collect();
-        let std_error = est.std_error
-            * if ext.target() == gyro {
-                value * value
-            } else {
-                1.0
-            };
         sel.named.push(NamedCause {
             effect: ext.effect().into(),
             target: ext.target().into(),
             value: *value,
-            std_error,
+            std_error: *std_error,
             ambiguous_with,
         });
         sel.candidates.push(Candidate {
             effect: ext.effect().into(),
             target: ext.target().into(),
             value: *value,
-            std_error,
+            std_error: *std_error,
             cost_before: before,
             cost_after: *after,
             criterion: "kinematics".into(),
             criterion_delta: n_eff * (after / before).ln(),
             z,
             n_eff,
-            resolution,
+            resolution: *resolution,
             validation_gain: None,
             rejected_because: None,
             round: sel.named.len() - 1,
@@ -134,6 +208,32 @@ pub fn attitude_scales<'e>(
         sel.selected.push(held(*ext, *value));
     }
     Ok(())
+}
+
+/// The attitude columns: an error of theirs is judged against the integrated rates, not the replay's attitude.
+const ATTITUDES: [&str; 2] = ["phi_rad", "theta_rad"];
+
+impl Reading {
+    /// Whether `ext` is this reading's catalogue entry.
+    fn is(&self, ext: &dyn Extension) -> bool {
+        ext.effect() == self.effect && ext.target() == self.target
+    }
+}
+
+/// An attitude error the selection named, given the reconstruction's value and standard error: the replay
+/// judged it against the attitude the model flies open loop, which the gusts move (module doc).
+fn attitude_from_kinematics(sel: &mut Selection, r: &Reading, value: f64, std_error: f64) {
+    for a in sel.selected.iter_mut().filter(|a| r.is(a.ext)) {
+        a.params[0] = value;
+    }
+    for c in sel
+        .named
+        .iter_mut()
+        .filter(|c| c.effect == r.effect && c.target == r.target)
+    {
+        c.value = value;
+        c.std_error = std_error;
+    }
 }
 
 /// `ext` held at `value`.

@@ -3,7 +3,7 @@
 //!
 //! Stages, one file each: [`prepare`] (records, compared channels, weights, the catalogue entries the record
 //! can identify) → [`baseline`] (the unextended model) → [`select`] (output-error fits of the [`extension`]
-//! catalogue by [`search`], forward selection) → [`kinematic`] (attitude scale factors from the flight-path
+//! catalogue by [`search`], forward selection) → [`kinematic`] (sensor errors from the flight-path
 //! reconstruction) → [`validate`] (the named effects on both records, the traces)
 //! → [`export`] (the extension file).
 
@@ -142,7 +142,7 @@ pub struct Candidate {
     pub cost_before: f64,
     /// Noise-weighted cost after fitting this candidate.
     pub cost_after: f64,
-    /// `BIC`, or `kinematics` for an attitude scale factor named from the flight-path reconstruction.
+    /// `BIC`, or `kinematics` for a sensor error named from the flight-path reconstruction.
     pub criterion: String,
     /// ΔBIC = n_eff ln(max(J₁, f·n) / max(J₀, f·n)) + ln n_eff (f: residual floor, n_eff: effective sample count).
     pub criterion_delta: f64,
@@ -318,8 +318,8 @@ pub fn diagnose(
         }
         found => (found, None),
     };
-    progress.stage("attitude kinematics", 0);
-    kinematic::attitude_scales(&mut workers[0], train, &p, &mut sel, opts)?;
+    progress.stage("kinematic findings", 0);
+    kinematic::kinematic_findings(&mut workers[0], train, &p, &mut sel, opts)?;
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
     progress.finish();

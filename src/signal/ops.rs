@@ -8,10 +8,15 @@ pub fn sum_sq(x: &[f64]) -> f64 {
     x.iter().map(|v| v * v).sum()
 }
 
+/// Mean x̄ = Σ xᵢ / n; 0 for an empty series.
+pub fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
 /// Population standard deviation √(Σ (xᵢ − x̄)² / n); 0 for an empty series.
 pub fn std_dev(x: &[f64]) -> f64 {
     let n = x.len().max(1) as f64;
-    let mean = x.iter().sum::<f64>() / n;
+    let mean = mean(x);
     (x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt()
 }
 
