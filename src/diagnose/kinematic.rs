@@ -44,40 +44,8 @@ struct Finding {
 
 /// The findings the stage tests (module doc).
 const FINDINGS: [Finding; 3] = [
-    Finding {
-        estimate: "scale_phi",
-        readings: [
-            Reading {
-                effect: "sensor_scale",
-                target: "phi_rad",
-                value: |s, _| 1.0 + s,
-                std_error: |_, se, _| se,
-            },
-            Reading {
-                effect: "sensor_scale",
-                target: "p_rad_s",
-                value: |s, _| 1.0 / (1.0 + s),
-                std_error: |s, se, _| se / (1.0 + s).powi(2),
-            },
-        ],
-    },
-    Finding {
-        estimate: "scale_theta",
-        readings: [
-            Reading {
-                effect: "sensor_scale",
-                target: "theta_rad",
-                value: |s, _| 1.0 + s,
-                std_error: |_, se, _| se,
-            },
-            Reading {
-                effect: "sensor_scale",
-                target: "q_rad_s",
-                value: |s, _| 1.0 / (1.0 + s),
-                std_error: |s, se, _| se / (1.0 + s).powi(2),
-            },
-        ],
-    },
+    attitude_scale("scale_phi", "phi_rad", "p_rad_s"),
+    attitude_scale("scale_theta", "theta_rad", "q_rad_s"),
     Finding {
         estimate: "bias_ay_m_s2",
         readings: [
@@ -96,6 +64,32 @@ const FINDINGS: [Finding; 3] = [
         ],
     },
 ];
+
+/// The scale factor `estimate` of `attitude`: that attitude scaled by 1 + s, or the `gyro` of its axis by
+/// 1/(1 + s).
+const fn attitude_scale(
+    estimate: &'static str,
+    attitude: &'static str,
+    gyro: &'static str,
+) -> Finding {
+    Finding {
+        estimate,
+        readings: [
+            Reading {
+                effect: "sensor_scale",
+                target: attitude,
+                value: |s, _| 1.0 + s,
+                std_error: |_, se, _| se,
+            },
+            Reading {
+                effect: "sensor_scale",
+                target: gyro,
+                value: |s, _| 1.0 / (1.0 + s),
+                std_error: |s, se, _| se / (1.0 + s).powi(2),
+            },
+        ],
+    }
+}
 
 /// Names the sensor errors the reconstruction of `train` finds and the selection did not (module doc), adding
 /// them to `sel` held at the reconstruction's value.
