@@ -146,12 +146,7 @@ pub fn kinematic_findings<'e>(
         // (entry, its resolution, value, standard error, (cost, residual)) of each reading the record identifies
         let mut tried = Vec::new();
         for r in &finding.readings {
-            let Some(i) = sel
-                .entries
-                .catalogue
-                .iter()
-                .position(|e| e.effect() == r.effect && e.target() == r.target)
-            else {
+            let Some(i) = sel.entries.catalogue.iter().position(|e| r.is(*e)) else {
                 continue;
             };
             let ext = sel.entries.catalogue[i];
