@@ -23,8 +23,10 @@ use super::select::Selection;
 use super::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 use crate::data::{self, Channel, FlightRecord, G0_M_S2};
 
-/// Least |estimate| / σ of a reconstruction finding for the stage to test it (the check's own line is 3; on its
-/// clean turbulent records the attitude scales stay under 2.5, the a_y bias under 4).
+/// Least |estimate| / σ of a reconstruction finding for the stage to test it (the check's own line is 3). On the
+/// 78 clean turbulent records of the evaluation (`diagnose_eval` seed 6 and false-alarm seeds 21–23) the
+/// attitude scales reached z 10.5 once (−0.021, under the entry's resolution of 0.03) and 5.5 otherwise, the a_y
+/// bias 8.0 (−0.073 m/s²).
 pub const KINEMATIC_Z: f64 = 10.0;
 
 /// One reading of a finding: the catalogue entry, and the entry's value and standard error from the
