@@ -16,8 +16,8 @@
 //! bias b, for V, α and β; a scale factor also for φ and θ, against the attitude the rates integrate to,
 //! so that a roll or pitch gyro's scale error shows as the inverse scale factor on φ or θ). Biases, scale
 //! factors, skews and the initial state are estimated by output-error Gauss–Newton (Levenberg–Marquardt
-//! damped) with the residual covariance re-estimated every iteration (Klein & Morelli §6.2, eq. 6.51–6.56). Standard errors are Cramér–Rao bounds
-//! corrected for coloured residuals (Morelli & Klein, "Accounting for the effects of colored
+//! damped) with the residual covariance re-estimated every iteration (Klein & Morelli §6.2, eq.
+//! 6.51–6.56). Standard errors are Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein, "Accounting for the effects of colored
 //! residuals", J. Aircraft 1997; Klein & Morelli §6.5): `Cov = M⁻¹ S M⁻¹` with
 //! `M = Σ Jᵀ R⁻¹ J` and `S` built from the Bartlett-windowed residual autocorrelation over the lags
 //! where it is correlated (the estimation core's rule, `estimate::covariance`). The plain
