@@ -11,17 +11,17 @@
 //! ```
 //!
 //! with `p = p_m − b_p`, …, `ax = ax_m − b_ax`, … (instrument biases). The reconstructed outputs
-//! `V = |(u,v,w)|`, `α = atan2(w, u)`, `β = asin(v/V)`, φ, θ, ψ are compared with the measured
-//! ones through the output model `y_m(t) = (1 + s) · y(t − τ) + b` (scale factor s, time skew τ,
-//! bias b, for V, α and β; a scale factor also for φ and θ, against the attitude the rates integrate to,
-//! so that a roll or pitch gyro's scale error shows as the inverse scale factor on φ or θ). Biases, scale
-//! factors, skews and the initial state are estimated by output-error Gauss–Newton (Levenberg–Marquardt
-//! damped) with the residual covariance re-estimated every iteration (Klein & Morelli §6.2, eq.
-//! 6.51–6.56). Standard errors are Cramér–Rao bounds corrected for coloured residuals (Morelli & Klein, "Accounting for the effects of colored
-//! residuals", J. Aircraft 1997; Klein & Morelli §6.5): `Cov = M⁻¹ S M⁻¹` with
-//! `M = Σ Jᵀ R⁻¹ J` and `S` built from the Bartlett-windowed residual autocorrelation over the lags
-//! where it is correlated (the estimation core's rule, `estimate::covariance`). The plain
-//! bound `M⁻¹` (white residuals) is optimistic by factors of 2–5 on flight data.
+//! `V = |(u,v,w)|`, `α = atan2(w, u)`, `β = asin(v/V)`, φ, θ, ψ are compared with the measured ones through the
+//! output model `y_m(t) = (1 + s) · y(t − τ) + b` (scale factor s, time skew τ, bias b, for V, α and β; a scale
+//! factor also for φ and θ, against the attitude the rates integrate to, so that a roll or pitch gyro's scale
+//! error shows as the inverse scale factor on φ or θ). Biases, scale factors, skews and the initial state are
+//! estimated by output-error Gauss–Newton (Levenberg–Marquardt damped) with the residual covariance
+//! re-estimated every iteration (Klein & Morelli §6.2, eq. 6.51–6.56). Standard errors are Cramér–Rao bounds
+//! corrected for coloured residuals (Morelli & Klein, "Accounting for the effects of colored residuals", J.
+//! Aircraft 1997; Klein & Morelli §6.5): `Cov = M⁻¹ S M⁻¹` with `M = Σ Jᵀ R⁻¹ J` and `S` built from the
+//! Bartlett-windowed residual autocorrelation over the lags where it is correlated (the estimation core's rule,
+//! `estimate::covariance`). The plain bound `M⁻¹` (white residuals) is optimistic by factors of 2–5 on flight
+//! data.
 //!
 //! Integration: classical Runge–Kutta 4 over each sample interval, measured inputs linear in time.
 
