@@ -370,13 +370,7 @@ fn an_attitude_scale_lost_in_the_gusts_is_named_from_the_kinematics() {
         45.0,
         true,
     );
-    assert!(
-        d.candidates
-            .iter()
-            .any(|c| c.criterion == "kinematics" && c.target == "theta_rad"),
-        "named by the replay, not the kinematics: {:?}",
-        d.named_cause
-    );
+    assert_named_from_kinematics(&d, "theta_rad");
 }
 
 /// A φ bias of 1.13° in light turbulence (case 2 of `cargo bench --bench diagnose_eval -- --seed 3
@@ -399,10 +393,15 @@ fn a_roll_attitude_bias_lost_in_the_gusts_is_named_from_the_kinematics() {
         ],
         2,
     );
+    assert_named_from_kinematics(&d, "phi_rad");
+}
+
+/// Asserts that the sensor error on `target` was named by the kinematic stage, not by the replay's selection.
+fn assert_named_from_kinematics(d: &Diagnosis, target: &str) {
     assert!(
         d.candidates
             .iter()
-            .any(|c| c.criterion == "kinematics" && c.target == "phi_rad"),
+            .any(|c| c.criterion == "kinematics" && c.target == target),
         "named by the replay, not the kinematics: {:?}",
         d.named_cause
     );
