@@ -396,6 +396,40 @@ fn a_roll_attitude_bias_lost_in_the_gusts_is_named_from_the_kinematics() {
     assert_named_from_kinematics(&d, "phi_rad");
 }
 
+/// A clean record (seed 31, 45 s, light turbulence) with θ logged × 1.12 over its first 74 % only: no constant
+/// sensor error, but the reconstruction of the whole record reads a θ scale of +0.108 at z 12.5, beyond the
+/// stage's 10. The second half's own reconstruction gives +0.070 at z 4.2, which does not confirm it, so the
+/// kinematic stage names nothing (docs/diagnose.md, "Sensor errors from the flight-path reconstruction");
+/// without that test it named a θ scale here. Checked: nothing named by the kinematic stage.
+#[test]
+fn an_attitude_error_over_part_of_the_record_is_not_named_from_the_kinematics() {
+    let args = [
+        "--cases",
+        "1",
+        "--effects",
+        "[]",
+        "--duration",
+        "45",
+        "--seed",
+        "31",
+        "--turbulence",
+    ];
+    let d = check_generated_with(&args, 0, |mut rec| {
+        let cut = rec.len() * 74 / 100;
+        for (name, values) in rec.columns.iter_mut() {
+            if name == "theta_rad" {
+                values[..cut].iter_mut().for_each(|v| *v *= 1.12);
+            }
+        }
+        rec
+    });
+    assert!(
+        d.candidates.iter().all(|c| c.criterion != "kinematics"),
+        "named from the kinematics: {:?}",
+        d.named_cause
+    );
+}
+
 /// Asserts that the sensor error on `target` was named by the kinematic stage, not by the replay's selection.
 fn assert_named_from_kinematics(d: &Diagnosis, target: &str) {
     assert!(
