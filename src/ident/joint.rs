@@ -210,6 +210,20 @@ fn assemble(
     }
 }
 
+/// Keeps `model` in `best` when its joint simulation error ([`joint_cost`]) is the lowest so far: the joint
+/// IV and SRIVC estimators pick their start and the iterate they return by it, not by the last step.
+fn keep_if_lower(
+    recs: &[Centered],
+    dt_s: f64,
+    model: &ContinuousModel,
+    best: &mut Option<(f64, ContinuousModel)>,
+) {
+    let cost = joint_cost(recs, dt_s, model);
+    if best.as_ref().is_none_or(|b| cost < b.0) {
+        *best = Some((cost, model.clone()));
+    }
+}
+
 /// Joint simulation error `Σ_r Σ_k (y_r − ŷ_r)²` with each record's nuisances fitted.
 fn joint_cost(recs: &[Centered], dt_s: f64, model: &ContinuousModel) -> f64 {
     match nuisances(recs, dt_s, model) {
@@ -405,10 +419,7 @@ fn iv_joint(
         let change = relative_change(&den, &model.den);
         model = next;
         let candidate = refit_linear(recs, dt_s, &model.den, m, delay_s)?;
-        let cost = joint_cost(recs, dt_s, &candidate);
-        if best.as_ref().is_none_or(|b| cost < b.0) {
-            best = Some((cost, candidate));
-        }
+        keep_if_lower(recs, dt_s, &candidate, &mut best);
         if change < 1e-9 {
             break;
         }
@@ -524,17 +535,11 @@ fn srivc_joint(
 ) -> Result<ContinuousModel, IdentError> {
     const MAX_ITER: usize = 30;
     let mut best: Option<(f64, ContinuousModel)> = None;
-    let consider = |model: &ContinuousModel, best: &mut Option<(f64, ContinuousModel)>| {
-        let cost = joint_cost(recs, dt_s, model);
-        if best.as_ref().is_none_or(|b| cost < b.0) {
-            *best = Some((cost, model.clone()));
-        }
-    };
     let mut start: Option<(f64, ContinuousModel)> = None;
     for lambda in lambdas(dt_s) {
         let den_f = poly_from_roots(&vec![num_complex::Complex64::new(-lambda, 0.0); n]);
         if let Some(model) = srivc_step(recs, dt_s, m, delay_s, &den_f, None) {
-            consider(&model, &mut start);
+            keep_if_lower(recs, dt_s, &model, &mut start);
         }
     }
     let Some((_, mut model)) = start else {
@@ -544,7 +549,7 @@ fn srivc_joint(
             n_params: n + m + 1,
         });
     };
-    consider(&model, &mut best);
+    keep_if_lower(recs, dt_s, &model, &mut best);
     for _ in 0..MAX_ITER {
         let den_f = stabilize_continuous(&model.den);
         let Some(next) = srivc_step(recs, dt_s, m, delay_s, &den_f, Some(&model.num)) else {
@@ -553,7 +558,7 @@ fn srivc_joint(
         let change =
             relative_change(&next.den, &model.den).max(relative_change(&next.num, &model.num));
         model = next;
-        consider(&model, &mut best);
+        keep_if_lower(recs, dt_s, &model, &mut best);
         if change < 1e-9 {
             break;
         }
