@@ -430,6 +430,37 @@ fn an_attitude_error_over_part_of_the_record_is_not_named_from_the_kinematics() 
     );
 }
 
+/// A clean record in light turbulence (case 8 of `cargo bench --bench diagnose_eval -- --seed 7 --turbulence`,
+/// 35 s at 20 Hz). The filter error refit named a θ bias of −0.0109 rad from the innovations: a bias on θ takes
+/// up the record's mean vertical gust (θ = γ + α). The flight-path reconstruction reads a θ bias as an a_x bias
+/// of −g cos θ₀ times it and finds none (+0.0016 ± 0.0011 rad in θ), so the θ bias is dropped
+/// (docs/diagnose.md, "Sensor errors from the flight-path reconstruction"). Checked: nothing named, and the θ
+/// bias's entry says the reconstruction dropped it.
+#[test]
+fn a_pitch_attitude_bias_the_kinematics_do_not_see_is_dropped() {
+    let d = check_generated(
+        &[
+            "--cases",
+            "1",
+            "--first",
+            "8",
+            "--seed",
+            "7",
+            "--turbulence",
+            "--stratified",
+        ],
+        8,
+    );
+    assert!(
+        d.candidates.iter().any(|c| c.target == "theta_rad"
+            && c
+                .rejected_because
+                .as_deref()
+                .is_some_and(|r| r.starts_with("dropped by the flight-path reconstruction"))),
+        "no θ bias dropped by the reconstruction"
+    );
+}
+
 /// Asserts that the sensor error on `target` was named by the kinematic stage, not by the replay's selection.
 fn assert_named_from_kinematics(d: &Diagnosis, target: &str) {
     assert!(
