@@ -30,7 +30,8 @@
 //!
 //! - **Filter error** adds to the longitudinal model the vertical gust states of [`super::flight_models`]
 //!   (α_g and the rotary q_g, gain `gust_q_gain` estimated within ±1.5) with process noise on α_g and V; the
-//!   lateral model keeps process noise on every state.
+//!   lateral model keeps process noise on every state. Once C_Lq and C_mα̇ are free it ties the held C_Lα̇ to
+//!   them by the tail's ratio, C_Lα̇ = C_Lq C_mα̇/C_mq (`lift_alphadot_tied`).
 //! - **A held C_mα̇** is a consider parameter, 0 ± 0.2 |C_mq| (`free.rs`): where the records cannot separate it
 //!   from C_mα, C_mq and C_mδe, their σ carry it. The α̇ check frees it where they can (filter error in gusts,
 //!   once a vane skew is taken off the data: `checks.rs`).
@@ -41,6 +42,7 @@
 //! mean flight condition, with σ by first-order propagation of the estimates' covariance through
 //! central-difference derivatives of the eigenvalues (Jategaonkar §4.17; [`super::measured::modes_with_uncertainty`]).
 
+use std::borrow::Cow;
 use std::collections::{BTreeMap, BTreeSet};
 
 use super::airframe::Airframe;
@@ -61,9 +63,9 @@ mod checks;
 mod free;
 mod records;
 use checks::{
-    alphadot_check, alphadot_terms, beta_skew_check, curvature_check, process_noise_note,
-    run_checks, side_force_rate_check, skew_check, skew_taken_off, speed_check, AxisFitter, Check,
-    StructureCheck, BETA_SKEW, CURVATURE, SIDE_RATES_AND_SKEW, SKEW, SPEED,
+    alphadot_check, beta_skew_check, curvature_check, process_noise_note, run_checks,
+    side_force_rate_check, skew_check, skew_taken_off, speed_check, AxisFitter, Check,
+    StructureCheck, ALPHADOT, BETA_SKEW, CURVATURE, SIDE_RATES_AND_SKEW, SKEW, SPEED,
 };
 use free::{equation_error_starts, parameters, GUST_Q_GAIN, LAT_HELD, LON_HELD};
 pub use free::{parse_free, FreeChoice, FREE_GROUPS};
@@ -88,6 +90,46 @@ pub struct LongitudinalModel {
     thrust: bool,
     /// With the vertical gust states ([`fm::VerticalGust`]): their scale length L_w, m.
     gust_scale_m: Option<f64>,
+    /// C_Lα̇ tied to C_Lq by the tail's ratio ([`lift_alphadot_tied`]); its own θ entry is then ignored.
+    tied_lift_alphadot: bool,
+}
+
+/// θ indices of C_Lq, C_Lα̇, C_mq and C_mα̇.
+fn lift_alphadot_indices() -> [usize; 4] {
+    ["CL_q", "CL_alphadot", "Cm_q", "Cm_alphadot"].map(|n| {
+        LONGITUDINAL_PARAMETERS
+            .iter()
+            .position(|p| *p == n)
+            .expect("a longitudinal parameter")
+    })
+}
+
+/// Whether a filter-error fit ties C_Lα̇ to C_Lq: when C_Lq and C_mα̇ are free and C_Lα̇ is held (the α̇ check's wider
+/// fit, [`checks::ALPHADOT`], and every fit after it adopts). With the accelerometer measuring the whole lift, α̇ = q
+/// − q̄S C_L/(mV) + g cos γ/V makes the lift equation C_L (1 + ρSc̄ C_Lα̇/(4m)) = C_L0 + C_Lα α + (C_Lq + C_Lα̇) q̂ +
+/// …: the records fix the sum C_Lq + C_Lα̇, and their split only rescales every lift derivative by 1 + ρSc̄ C_Lα̇/(4m)
+/// (Klein & Morelli §3.5). Filter error's gust states add the rotary gust, which C_Lq sees and C_Lα̇ does not, but
+/// that share of the lift is a few parts in a thousand, and the split it gives follows whatever else the model misses:
+/// freed together, C_Lq and C_Lα̇ came out 0–11 and 11–19 on the c310 (JSBSim 9.5 and 5.1), C_Lα +2…+4.4 % off in step
+/// with ρSc̄ ΔC_Lα̇/(4m), and on two of five seeds the wider fit ran off. Holding C_Lq at 0 put C_Lα +4…+6 % off on
+/// all five; holding C_Lα̇ at 0 put it −1.8 % off (−ρSc̄ C_Lα̇/(4m)) and C_mq, C_mδe 7–12 % off on two. The tie pins
+/// the split as a horizontal tail does (Etkin & Reid §5.4): its lift and moment per unit q are C_Lq,t = 2 a_t η V_H
+/// and C_mq,t = −(l_t/c̄) C_Lq,t, and downwash lag multiplies both by dε/dα, so C_Lα̇/C_Lq = C_mα̇/C_mq = dε/dα, a
+/// ratio the pitch equation does determine; C_Lα̇ = C_Lq C_mα̇/C_mq. On five c310 gust realisations it gave C_Lα̇
+/// 3.1–6.5 (JSBSim 5.1) and C_Lα, C_mq, C_mδe within 2 %; C_Lq itself, which carries the whole q̂ share of the lift,
+/// came out 18–26.
+fn lift_alphadot_tied(method: Method, free: impl Fn(&str) -> bool) -> bool {
+    method == Method::Fem && free("CL_q") && free("Cm_alphadot") && !free("CL_alphadot")
+}
+
+/// C_Lα̇ = C_Lq C_mα̇/C_mq ([`lift_alphadot_tied`]; 0 when C_mq is 0).
+fn tied_lift_alphadot(theta: &[f64]) -> f64 {
+    let [clq, _, cmq, cmad] = lift_alphadot_indices();
+    if theta[cmq] == 0.0 {
+        0.0
+    } else {
+        theta[clq] * theta[cmad] / theta[cmq]
+    }
 }
 
 impl LongitudinalModel {
@@ -119,7 +161,18 @@ impl LongitudinalModel {
             outputs,
             thrust,
             gust_scale_m,
+            tied_lift_alphadot: false,
         }
+    }
+
+    /// θ as the equations read it: with C_Lα̇ tied to C_Lq when [`lift_alphadot_tied`].
+    fn theta<'a>(&self, theta: &'a [f64]) -> Cow<'a, [f64]> {
+        if !self.tied_lift_alphadot {
+            return Cow::Borrowed(theta);
+        }
+        let mut t = theta.to_vec();
+        t[lift_alphadot_indices()[1]] = tied_lift_alphadot(theta);
+        Cow::Owned(t)
     }
 
     fn inputs(&self, u: &[f64]) -> LonInputs {
@@ -137,6 +190,7 @@ impl StateModel for LongitudinalModel {
     }
 
     fn derivatives(&self, theta: &[f64], x: &[f64], u: &[f64], dx: &mut [f64]) {
+        let theta = &self.theta(theta)[..];
         let e = fm::longitudinal(&self.constants, theta, x, &self.inputs(u));
         dx[..4].copy_from_slice(&e.dx);
         if let Some(scale_m) = self.gust_scale_m {
@@ -145,6 +199,7 @@ impl StateModel for LongitudinalModel {
     }
 
     fn outputs(&self, theta: &[f64], x: &[f64], u: &[f64], y: &mut [f64]) {
+        let theta = &self.theta(theta)[..];
         let e = fm::longitudinal(&self.constants, theta, x, &self.inputs(u));
         for (yo, o) in y.iter_mut().zip(&self.outputs) {
             *yo = o.value(&self.constants, theta, x, &e);
@@ -364,14 +419,25 @@ fn fit_longitudinal(
         setup.options,
         notes,
     );
-    let model = LongitudinalModel::new(constants, outputs.clone(), thrust, gust_scale_m);
+    let mut model = LongitudinalModel::new(constants, outputs.clone(), thrust, gust_scale_m);
+    model.tied_lift_alphadot = lift_alphadot_tied(setup.options.method, |n| {
+        params.iter().any(|p| p.name == n && !p.fixed)
+    });
     let bias = [LonOutput::Q, LonOutput::Ax, LonOutput::Az, LonOutput::Qdot];
     let mut nuisance = states_and_biases(&outputs, &bias);
     if gust_scale_m.is_some() {
         // the atmosphere's process noise: the vertical gust, and the horizontal one on the airspeed
         nuisance.process_noise = Some(vec![0, 4]);
     }
-    fit_model(&model, &params, &recs, &nuisance, setup.options, constants)
+    let mut fit = fit_model(&model, &params, &recs, &nuisance, setup.options, constants)?;
+    if model.tied_lift_alphadot {
+        // the held entry takes the tied value, for the modes and the report
+        let clad = lift_alphadot_indices()[1];
+        let v = tied_lift_alphadot(&fit.theta);
+        fit.theta[clad] = v;
+        fit.estimate.parameters[clad].value = v;
+    }
+    Ok(fit)
 }
 
 /// Fits the lateral-directional model to the records (module doc).
@@ -498,6 +564,32 @@ fn free_block(est: &estimate::Estimate) -> (Vec<usize>, Vec<Vec<f64>>) {
     (free, cov)
 }
 
+/// σ of the tied C_Lα̇ = C_Lq C_mα̇/C_mq ([`lift_alphadot_tied`]) by first-order propagation of the
+/// covariance of C_Lq, C_mα̇ and C_mq (0 when C_mq is 0, as the tie's value is).
+fn tied_lift_alphadot_sigma(est: &estimate::Estimate) -> f64 {
+    let (free, cov) = free_block(est);
+    let [clq, _, cmq, cmad] = lift_alphadot_indices();
+    let v = |i: usize| est.parameters[i].value;
+    if v(cmq) == 0.0 {
+        return 0.0;
+    }
+    let gradient = [
+        (clq, v(cmad) / v(cmq)),
+        (cmad, v(clq) / v(cmq)),
+        (cmq, -v(clq) * v(cmad) / (v(cmq) * v(cmq))),
+    ];
+    let at = |i: usize| free.iter().position(|&f| f == i);
+    let mut var = 0.0;
+    for &(i, gi) in &gradient {
+        for &(j, gj) in &gradient {
+            if let (Some(a), Some(b)) = (at(i), at(j)) {
+                var += gi * cov[a][b] * gj;
+            }
+        }
+    }
+    var.max(0.0).sqrt()
+}
+
 /// Output error (or filter error) on measured records: the report of `derivatives --data … --airframe …
 /// --method oe|fem` (module doc). `records` pairs a name with each record.
 pub fn output_error_report(
@@ -550,10 +642,9 @@ pub fn output_error_report(
     let check = |run: Check, frees: &'static [&'static str], tested: &'static [&'static str]| {
         StructureCheck { run, frees, tested }
     };
-    let alphadot = alphadot_terms(options.method);
     let lon_checks = [
         check(skew_check, &SKEW, &SKEW),
-        check(alphadot_check, alphadot, &alphadot[..1]),
+        check(alphadot_check, &ALPHADOT, &ALPHADOT[..1]),
         check(speed_check, &SPEED, &SPEED),
         check(curvature_check, &CURVATURE, &CURVATURE),
     ];
@@ -608,6 +699,7 @@ pub fn output_error_report(
     for (name, f, n_records) in &fits {
         let est = &f.estimate;
         let sigma_known = !no_sigma(f);
+        let tied = lift_alphadot_tied(est.method, |n| est.parameter(n).is_some_and(|p| !p.fixed));
         let mut held = Vec::new();
         for p in &est.parameters {
             if p.name == GUST_Q_GAIN {
@@ -629,6 +721,27 @@ pub fn output_error_report(
                         1000.0 * p.std_error
                     ));
                 }
+                continue;
+            }
+            if p.name == "CL_alphadot" && tied {
+                let sd = if sigma_known {
+                    tied_lift_alphadot_sigma(est)
+                } else {
+                    f64::NAN
+                };
+                notes.push(format!(
+                    "{name}: C_Lα̇ = C_Lq C_mα̇/C_mq = {:.2} ± {sd:.2}: the records fix only C_Lq + C_Lα̇ (the \
+                     accelerometer measures the whole lift), so the split is the tail's, C_Lα̇/C_Lq = C_mα̇/C_mq \
+                     = dε/dα; C_Lq carries the rest of the lift's q̂ share",
+                    p.value
+                ));
+                derivatives.insert(
+                    p.name.clone(),
+                    Estimate {
+                        value: p.value,
+                        std_error: sd,
+                    },
+                );
                 continue;
             }
             if p.fixed {

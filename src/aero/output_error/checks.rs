@@ -63,24 +63,15 @@ pub(super) const SPEED: [&str; 3] = ["CL_V", "CD_V", "Cm_V"];
 
 /// The α̇ terms the α̇ check frees: C_mα̇, with C_Lq. Not C_Lα̇: with the accelerometer measuring the whole
 /// lift, α̇ = q − q̄S C_L/(mV) + g cos γ/V turns the lift equation into C_L (1 + ρSc̄ C_Lα̇/(4m)) = C_L0 +
-/// C_Lα α + (C_Lq + C_Lα̇) q̂ + …, so C_Lα̇ only rescales every lift derivative, and nothing but gravity's small
-/// share of γ̇ pins it (Klein & Morelli §3.5). In light turbulence it ran off to −216…−6 over five c310 gust
-/// realisations (truth 5.1) and scaled C_Lα by up to 0.3; held at 0 it biases the lift derivatives by
-/// ρSc̄ C_Lα̇/(4m), 1.6 % on the c310. C_Lq, nearly collinear with it, takes the sum.
+/// C_Lα α + (C_Lq + C_Lα̇) q̂ + …, so the records fix C_Lq + C_Lα̇ and their split only rescales every lift
+/// derivative, with nothing but gravity's small share of γ̇ to pin it (Klein & Morelli §3.5). Output error
+/// holds C_Lα̇ at 0: freed, it ran off to −216…−6 over five c310 gust realisations (truth 5.1) and scaled C_Lα
+/// by up to 0.3; held, it biases the lift derivatives by ρSc̄ C_Lα̇/(4m), 1.6 % on the c310. Filter error
+/// ties it to C_Lq by the tail's ratio, C_Lα̇ = C_Lq C_mα̇/C_mq (`lift_alphadot_tied` in the parent module):
+/// freeing C_Lα̇ instead of C_Lq put C_Lα +4…+6 % off on all five c310 seeds (σ 0.8 %), freeing all three
+/// ran off on two of five, and C_Lq alone left C_Lα −1.8 % and C_mq, C_mδe up to 12 % off; tied, C_Lα, C_mq
+/// and C_mδe are within 2 % on all five (C_mα 3.8 %).
 pub(super) const ALPHADOT: [&str; 2] = ["Cm_alphadot", "CL_q"];
-
-/// The α̇ terms the α̇ check frees for filter error: C_mα̇ with C_Lα̇. The gust states keep C_Lα̇ from running
-/// off there, and C_Lq beside C_mα̇ did run off (c310, light turbulence: C_mα̇ +57 ± 31, C_mα of the wrong
-/// sign), while with C_Lα̇ the c310 gets C_mα̇ −13.3 ± 1.8 (JSBSim −12.7) and C_mq, C_mδe within 5 %.
-pub(super) const ALPHADOT_FEM: [&str; 2] = ["Cm_alphadot", "CL_alphadot"];
-
-/// The α̇ terms the α̇ check frees for `method`.
-pub(super) fn alphadot_terms(method: Method) -> &'static [&'static str] {
-    match method {
-        Method::Fem => &ALPHADOT_FEM,
-        _ => &ALPHADOT,
-    }
-}
 
 /// The fit of one axis ([`fit_longitudinal`], [`fit_lateral`]).
 pub(super) type AxisFitter = fn(
@@ -531,17 +522,18 @@ fn vane_skew_check(
     Some((note, (supported && !w.user_chose).then_some(w.fit)))
 }
 
-/// When the α̇ terms were held by default: the same fit with C_mα̇ and C_Lq free (C_Lα̇ stays held:
-/// [`ALPHADOT`]; filter error frees C_Lα̇ instead, [`ALPHADOT_FEM`]). Downwash lag at a tail behind the
+/// When the α̇ terms were held by default: the same fit with C_mα̇ and C_Lq free ([`ALPHADOT`]; C_Lα̇ stays
+/// held by output error and follows C_Lq by the tail's ratio in filter error). Downwash lag at a tail behind the
 /// wing makes C_mα̇ negative (Etkin & Reid §5.4; Klein & Morelli §3.5). The wider fit is adopted when C_mα̇ is negative and significant (|t| > 3) and the
 /// likelihood-ratio test passes at 1 % (2 ΔJ > χ²₂ = 9.21,
 /// Klein & Morelli §5.4; J is the negative log-likelihood); a positive value is another unmodelled effect
 /// taking the α̇ shape, and the terms stay held. Without an α vane, or when the wider fit does not converge,
 /// it only reports. When the user named the α̇ terms in `--free`, the check only
 /// reports. Returns the note and the adopted fit. Output error and filter error alike: with a vane skew
-/// taken off the data ([`skew_taken_off`]) filter error finds the c310's −13.3 ± 1.8 in light turbulence
-/// (JSBSim: −12.7) and the 737's −14.3 ± 0.9 (−16); those are the values after the deskewed refit, and the
-/// check's own wider fit, with the skew term, said −16.8 and −13.7.
+/// taken off the data ([`skew_taken_off`]) filter error finds the c310's −13.7 ± 1.9 in light turbulence on
+/// seed 2 (JSBSim: −12.7; −13.7…−20.4 on seeds 1–5, with C_Lα̇ tied) and the 737's −14.3 ± 0.9 (−16, with
+/// C_Lα̇ free instead of C_Lq); those are the values after the deskewed refit, the check's own wider fit,
+/// with the skew term, says more (c310 −18.2 on seed 2).
 pub(super) fn alphadot_check(
     records: &[&(String, data::FlightRecord)],
     setup: FitSetup,
@@ -554,7 +546,7 @@ pub(super) fn alphadot_check(
     {
         return None;
     }
-    let w = wider_fit(records, setup, held, alphadot_terms(setup.options.method))?;
+    let w = wider_fit(records, setup, held, &ALPHADOT)?;
     let p = w.fit.estimate.parameter("Cm_alphadot")?;
     let t = p.value / p.std_error.max(f64::MIN_POSITIVE);
     // without an α vane the split between α̇ and q rests on the accelerometer alone: report, never adopt
@@ -565,14 +557,13 @@ pub(super) fn alphadot_check(
     let supported =
         p.value < 0.0 && t.abs() > 3.0 && 2.0 * w.drop > CHI2_2_1PCT && vane && converged;
     let partner = if setup.options.method == Method::Fem {
-        ("C_Lα̇", "-alphadot")
+        "C_Lq (C_Lα̇ = C_Lq C_mα̇/C_mq)"
     } else {
-        ("C_Lq", "-alphadot,-CL_q")
+        "C_Lq"
     };
     let adopted = format!(
-        "negative, as downwash lag at a tail behind the wing makes it: C_mα̇ and {} are estimated (hold them \
-         with --free {})",
-        partner.0, partner.1
+        "negative, as downwash lag at a tail behind the wing makes it: C_mα̇ and {partner} are estimated (hold \
+         them with --free -alphadot,-CL_q)"
     );
     let verdict = if supported && w.user_chose {
         "negative, as downwash lag at a tail behind the wing makes it; held as --free asks"
@@ -594,8 +585,9 @@ pub(super) fn alphadot_check(
         ""
     };
     let note = format!(
-        "longitudinal: with C_mα̇, {} free the cost falls by {:.1} and C_mα̇ = {:.2} ± {:.2}: {verdict}{chosen}",
-        partner.0, w.drop, p.value, p.std_error
+        "longitudinal: with C_mα̇, {partner} free the cost falls by {:.1} and C_mα̇ = {:.2} ± {:.2}: \
+         {verdict}{chosen}",
+        w.drop, p.value, p.std_error
     );
     Some((note, (supported && !w.user_chose).then_some(w.fit)))
 }
