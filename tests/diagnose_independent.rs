@@ -453,8 +453,7 @@ fn a_pitch_attitude_bias_the_kinematics_do_not_see_is_dropped() {
     );
     assert!(
         d.candidates.iter().any(|c| c.target == "theta_rad"
-            && c
-                .rejected_because
+            && c.rejected_because
                 .as_deref()
                 .is_some_and(|r| r.starts_with("dropped by the flight-path reconstruction"))),
         "no θ bias dropped by the reconstruction"
