@@ -8,8 +8,9 @@
 //! scale of φ and θ against that: −0.161 ± 0.003 on the same record.
 //!
 //! Each finding of the reconstruction has two readings the kinematics cannot tell apart ([`FINDINGS`]): a
-//! scale on φ is the roll gyro scaled the other way (both integrate to the same attitude), and an a_y bias b is
-//! a φ bias b/(g cos θ₀) (gravity's g cos θ sin φ in v̇ takes either). After the selection, a finding at
+//! scale on φ is the roll gyro scaled the other way (both integrate to the same attitude), an a_y bias b is
+//! a φ bias b/(g cos θ₀) (gravity's g cos θ sin φ in v̇ takes either), and an a_x bias b a θ bias
+//! −b/(g cos θ₀) (gravity's −g sin θ in u̇). After the selection, a finding at
 //! [`KINEMATIC_Z`] standard errors or more whose readings the selection both left alone is tested in the replay,
 //! where the aerodynamics and the other channels tell them apart: the reading of lower cost is named, held at the
 //! reconstruction's value and standard error, when it is beyond its entry's resolution and lowers the cost of
@@ -20,6 +21,10 @@
 //! sign and at least [`KINEMATIC_Z`]/√2 standard errors on each (a constant error seen at z on the whole record
 //! is seen at about z/√2 on half of it). A sensor error holds all flight long; what gusts or an unmodelled
 //! motion put into the estimate does not.
+//!
+//! The reconstruction also judges an attitude error the selection named without its twin, whatever the
+//! finding's z: when its reading of the error is within the entry's resolution of no effect, or of the other
+//! sign, the error is dropped ([`drop_unseen_attitude`]).
 
 use super::extension::Extension;
 use super::prepare::Prepared;
