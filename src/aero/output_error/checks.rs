@@ -522,18 +522,17 @@ fn vane_skew_check(
     Some((note, (supported && !w.user_chose).then_some(w.fit)))
 }
 
-/// When the α̇ terms were held by default: the same fit with C_mα̇ and C_Lq free ([`ALPHADOT`]; C_Lα̇ stays
-/// held by output error and follows C_Lq by the tail's ratio in filter error). Downwash lag at a tail behind the
-/// wing makes C_mα̇ negative (Etkin & Reid §5.4; Klein & Morelli §3.5). The wider fit is adopted when C_mα̇ is negative and significant (|t| > 3) and the
-/// likelihood-ratio test passes at 1 % (2 ΔJ > χ²₂ = 9.21,
-/// Klein & Morelli §5.4; J is the negative log-likelihood); a positive value is another unmodelled effect
-/// taking the α̇ shape, and the terms stay held. Without an α vane, or when the wider fit does not converge,
-/// it only reports. When the user named the α̇ terms in `--free`, the check only
-/// reports. Returns the note and the adopted fit. Output error and filter error alike: with a vane skew
-/// taken off the data ([`skew_taken_off`]) filter error finds the c310's −13.7 ± 1.9 in light turbulence on
-/// seed 2 (JSBSim: −12.7; −13.7…−20.4 on seeds 1–5, with C_Lα̇ tied) and the 737's −14.3 ± 0.9 (−16, with
-/// C_Lα̇ free instead of C_Lq); those are the values after the deskewed refit, the check's own wider fit,
-/// with the skew term, says more (c310 −18.2 on seed 2).
+/// When the α̇ terms were held by default: the same fit with C_mα̇ and C_Lq free ([`ALPHADOT`]; C_Lα̇ stays held by
+/// output error and follows C_Lq by the tail's ratio in filter error). Downwash lag at a tail behind the wing makes
+/// C_mα̇ negative (Etkin & Reid §5.4; Klein & Morelli §3.5). The wider fit is adopted when C_mα̇ is negative and
+/// significant (|t| > 3) and the likelihood-ratio test passes at 1 % (2 ΔJ > χ²₂ = 9.21, Klein & Morelli §5.4; J is
+/// the negative log-likelihood); a positive value is another unmodelled effect taking the α̇ shape, and the terms
+/// stay held. Without an α vane, or when the wider fit does not converge, it only reports. When the user named the
+/// α̇ terms in `--free`, the check only reports. Returns the note and the adopted fit. Output error and filter
+/// error alike: with a vane skew taken off the data ([`skew_taken_off`]) filter error finds the c310's −13.7 ± 1.9
+/// in light turbulence on seed 2 (JSBSim: −12.7; −13.7…−20.4 on seeds 1–5, with C_Lα̇ tied) and the 737's −14.3 ±
+/// 0.9 (−16, with C_Lα̇ free instead of C_Lq); those are the values after the deskewed refit, the check's own wider
+/// fit, with the skew term, says more (c310 −18.2 on seed 2).
 pub(super) fn alphadot_check(
     records: &[&(String, data::FlightRecord)],
     setup: FitSetup,
