@@ -70,18 +70,30 @@ const FINDINGS: [Finding; 4] = [
     attitude_scale("scale_phi", "phi_rad", "p_rad_s"),
     attitude_scale("scale_theta", "theta_rad", "q_rad_s"),
     // gravity's g cos θ sin φ in v̇: an a_y bias b is a φ bias b/(g cos θ₀)
-    attitude_bias("bias_ay_m_s2", "ay_m_s2", "phi_rad", 1.0, true),
+    attitude_bias(
+        "bias_ay_m_s2",
+        "ay_m_s2",
+        "phi_rad",
+        |b, c| b / (G0_M_S2 * c),
+        true,
+    ),
     // gravity's −g sin θ in u̇: an a_x bias b is a θ bias −b/(g cos θ₀)
-    attitude_bias("bias_ax_m_s2", "ax_m_s2", "theta_rad", -1.0, false),
+    attitude_bias(
+        "bias_ax_m_s2",
+        "ax_m_s2",
+        "theta_rad",
+        |b, c| -b / (G0_M_S2 * c),
+        false,
+    ),
 ];
 
-/// The bias `estimate` of the accelerometer `accel`: that accelerometer's bias b, or a bias `sign` · b/(g cos θ₀)
-/// of the `attitude` whose gravity component it balances.
+/// The bias `estimate` of the accelerometer `accel`: that accelerometer's bias b, or the bias `value`(b, cos θ₀)
+/// of the `attitude` whose gravity component it balances (±b/(g cos θ₀)).
 const fn attitude_bias(
     estimate: &'static str,
     accel: &'static str,
     attitude: &'static str,
-    sign: f64,
+    value: fn(f64, f64) -> f64,
     sets_value: bool,
 ) -> Finding {
     Finding {
@@ -97,11 +109,7 @@ const fn attitude_bias(
             Reading {
                 effect: "sensor_bias",
                 target: attitude,
-                value: if sign > 0.0 {
-                    |b, cos_theta| b / (G0_M_S2 * cos_theta)
-                } else {
-                    |b, cos_theta| -b / (G0_M_S2 * cos_theta)
-                },
+                value,
                 std_error: |_, se, cos_theta| se / (G0_M_S2 * cos_theta),
             },
         ],
