@@ -143,16 +143,31 @@ const fn attitude_scale(
     }
 }
 
-/// Names the sensor errors the reconstruction of `train` finds and the selection did not (module doc), adding
-/// them to `sel` held at the reconstruction's value.
+/// The flight-path reconstruction of a training record, made on a thread of its own: it needs the record
+/// only, so it runs while the search waits on the simulations, and the stage finds it done.
+pub struct Reconstruction(std::thread::JoinHandle<Option<data::CheckReport>>);
+
+impl Reconstruction {
+    /// Starts the reconstruction of `train`.
+    pub fn start(train: &FlightRecord) -> Reconstruction {
+        let train = train.clone();
+        Reconstruction(std::thread::spawn(move || {
+            data::check_compatibility(&train, &data::CheckOptions::default()).ok()
+        }))
+    }
+}
+
+/// Names the sensor errors the reconstruction of `train` (started as `reconstruction`) finds and the selection
+/// did not (module doc), adding them to `sel` held at the reconstruction's value.
 pub fn kinematic_findings<'e>(
     worker: &mut Worker,
     train: &FlightRecord,
+    reconstruction: Reconstruction,
     p: &'e Prepared,
     sel: &mut Selection<'e>,
     opts: &DiagnoseOptions,
 ) -> Result<(), DiagnoseError> {
-    let Ok(report) = data::check_compatibility(train, &data::CheckOptions::default()) else {
+    let Some(report) = reconstruction.0.join().ok().flatten() else {
         return Ok(());
     };
     let Some(theta) = train.column(Channel::Theta).filter(|_| report.converged) else {
@@ -261,15 +276,20 @@ pub fn kinematic_findings<'e>(
 }
 
 /// The instrument estimates of the reconstruction of each half of `train` in time (empty where a half's did not
-/// converge).
+/// converge). The two run at once.
 fn reconstruct_halves(train: &FlightRecord) -> [Vec<data::Estimate>; 2] {
     let mid = train.len() / 2;
-    [(0, mid), (mid, train.len())].map(|(a, b)| {
+    let half = |a: usize, b: usize| {
         data::check_compatibility(&train.slice(a, b), &data::CheckOptions::default())
             .ok()
             .filter(|r| r.converged)
             .map(|r| r.instrument)
             .unwrap_or_default()
+    };
+    std::thread::scope(|s| {
+        let first = s.spawn(|| half(0, mid));
+        let second = half(mid, train.len());
+        [first.join().unwrap_or_default(), second]
     })
 }
 

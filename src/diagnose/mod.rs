@@ -279,13 +279,13 @@ pub fn diagnose(
     let t0 = std::time::Instant::now();
     let sim_s0: f64 = workers.iter().map(|w| w.sim_s).sum();
     search::share_replays(workers);
-    let Some(first) = workers.first_mut() else {
-        return Err(DiagnoseError::BadData("no simulation worker".into()));
-    };
+    let no_worker = || DiagnoseError::BadData("no simulation worker".into());
+    let first = workers.first_mut().ok_or_else(no_worker)?;
     // The progress line is cleared when `progress` is dropped, also on an early error return.
     let progress = progress::Progress::new(opts.progress, first.shared_simulations());
     progress.stage("trim", 0);
     let mut p = prepare::prepare(first, train, valid)?;
+    let reconstruction = kinematic::Reconstruction::start(train);
     progress.stage("segment initial states", 0);
     let columns = initial_state::initial_state_columns(workers, &p.case, &p.sigma)
         .map_err(sim_err("replay"))?;
@@ -319,7 +319,7 @@ pub fn diagnose(
         found => (found, None),
     };
     progress.stage("kinematic findings", 0);
-    kinematic::kinematic_findings(&mut workers[0], train, &p, &mut sel, opts)?;
+    kinematic::kinematic_findings(&mut workers[0], train, reconstruction, &p, &mut sel, opts)?;
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
     progress.finish();
@@ -378,7 +378,7 @@ fn turbulence(
     };
     let mut columns = columns;
     if let Some(f) = &filter {
-        columns.iter_mut().for_each(|c| f.apply(c));
+        f.apply_all(&mut columns);
         p.warnings.push(format!(
             "the record carries process noise (turbulence): the search fitted the filter error method's \
              innovations (likelihood gain {:.0} against a penalty of {:.0})",

@@ -177,8 +177,9 @@ fn innovations(filter: Option<&ResidualFilter>, r: &[f64], columns: &[Vec<f64>])
     let mut nu = r.to_vec();
     let mut cols = columns.to_vec();
     if let Some(f) = filter {
-        f.apply(&mut nu);
-        cols.iter_mut().for_each(|c| f.apply(c));
+        cols.push(nu);
+        f.apply_all(&mut cols);
+        nu = cols.pop().unwrap_or_default();
     }
     super::search::project_off(&mut nu, &super::search::orthonormal_basis(&cols));
     nu

@@ -58,7 +58,7 @@ pub fn refit_in_turbulence(
             break;
         }
         let mut filtered = columns.to_vec();
-        filtered.iter_mut().for_each(|c| filter.apply(c));
+        filter.apply_all(&mut filtered);
         let basis = search::orthonormal_basis(&filtered);
         let w = search::Weighted {
             case: &p.case,

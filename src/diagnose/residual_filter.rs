@@ -17,24 +17,121 @@ pub struct ResidualFilter {
 impl ResidualFilter {
     /// Replaces the channel-major residual `r` by its innovations.
     pub fn apply(&self, r: &mut [f64]) {
+        let mut v = [r.to_vec()];
+        self.apply_all(&mut v);
+        r.copy_from_slice(&v[0]);
+    }
+
+    /// [`apply`](Self::apply) on every vector of `rs` at once, each to the same result as alone (the same
+    /// operations in the same order); one pass over the samples with the filter's state for all of them, so
+    /// the inner loops run over the vectors and vectorise. A vector of the wrong length is left as it is.
+    pub fn apply_all(&self, rs: &mut [Vec<f64>]) {
         let (n, m, len) = (self.a.len(), self.c.len(), self.len);
-        if r.len() != m * len {
+        let idx: Vec<usize> = (0..rs.len()).filter(|&v| rs[v].len() == m * len).collect();
+        let b = idx.len();
+        if b == 0 {
             return;
         }
+        // State, innovations and corrected state, row-major with the vectors along the rows.
+        let mut x = vec![0.0; n * b];
+        let mut nu = vec![0.0; m * b];
+        let mut corrected = vec![0.0; n * b];
+        let mut acc = vec![0.0; b];
+        for k in 0..len {
+            for o in 0..m {
+                acc.fill(0.0);
+                for (j, &cj) in self.c[o].iter().enumerate() {
+                    let xj = &x[j * b..(j + 1) * b];
+                    acc.iter_mut().zip(xj).for_each(|(s, v)| *s += cj * v);
+                }
+                let row = &mut nu[o * b..(o + 1) * b];
+                for ((v, s), &vi) in row.iter_mut().zip(&acc).zip(&idx) {
+                    let at = &mut rs[vi][o * len + k];
+                    *v = *at - s;
+                    *at = *v;
+                }
+            }
+            for i in 0..n {
+                acc.fill(0.0);
+                for (o, &kio) in self.k[i].iter().enumerate() {
+                    let nuo = &nu[o * b..(o + 1) * b];
+                    acc.iter_mut().zip(nuo).for_each(|(s, v)| *s += kio * v);
+                }
+                let xi = &x[i * b..(i + 1) * b];
+                corrected[i * b..(i + 1) * b]
+                    .iter_mut()
+                    .zip(xi.iter().zip(&acc))
+                    .for_each(|(c, (xv, s))| *c = xv + s);
+            }
+            for i in 0..n {
+                acc.fill(0.0);
+                for (j, &aij) in self.a[i].iter().enumerate() {
+                    let cj = &corrected[j * b..(j + 1) * b];
+                    acc.iter_mut().zip(cj).for_each(|(s, v)| *s += aij * v);
+                }
+                x[i * b..(i + 1) * b].copy_from_slice(&acc);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ResidualFilter;
+
+    /// The filter one vector at a time, written out as the recursion reads.
+    fn one_by_one(f: &ResidualFilter, r: &mut [f64]) {
+        let (n, m, len) = (f.a.len(), f.c.len(), f.len);
         let mut x = vec![0.0; n];
         let mut nu = vec![0.0; m];
         for k in 0..len {
             for (o, v) in nu.iter_mut().enumerate() {
-                let pred: f64 = self.c[o].iter().zip(&x).map(|(a, b)| a * b).sum();
+                let pred: f64 = f.c[o].iter().zip(&x).map(|(a, b)| a * b).sum();
                 *v = r[o * len + k] - pred;
                 r[o * len + k] = *v;
             }
             let corrected: Vec<f64> = (0..n)
-                .map(|i| x[i] + self.k[i].iter().zip(&nu).map(|(a, b)| a * b).sum::<f64>())
+                .map(|i| x[i] + f.k[i].iter().zip(&nu).map(|(a, b)| a * b).sum::<f64>())
                 .collect();
             for (i, xi) in x.iter_mut().enumerate() {
-                *xi = self.a[i].iter().zip(&corrected).map(|(a, b)| a * b).sum();
+                *xi = f.a[i].iter().zip(&corrected).map(|(a, b)| a * b).sum();
             }
         }
+    }
+
+    #[test]
+    fn many_vectors_at_once_give_each_vector_its_own_innovations_exactly() {
+        let mut seed = 7u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let (n, m, len) = (4, 3, 50);
+        let mut mat = |r: usize, c: usize, s: f64| -> Vec<Vec<f64>> {
+            (0..r)
+                .map(|_| (0..c).map(|_| s * next()).collect())
+                .collect()
+        };
+        let f = ResidualFilter {
+            a: mat(n, n, 0.9),
+            c: mat(m, n, 1.0),
+            k: mat(n, m, 0.5),
+            len,
+        };
+        let mut rs: Vec<Vec<f64>> = (0..5)
+            .map(|_| (0..m * len).map(|_| next()).collect())
+            .collect();
+        rs.push(vec![1.0; 3]); // the wrong length: left alone
+        let mut want = rs.clone();
+        want.iter_mut().take(5).for_each(|r| one_by_one(&f, r));
+        f.apply_all(&mut rs);
+        assert_eq!(rs, want);
+        let mut single = want[0].clone();
+        let mut again = rs[0].clone();
+        one_by_one(&f, &mut single);
+        f.apply(&mut again);
+        assert_eq!(again, single);
     }
 }
