@@ -113,6 +113,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
             process_noise: args.process_noise,
             backward_elimination: args.backward_elimination,
             relax_weights: !args.noise_weights,
+            choose_rate: args.replay_rate_hz.is_none(),
             ..DiagnoseOptions::default()
         },
     )?;

@@ -18,6 +18,7 @@ pub mod prepare;
 pub mod process_noise;
 pub mod progress;
 pub mod projection;
+pub mod rate;
 pub mod refit;
 pub mod relax;
 pub mod replay;
@@ -105,6 +106,8 @@ pub struct DiagnoseOptions {
     /// Weight every channel whose unextended residual is far above its sensor noise by that residual instead
     /// (`relax`; docs/diagnose.md, Turbulence).
     pub relax_weights: bool,
+    /// Choose the replay's integration rate from the record (`rate`); off, the workers' rate is kept.
+    pub choose_rate: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -123,6 +126,7 @@ impl Default for DiagnoseOptions {
             filter_values: true,
             backward_elimination: false,
             relax_weights: true,
+            choose_rate: true,
         }
     }
 }
@@ -240,6 +244,9 @@ pub struct Diagnosis {
     /// Channels weighted by their unextended residual instead of their noise, with the factor on their noise
     /// variance (`relax`; empty when every channel sits near its noise).
     pub relaxed_weights: BTreeMap<String, f64>,
+    /// The replay's integration rate chosen from the record, with the rates tried (`rate`; absent when the
+    /// rate was declared or there was nothing to choose).
+    pub replay_rate: Option<rate::RateChoice>,
     /// Number of residual values (samples × channels).
     pub n_residuals: usize,
     /// Simulations run.
@@ -286,11 +293,7 @@ pub fn diagnose(
     progress.stage("trim", 0);
     let mut p = prepare::prepare(first, train, valid)?;
     let reconstruction = kinematic::Reconstruction::start(train);
-    progress.stage("segment initial states", 0);
-    let columns = initial_state::initial_state_columns(workers, &p.case, &p.sigma)
-        .map_err(sim_err("replay"))?;
-    let (columns, relaxed_weights) =
-        relax::relax(&mut workers[0], &mut p, columns, opts.relax_weights)?;
+    let (columns, relaxed_weights, replay_rate) = nuisance(workers, &mut p, opts, &progress)?;
     let process_noise = if opts.process_noise {
         turbulence(&mut workers[0], &mut p, columns.clone())?
     } else {
@@ -341,6 +344,7 @@ pub fn diagnose(
         process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.noise_sigma).collect(),
         relaxed_weights,
+        replay_rate,
         n_residuals: p.case.len() * p.case.outputs.len(),
         simulations: progress.simulations(),
         wall_s: t0.elapsed().as_secs_f64(),
@@ -348,6 +352,31 @@ pub fn diagnose(
         stages,
         traces: v.traces,
     })
+}
+
+/// What [`nuisance`] gives: the nuisance columns, the relaxed channels' factors and the integration rate.
+type Nuisance = (
+    Vec<Vec<f64>>,
+    BTreeMap<String, f64>,
+    Option<rate::RateChoice>,
+);
+
+/// The segment initial-state responses of the training record (the nuisance columns), the channels whose
+/// weights are relaxed to their residual (`relax`, which reweights `p.sigma` and the columns) and the replay's
+/// integration rate chosen on those weights (`rate::choose`: the gusts' response, which no rate models, then
+/// weighs no more than it does in the search).
+fn nuisance(
+    workers: &mut [Worker],
+    p: &mut prepare::Prepared,
+    opts: &DiagnoseOptions,
+    progress: &progress::Progress,
+) -> Result<Nuisance, DiagnoseError> {
+    progress.stage("segment initial states", 0);
+    let columns = initial_state::initial_state_columns(workers, &p.case, &p.sigma)
+        .map_err(sim_err("replay"))?;
+    let (columns, relaxed) = relax::relax(&mut workers[0], p, columns, opts.relax_weights)?;
+    let rate = rate::choose(workers, p, &columns, opts, progress)?;
+    Ok((columns, relaxed, rate))
 }
 
 /// Estimates the training record's process noise from the unextended model's residual and the segment
