@@ -165,6 +165,8 @@ fn main() {
             Some(&valid),
             &DiagnoseOptions {
                 progress: false,
+                // the comparison run keeps the record's own rate
+                choose_rate: rate == default_rate,
                 ..Default::default()
             },
         )
