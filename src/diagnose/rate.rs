@@ -13,8 +13,8 @@
 //! record's rate between [`RATE_MIN_HZ`] and [`RATE_MAX_HZ`] whose replay of the unextended model, with the
 //! segment initial states projected off, fits the training record best; a coarser one must beat the finest by
 //! [`COARSER_GAIN`] (χ² units of the noise-normalised cost) and by [`COARSER_SHARE`] of it, so that a record
-//! with no integration step of its own (a real aircraft's) keeps the finest. This is the record's convention estimated, as the timing of its
-//! inputs is: the model's physics do not change with it.
+//! with no integration step of its own (a real aircraft's) keeps the finest. This is the record's convention
+//! estimated, as the timing of its inputs is: the model's physics do not change with it.
 //!
 //! The choice is made before any cause is named, so a hidden effect can lean on it: without the share gate,
 //! on still-air records with effects (`--cases 40 --seed 16`) 27 of 40 chose the rate they were flown at (all
