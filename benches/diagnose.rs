@@ -165,8 +165,6 @@ fn main() {
             Some(&valid),
             &DiagnoseOptions {
                 progress: false,
-                // the comparison run keeps the record's own rate
-                choose_rate: rate == default_rate,
                 ..Default::default()
             },
         )
@@ -197,6 +195,12 @@ fn main() {
             println!(
                 "    {:<28} {:>6.2} s {:>4}",
                 st.stage, st.wall_s, st.simulations
+            );
+        }
+        if let Some(r) = &d.replay_rate {
+            println!(
+                "  integration rate chosen: {} Hz (rate, cost tried: {:?})",
+                r.rate_hz, r.tried
             );
         }
         for c in &d.named_cause {

@@ -5,13 +5,16 @@
 //! (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
-//! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--backward-elimination] [--without COLUMNS]
+//! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--backward-elimination] [--estimate-rate]
+//! [--without COLUMNS]
 //! [--out DIR]`
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
 //! - `--noise-weights`: weight every channel by its sensor noise only (`flightid diagnose --noise-weights`).
 //! - `--backward-elimination`: after forward selection, test every named effect again against the model without
 //!   it (`flightid diagnose --backward-elimination`).
+//! - `--estimate-rate`: choose the replay's integration rate from the record (`flightid diagnose
+//!   --estimate-rate`).
 //! - `--without alpha_rad,beta_rad,ax_m_s2,ay_m_s2,az_m_s2`: records that leave those sensor columns out (a log
 //!   without vanes or accelerometers); no effect is hidden on them.
 //! - the mix is stratified by case index (i mod 4 = 0 clean, 3 two or three effects, else one: 40 cases give
@@ -42,6 +45,7 @@ struct Args {
     process_noise: bool,
     noise_weights: bool,
     backward_elimination: bool,
+    estimate_rate: bool,
     out: PathBuf,
     first: usize,
     without: String,
@@ -58,6 +62,7 @@ fn args() -> Args {
         process_noise: false,
         noise_weights: false,
         backward_elimination: false,
+        estimate_rate: false,
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
         without: String::new(),
@@ -104,6 +109,11 @@ fn args() -> Args {
             }
             "--backward-elimination" => {
                 a.backward_elimination = true;
+                i += 1;
+                continue;
+            }
+            "--estimate-rate" => {
+                a.estimate_rate = true;
                 i += 1;
                 continue;
             }
@@ -250,6 +260,7 @@ fn main() {
             process_noise: a.process_noise,
             relax_weights: !a.noise_weights,
             backward_elimination: a.backward_elimination,
+            choose_rate: a.estimate_rate,
             ..Default::default()
         };
         let d = match diagnose(&mut workers, &train, Some(&valid), &opts) {

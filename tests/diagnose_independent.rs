@@ -55,6 +55,16 @@ fn check_generated_with(
     case: usize,
     log: impl Fn(FlightRecord) -> FlightRecord,
 ) -> Diagnosis {
+    check_generated_opts(args, case, log, DiagnoseOptions::default())
+}
+
+/// [`check_generated_with`] with the search settings `opts` (progress off).
+fn check_generated_opts(
+    args: &[&str],
+    case: usize,
+    log: impl Fn(FlightRecord) -> FlightRecord,
+    opts: DiagnoseOptions,
+) -> Diagnosis {
     let dir = tempfile::tempdir().unwrap();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_diagnose_records.py");
     let st = Command::new(flightid::sim::env::python().expect("the provisioned Python"))
@@ -80,7 +90,7 @@ fn check_generated_with(
         .collect();
     let opts = DiagnoseOptions {
         progress: false,
-        ..Default::default()
+        ..opts
     };
     let d = diagnose(&mut workers, &train, Some(&valid), &opts).unwrap();
     // Every simulation is counted in the stage that ran it, and the stages run in the diagnosis' order.
@@ -474,8 +484,9 @@ fn assert_named_from_kinematics(d: &Diagnosis, target: &str) {
 
 /// A rudder lag of 0.123 s on a 32 s record in light turbulence, flown at 100 Hz and logged at 20 Hz
 /// (`diagnose_eval -- --seed 3 --turbulence`, case 10). Replayed at 200 Hz, JSBSim's other integration step left
-/// a residual that a rudder *delay* of 0.122 s fitted better than the lag. The replay now integrates at the step
-/// that fits the record best (`diagnose::rate`), the record's own 100 Hz, and the lag is named.
+/// a residual that a rudder *delay* of 0.122 s fitted better than the lag. Asked to, the replay integrates at
+/// the step that fits the record best (`diagnose::rate`, `--estimate-rate`), the record's own 100 Hz, and the
+/// lag is named.
 #[test]
 fn the_replay_integrates_at_the_step_the_record_was_flown_at() {
     let args = [
@@ -488,7 +499,11 @@ fn the_replay_integrates_at_the_step_the_record_was_flown_at() {
         "--turbulence",
         "--stratified",
     ];
-    let d = check_generated(&args, 10);
+    let opts = DiagnoseOptions {
+        choose_rate: true,
+        ..Default::default()
+    };
+    let d = check_generated_opts(&args, 10, |r| r, opts);
     let rate = d.replay_rate.expect("the integration rate is chosen");
     assert_eq!(rate.rate_hz, 100.0, "rates tried: {:?}", rate.tried);
 }

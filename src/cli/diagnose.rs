@@ -53,6 +53,11 @@ pub struct DiagnoseCmd {
     /// rate that is a hold of each sample over the step that ends at it (the convention of `flightid fly`).
     #[arg(long, value_name = "HZ")]
     pub replay_rate_hz: Option<f64>,
+    /// Estimate the replay's integration rate from the record: replay the unextended model at every whole
+    /// multiple of the record's rate from 100 to 200 Hz and keep the best fit (experimental: a hidden input
+    /// delay pulls the choice to a coarser step; docs/diagnose.md, "Replay conventions")
+    #[arg(long, conflicts_with = "replay_rate_hz")]
+    pub estimate_rate: bool,
     /// Records flown in turbulence (experimental): estimate the process noise from the replay's residuals and,
     /// when the likelihood finds it, fit every candidate on the filter error method's innovations instead of the
     /// output error (a steady-state Kalman filter of the linearised error dynamics; docs/diagnose.md,
@@ -113,7 +118,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
             process_noise: args.process_noise,
             backward_elimination: args.backward_elimination,
             relax_weights: !args.noise_weights,
-            choose_rate: args.replay_rate_hz.is_none(),
+            choose_rate: args.estimate_rate,
             ..DiagnoseOptions::default()
         },
     )?;

@@ -106,7 +106,8 @@ pub struct DiagnoseOptions {
     /// Weight every channel whose unextended residual is far above its sensor noise by that residual instead
     /// (`relax`; docs/diagnose.md, Turbulence).
     pub relax_weights: bool,
-    /// Choose the replay's integration rate from the record (`rate`); off, the workers' rate is kept.
+    /// Choose the replay's integration rate from the record (`rate`; experimental, off by default: a hidden
+    /// delay leans on the choice); off, the workers' rate is kept.
     pub choose_rate: bool,
 }
 
@@ -126,7 +127,7 @@ impl Default for DiagnoseOptions {
             filter_values: true,
             backward_elimination: false,
             relax_weights: true,
-            choose_rate: true,
+            choose_rate: false,
         }
     }
 }

@@ -9,9 +9,10 @@
 //! up: a hidden `Cm_de` ×1.41 on a record flown at 100 Hz was named as an elevator effectiveness ×1.45 by a
 //! replay at 200 Hz, and as `Cm_de` ×1.42 at 100 Hz.
 //!
-//! So unless the rate is declared (`--replay-rate-hz`), the replay integrates at the whole multiple of the
-//! record's rate between [`RATE_MIN_HZ`] and [`RATE_MAX_HZ`] whose replay of the unextended model, with the
-//! segment initial states projected off, fits the training record best; a coarser one must beat the finest by
+//! So with `--estimate-rate` (off by default, see [`super::DiagnoseOptions::choose_rate`]) the replay
+//! integrates at the whole multiple of the record's rate between [`RATE_MIN_HZ`] and [`RATE_MAX_HZ`] whose
+//! replay of the unextended model, with the segment initial states projected off, fits the training record
+//! best; a coarser one must beat the finest by
 //! [`COARSER_GAIN`] (χ² units of the noise-normalised cost) and by [`COARSER_SHARE`] of it, so that a record
 //! with no integration step of its own (a real aircraft's) keeps the finest. This is the record's convention
 //! estimated, as the timing of its inputs is: the model's physics do not change with it.
