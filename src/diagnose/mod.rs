@@ -245,8 +245,8 @@ pub struct Diagnosis {
     /// Channels weighted by their unextended residual instead of their noise, with the factor on their noise
     /// variance (`relax`; empty when every channel sits near its noise).
     pub relaxed_weights: BTreeMap<String, f64>,
-    /// The replay's integration rate chosen from the record, with the rates tried (`rate`; absent when the
-    /// rate was declared or there was nothing to choose).
+    /// The replay's integration rate chosen from the record, with the rates tried (`rate`; absent unless
+    /// `choose_rate` asked for it and there was more than one rate to try).
     pub replay_rate: Option<rate::RateChoice>,
     /// Number of residual values (samples × channels).
     pub n_residuals: usize,
