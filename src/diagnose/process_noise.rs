@@ -15,8 +15,9 @@
 //! The filter error method (Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., ch. 5; the
 //! estimation core's steady-state gain, `estimate::fem::gain`) replaces the residual by the innovations
 //! `ν_k = r_k − C x̃_k`, `x̂_k = x̃_k + K ν_k`, `x̃_{k+1} = A x̂_k`, a linear map of the residual that every
-//! candidate fit, sensitivity and score test then works on. With no process noise `K = 0` and `ν = r`: the
-//! output-error search.
+//! candidate fit, sensitivity and score test then works on, each channel divided by the root of its innovation
+//! variance `R_c` so that a sum of squares is the method's cost `Σ νᵀR⁻¹ν` (eq. 5.6). With no process noise
+//! `K = 0` and `ν = r`: the output-error search.
 //!
 //! The process-noise variances, one on the body velocities (the gusts) and one on the body rates, are chosen
 //! by maximum likelihood on the unextended model's residual with the innovation variances relaxed,
@@ -162,6 +163,7 @@ fn filter_for(
         c: rows(c),
         k: gain.k,
         len,
+        weight: vec![1.0; c.nrows()],
     })
 }
 
@@ -197,7 +199,8 @@ pub fn estimate(
     let (len, dt_s) = (case.len(), case.dt_s());
     let oe = innovations(None, r0, columns);
     let r_oe = channel_variance(&oe, len);
-    // −2 ln L at q: the innovation variances relaxed twice from output error's
+    // −2 ln L at q: the innovation variances relaxed twice from output error's; the filter carries the last
+    // ones as its channel weights
     let evaluate = |qv: f64, qr: f64| -> Option<(f64, ResidualFilter)> {
         // (no process noise on the heading, a state the rates drive)
         let mut q = vec![0.0; a.nrows()];
@@ -212,7 +215,10 @@ pub fn estimate(
             best = Some(f);
         }
         let cost: f64 = r.iter().map(|v| v.ln()).sum::<f64>() * len as f64;
-        best.map(|f| (cost, f))
+        best.map(|f| {
+            let weight = r.iter().map(|v| 1.0 / v.sqrt()).collect();
+            (cost, ResidualFilter { weight, ..f })
+        })
     };
     let cost_oe: f64 = r_oe.iter().map(|v| v.ln()).sum::<f64>() * len as f64;
     let grid = variance_grid();

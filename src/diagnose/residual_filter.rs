@@ -12,10 +12,15 @@ pub struct ResidualFilter {
     pub(super) k: Vec<Vec<f64>>,
     /// Samples per channel.
     pub(super) len: usize,
+    /// Per channel, the factor each innovation leaves the filter with: `R_c^{−1/2}` with `R_c` the innovation
+    /// variance the gain was computed for, so that a sum of squared innovations is the filter error method's
+    /// cost `Σ νᵀR⁻¹ν` (Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., eq. 5.6); all 1 while the
+    /// variances are being estimated. The state is corrected with the innovations as they are.
+    pub(super) weight: Vec<f64>,
 }
 
 impl ResidualFilter {
-    /// Replaces the channel-major residual `r` by its innovations.
+    /// Replaces the channel-major residual `r` by its innovations (times the channels' [`weight`](Self::weight)).
     pub fn apply(&self, r: &mut [f64]) {
         let mut v = [r.to_vec()];
         self.apply_all(&mut v);
@@ -45,10 +50,11 @@ impl ResidualFilter {
                     acc.iter_mut().zip(xj).for_each(|(s, v)| *s += cj * v);
                 }
                 let row = &mut nu[o * b..(o + 1) * b];
+                let weight = self.weight[o];
                 for ((v, s), &vi) in row.iter_mut().zip(&acc).zip(&idx) {
                     let at = &mut rs[vi][o * len + k];
                     *v = *at - s;
-                    *at = *v;
+                    *at = *v * weight;
                 }
             }
             for i in 0..n {
@@ -88,7 +94,7 @@ mod tests {
             for (o, v) in nu.iter_mut().enumerate() {
                 let pred: f64 = f.c[o].iter().zip(&x).map(|(a, b)| a * b).sum();
                 *v = r[o * len + k] - pred;
-                r[o * len + k] = *v;
+                r[o * len + k] = *v * f.weight[o];
             }
             let corrected: Vec<f64> = (0..n)
                 .map(|i| x[i] + f.k[i].iter().zip(&nu).map(|(a, b)| a * b).sum::<f64>())
@@ -118,6 +124,7 @@ mod tests {
             c: mat(m, n, 1.0),
             k: mat(n, m, 0.5),
             len,
+            weight: vec![1.0, 0.5, 2.0],
         };
         let mut rs: Vec<Vec<f64>> = (0..5)
             .map(|_| (0..m * len).map(|_| next()).collect())
@@ -132,5 +139,17 @@ mod tests {
         one_by_one(&f, &mut single);
         f.apply(&mut again);
         assert_eq!(again, single);
+        // The weights scale what leaves the filter, channel by channel, and leave its state alone.
+        let unweighted = ResidualFilter {
+            weight: vec![1.0; m],
+            ..f.clone()
+        };
+        let mut plain = rs[1].clone();
+        let mut weighted = rs[1].clone();
+        unweighted.apply(&mut plain);
+        f.apply(&mut weighted);
+        for (i, (w, p)) in weighted.iter().zip(&plain).enumerate() {
+            assert_eq!(*w, p * f.weight[i / len], "sample {i}");
+        }
     }
 }
