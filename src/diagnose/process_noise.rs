@@ -227,13 +227,17 @@ pub fn estimate(
     // coordinate search: velocities, rates, velocities again
     // (the points of a round do not depend on each other: they are evaluated in parallel, then compared in
     // grid order)
+    // A point evaluated in an earlier round is not evaluated again: its cost is no lower than the best so far, so
+    // it could not be taken (when the rates' round keeps their variance, the third round is the first again).
     let mut threads = vec![(); std::thread::available_parallelism().map_or(1, |n| n.get())];
+    let mut seen: Vec<(f64, f64)> = Vec::new();
     for round in 0..3 {
         let points: Vec<(f64, f64)> = std::iter::once(&0.0)
             .chain(&grid)
             .map(|&g| if round == 1 { (qv, g) } else { (g, qr) })
-            .filter(|&(tv, tr)| tv != 0.0 || tr != 0.0)
+            .filter(|&(tv, tr)| (tv != 0.0 || tr != 0.0) && !seen.contains(&(tv, tr)))
             .collect();
+        seen.extend(&points);
         let evaluated =
             super::search::par_map(&mut threads, &points, |_, &(tv, tr)| evaluate(tv, tr));
         for (&(tv, tr), e) in points.iter().zip(evaluated) {
