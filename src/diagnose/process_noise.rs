@@ -200,7 +200,7 @@ pub fn estimate(
     let oe = innovations(None, r0, columns);
     let r_oe = channel_variance(&oe, len);
     // −2 ln L at q: the innovation variances relaxed twice from output error's; the filter carries the last
-    // ones as its channel weights
+    // ones, those of its own innovations, as its channel weights
     let evaluate = |qv: f64, qr: f64| -> Option<(f64, ResidualFilter)> {
         // (no process noise on the heading, a state the rates drive)
         let mut q = vec![0.0; a.nrows()];

@@ -12,10 +12,11 @@ pub struct ResidualFilter {
     pub(super) k: Vec<Vec<f64>>,
     /// Samples per channel.
     pub(super) len: usize,
-    /// Per channel, the factor each innovation leaves the filter with: `R_c^{−1/2}` with `R_c` the innovation
-    /// variance the gain was computed for, so that a sum of squared innovations is the filter error method's
-    /// cost `Σ νᵀR⁻¹ν` (Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., eq. 5.6); all 1 while the
-    /// variances are being estimated. The state is corrected with the innovations as they are.
+    /// Per channel, the factor each innovation leaves the filter with: `R_c^{−1/2}` with `R_c` the channel's
+    /// innovation variance at the likelihood's optimum (the last relaxation of `process_noise::estimate`), so
+    /// that a sum of squared innovations is the filter error method's cost `Σ νᵀR⁻¹ν` (Jategaonkar, *Flight
+    /// Vehicle System Identification*, 2nd ed., eq. 5.6); all 1 while the variances are being estimated. The
+    /// state is corrected with the innovations as they are.
     pub(super) weight: Vec<f64>,
 }
 
