@@ -12,8 +12,8 @@ use super::process_noise::{self, ProcessNoise};
 use super::progress::Progress;
 use super::search::{self, Active, Worker};
 use super::select::{
-    drop_below_resolution, eliminate_backward, substitute_dropped, Replacement, Selection,
-    BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE,
+    determined_on, drop_below_resolution, eliminate_backward, substitute_dropped, Replacement,
+    Selection, BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE,
 };
 use super::{prepare::Prepared, sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 
@@ -36,7 +36,9 @@ pub fn refit_in_turbulence(
     // refit repeated once.
     for pass in 0..2 {
         let near: &[(String, f64)] = if pass == 0 { &near } else { &[] };
-        if (sel.selected.is_empty() && near.is_empty()) || columns.is_empty() {
+        // Nothing to test but what output error could not identify: tested once, on the first pass.
+        let retry = pass == 0 && !sel.undetermined.catalogue.is_empty();
+        if (sel.selected.is_empty() && near.is_empty() && !retry) || columns.is_empty() {
             break;
         }
         let r = search::raw_residuals(worker, &p.case, &p.sigma, &sel.selected)
@@ -71,7 +73,7 @@ pub fn refit_in_turbulence(
         // A sensor bias stays at its output-error value: to the filter a constant offset on a rate gyro looks like
         // a steady moment disturbance, which the process noise on the body rates partly tracks.
         let held = |a: &Active| a.ext.effect() == "sensor_bias";
-        if sel.selected.iter().all(held) && near.is_empty() {
+        if sel.selected.iter().all(held) && near.is_empty() && !retry {
             found = Some(report);
             break;
         }
@@ -94,8 +96,15 @@ pub fn refit_in_turbulence(
             candidates,
             entries,
             alternatives,
+            undetermined,
             ..
         } = sel;
+        // The refit tests the entries output error could not identify as well (see `determined_on`).
+        let entries = entries.joined(undetermined);
+        let undetermined: Vec<String> = match retry {
+            true => undetermined.catalogue.iter().map(|e| e.key()).collect(),
+            false => Vec::new(),
+        };
         // Without the share of the cost a named effect must explain: that gate guards output error against its
         // coloured residual, and the innovations are white but for what the lag window still finds; their cost is
         // mostly the gusts' own, so a hidden `Cn_beta` ×1.46 at z 20.7 and ΔBIC −162 explains only 1.5 % of it.
@@ -133,12 +142,22 @@ pub fn refit_in_turbulence(
             // Output error's near misses, tested again where the gusts no longer colour the residual.
             let added = substitute_dropped(
                 &mut refiner,
-                state,
+                state.reborrow(),
                 &[(NEAR_MISS.to_string(), near.to_vec())],
                 "the filter error refit",
                 held,
             )?;
-            Ok::<_, DiagnoseError>(match added.or(substituted) {
+            // What output error could not identify in the gusts, where the innovations now determine it.
+            let tries =
+                determined_on(&mut refiner, state.selected, &undetermined, NEAR_MISSES_MAX)?;
+            let determined = substitute_dropped(
+                &mut refiner,
+                state,
+                &[(UNDETERMINED.to_string(), tries)],
+                "the filter error refit",
+                held,
+            )?;
+            Ok::<_, DiagnoseError>(match determined.or(added).or(substituted) {
                 Some(o) => (o, true),
                 None => (o, false),
             })
@@ -171,6 +190,13 @@ pub fn refit_in_turbulence(
             break;
         }
     }
+    // An entry output error could not identify that the refit has named is no longer skipped.
+    let named = &sel.named;
+    sel.unidentifiable.retain(|s| {
+        !named
+            .iter()
+            .any(|n| n.effect == s.effect && n.target == s.target)
+    });
     Ok(found)
 }
 
@@ -222,6 +248,9 @@ fn alternatives_of_dropped(
 
 /// The key under which output error's near misses are fitted on the innovations (it reads "in place of …").
 const NEAR_MISS: &str = "output error's near miss";
+
+/// The key under which the entries output error could not identify are fitted on the innovations.
+const UNDETERMINED: &str = "what output error could not identify";
 
 /// Most near misses fitted on the innovations.
 const NEAR_MISSES_MAX: usize = 3;

@@ -35,7 +35,7 @@ use gates::{beaten_within_resolution, rejection, unconfirmed_in_time};
 pub(super) use gates::{BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
 pub use identifiability::profiled_information;
 use identifiability::{identifiable, Identifiable};
-pub(super) use refine::{eliminate_backward, substitute_dropped, Replacement};
+pub(super) use refine::{determined_on, eliminate_backward, substitute_dropped, Replacement};
 use refine::{replace_ambiguous, Refiner};
 
 use super::baseline::Baseline;
@@ -56,6 +56,9 @@ pub struct Selection<'e> {
     pub candidates: Vec<Candidate>,
     /// Catalogue entries the record cannot identify.
     pub unidentifiable: Vec<Skipped>,
+    /// The entries of `unidentifiable` that the Fisher information turned down (not those whose input does not
+    /// move), with their resolution and masks: the filter error refit tests them again on the innovations.
+    pub undetermined: Entries<'e>,
     /// Per effect named in a round (`effect/target`), the other candidates that passed their own tests there:
     /// the runner-ups, and those a candidate within its resolution of "no effect" fitted better.
     pub alternatives: Vec<(String, Vec<String>)>,
@@ -64,7 +67,8 @@ pub struct Selection<'e> {
     pub entries: Entries<'e>,
 }
 
-/// The identifiable catalogue entries with their resolution on the record and their channel masks.
+/// Catalogue entries with their resolution on the record and their channel masks.
+#[derive(Clone, Default)]
 pub struct Entries<'e> {
     /// The entries.
     pub catalogue: Vec<&'e dyn Extension>,
@@ -75,6 +79,15 @@ pub struct Entries<'e> {
 }
 
 impl<'e> Entries<'e> {
+    /// These entries followed by `more`'s.
+    pub fn joined(&self, more: &Entries<'e>) -> Entries<'e> {
+        let mut out = self.clone();
+        out.catalogue.extend(more.catalogue.iter().copied());
+        out.resolution.extend(more.resolution.iter().copied());
+        out.masks.extend(more.masks.iter().cloned());
+        out
+    }
+
     /// A backward-elimination context on `workers` and the weighting `w`.
     pub(super) fn refiner<'a>(
         &'a self,
@@ -394,6 +407,7 @@ pub fn select<'e>(
         resolution,
         masks,
         skipped: unidentifiable,
+        undetermined,
     } = search::coarse(workers, &w, &[], |ws, cw| {
         identifiable(ws, cw, p, opts, progress)
     })
@@ -673,6 +687,7 @@ pub fn select<'e>(
         named,
         candidates,
         unidentifiable,
+        undetermined,
         alternatives,
         entries: Entries {
             catalogue,

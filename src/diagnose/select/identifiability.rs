@@ -7,6 +7,7 @@ use super::super::progress::Progress;
 use super::super::projection::{orthonormal_basis, project_off};
 use super::super::search::{null_sensitivity, par_map, residuals, Weighted, Worker};
 use super::super::{sim_err, DiagnoseError, DiagnoseOptions, Skipped};
+use super::Entries;
 
 /// Fisher information about the parameter with sensitivity `s` once the nuisance terms are estimated with it:
 /// ‖(1 − P) s‖², P the projection onto the `others` columns and onto an offset on every channel whose `mask`
@@ -55,13 +56,14 @@ pub(super) fn offset_mask(
 
 /// What the identifiability stage hands the selection: the entries the record can identify, their
 /// sensitivities at the unextended model, their resolution on this record and their nuisance masks; and the
-/// entries it cannot identify, with the reason.
+/// entries it cannot identify, with the reason, their resolution and masks (in the order of `skipped`).
 pub(super) struct Identifiable<'e> {
     pub(super) entries: Vec<&'e dyn Extension>,
     pub(super) sensitivities: Vec<Vec<f64>>,
     pub(super) resolution: Vec<f64>,
     pub(super) masks: Vec<Vec<bool>>,
     pub(super) skipped: Vec<Skipped>,
+    pub(super) undetermined: Entries<'e>,
 }
 
 /// The catalogue entries the record can identify: Cramér–Rao bound 1/√I, from the information after the
@@ -121,6 +123,7 @@ pub(super) fn identifiable<'e>(
         resolution: Vec::new(),
         masks: Vec::new(),
         skipped: Vec::new(),
+        undetermined: Entries::default(),
     };
     for ((((e, s), i), res), mask) in entries
         .into_iter()
@@ -140,6 +143,9 @@ pub(super) fn identifiable<'e>(
                      the nuisance terms exceeds a third of the resolution {res:.3} on this record"
                 ),
             });
+            out.undetermined.catalogue.push(e);
+            out.undetermined.resolution.push(res);
+            out.undetermined.masks.push(mask);
         } else {
             out.entries.push(e);
             out.sensitivities.push(s);
