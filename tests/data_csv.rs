@@ -9,14 +9,20 @@ fn parse(text: &str) -> Result<FlightRecord, DataError> {
     parse_csv_bytes(text.as_bytes(), "test.csv")
 }
 
-/// A 100 Hz record with every schema column holding a distinct smooth signal.
+/// A 100 Hz record with every schema column holding a distinct smooth signal (airspeed and density about
+/// a positive level, as the reader refuses a negative one).
 fn synthetic_record(n: usize) -> FlightRecord {
     let time_s: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
     let mut rec = FlightRecord::new(time_s.clone());
     for (k, name) in SCHEMA_COLUMNS.iter().enumerate().skip(1) {
+        let level = match *name {
+            "airspeed_m_s" => 50.0,
+            "density_kg_m3" => 1.2,
+            _ => 0.0,
+        };
         let values = time_s
             .iter()
-            .map(|t| 0.1 * (k as f64 * 0.37 * t).sin() + 1e-3 * k as f64 / 3.0)
+            .map(|t| level + 0.1 * (k as f64 * 0.37 * t).sin() + 1e-3 * k as f64 / 3.0)
             .collect();
         rec.push_column(name, values);
     }

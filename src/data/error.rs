@@ -70,6 +70,22 @@ pub enum DataError {
         column: String,
         cell: String,
     },
+    /// A value outside what its schema column can physically hold (`Channel::plausible_range`).
+    #[error("{file}:{line}: column `{column}`: {value} is outside what this column can hold ({min} to {max} in its \
+             unit); a corrupt sample, or a unit that a column map (`--columns`) should convert")]
+    Implausible {
+        file: String,
+        line: usize,
+        column: String,
+        /// The value as the file holds it, and in SI where a column map converts it.
+        value: String,
+        min: f64,
+        max: f64,
+    },
+    /// An airspeed column that is zero on every row: not a record of flight.
+    #[error("{file}: column `airspeed_m_s` is 0 on every one of its {rows} rows: this is not a record of an \
+             aircraft in flight (a pitot not connected?); fix the column, or leave it out of the file")]
+    NoAirspeed { file: String, rows: usize },
     /// Time does not strictly increase.
     #[error("{file}:{line}: column `time_s`: {time_s} {relation} the previous time {previous_s} (line {previous_line}); time must strictly increase")]
     TimeNotIncreasing {
