@@ -170,6 +170,8 @@ pub enum WarningKind {
     LooksLikeKnotsOrFeet,
     /// Accelerations look like g instead of m/s².
     LooksLikeG,
+    /// `time_s` steps look like milliseconds or microseconds instead of seconds.
+    LooksLikeMilliseconds,
     /// `throttle` lies outside 0..1 (percent?).
     ThrottleOutOfRange,
     /// A column has the other sign convention (a load factor for `az_m_s2`, a rate of the other sign).
