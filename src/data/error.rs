@@ -86,6 +86,15 @@ pub enum DataError {
     #[error("{file}: column `airspeed_m_s` is 0 on every one of its {rows} rows: this is not a record of an \
              aircraft in flight (a pitot not connected?); fix the column, or leave it out of the file")]
     NoAirspeed { file: String, rows: usize },
+    /// A fit on the data ended with a non-finite cost or residual: its estimates are no estimates.
+    #[error("{what} diverged: the residual of {columns} is not finite; the record holds values the model cannot \
+             follow (a corrupt sample, a wrong unit?)")]
+    Diverged {
+        /// The fit, e.g. "the flight-path reconstruction of f.csv".
+        what: String,
+        /// The outputs whose residual is not finite.
+        columns: String,
+    },
     /// Time does not strictly increase.
     #[error("{file}:{line}: column `time_s`: {time_s} {relation} the previous time {previous_s} (line {previous_line}); time must strictly increase")]
     TimeNotIncreasing {
