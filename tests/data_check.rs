@@ -357,6 +357,26 @@ fn an_unconverged_check_exits_1_without_a_table() {
     );
 }
 
+/// Specification: a reconstruction whose residuals overflow (one pitch-rate sample of 1e300, as a corrupt
+/// logger writes; the CSV reader refuses it, a record built in memory does not) is an error, not a converged fit
+/// with infinite residuals.
+#[test]
+fn a_reconstruction_with_a_non_finite_cost_is_an_error() {
+    let mut rec = consistent_flight(0.0, 0.0, true);
+    let q = rec
+        .columns
+        .iter_mut()
+        .find(|(n, _)| n == "q_rad_s")
+        .unwrap();
+    q.1[600] = 1e300;
+    let err = check_compatibility(&rec, &CheckOptions::default()).unwrap_err();
+    let text = err.to_string();
+    assert!(
+        text.starts_with("the flight-path reconstruction diverged") && text.contains("not finite"),
+        "{text}"
+    );
+}
+
 /// Records of `aircraft` (seed 1, `records` e.g. "lon1,lon2") from the independent generator
 /// `scripts/gen_foreign_records.py`, in a temporary directory.
 fn foreign_records(aircraft: &str, records: &str) -> tempfile::TempDir {

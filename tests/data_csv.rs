@@ -9,14 +9,20 @@ fn parse(text: &str) -> Result<FlightRecord, DataError> {
     parse_csv_bytes(text.as_bytes(), "test.csv")
 }
 
-/// A 100 Hz record with every schema column holding a distinct smooth signal.
+/// A 100 Hz record with every schema column holding a distinct smooth signal (airspeed and density about
+/// a positive level, as the reader refuses a negative one).
 fn synthetic_record(n: usize) -> FlightRecord {
     let time_s: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
     let mut rec = FlightRecord::new(time_s.clone());
     for (k, name) in SCHEMA_COLUMNS.iter().enumerate().skip(1) {
+        let level = match *name {
+            "airspeed_m_s" => 50.0,
+            "density_kg_m3" => 1.2,
+            _ => 0.0,
+        };
         let values = time_s
             .iter()
-            .map(|t| 0.1 * (k as f64 * 0.37 * t).sin() + 1e-3 * k as f64 / 3.0)
+            .map(|t| level + 0.1 * (k as f64 * 0.37 * t).sin() + 1e-3 * k as f64 / 3.0)
             .collect();
         rec.push_column(name, values);
     }
@@ -246,6 +252,47 @@ fn a_load_factor_az_and_a_rate_of_the_other_sign_are_flagged() {
         assert_eq!(found.kind, WarningKind::OppositeSign, "{found}");
         assert!(found.message.contains("scale = -1.0"), "{found}");
     }
+}
+
+/// A record timed in milliseconds (20 Hz written as steps of 50) is named as such; a 1 Hz recorder's steps of
+/// 1 s and a 100 Hz record in seconds are not.
+#[test]
+fn time_in_milliseconds_is_a_unit_warning() {
+    let record = |step: f64, n: usize| {
+        let time_s: Vec<f64> = (0..n).map(|i| i as f64 * step).collect();
+        let mut rec = FlightRecord::new(time_s.clone());
+        rec.push_column(
+            "q_rad_s",
+            time_s.iter().map(|t| 0.01 * (t / step).sin()).collect(),
+        );
+        rec.validate().unwrap()
+    };
+    let w = record(50.0, 1310);
+    let ms: Vec<_> = w
+        .iter()
+        .filter(|w| w.kind == WarningKind::LooksLikeMilliseconds)
+        .collect();
+    assert_eq!(ms.len(), 1, "{w:?}");
+    let text = ms[0].to_string();
+    assert!(
+        text.starts_with("column `time_s`: steps of 50 look like milliseconds")
+            && text.contains("at 0.02 Hz"),
+        "{text}"
+    );
+    for (step, n) in [(1.0, 3600), (0.01, 1000), (0.5, 100)] {
+        let w = record(step, n);
+        assert!(
+            w.iter()
+                .all(|w| w.kind != WarningKind::LooksLikeMilliseconds),
+            "{step}: {w:?}"
+        );
+    }
+    let us = record(20_000.0, 100);
+    assert!(
+        us.iter()
+            .any(|w| w.to_string().contains("look like microseconds")),
+        "{us:?}"
+    );
 }
 
 #[test]

@@ -85,7 +85,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     ));
     let report = data::check_compatibility(&rec, &opts);
     progress.finish_and_clear();
-    let report = report.map_err(|e| UsageError(e.to_string()))?;
+    let report = report.map_err(|e| UsageError(format!("{}: {e}", args.file.display())))?;
     let not_converged = || {
         anyhow::anyhow!(
             "the flight-path reconstruction of {} did not converge in {} iterations: its biases, \

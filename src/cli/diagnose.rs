@@ -3,6 +3,8 @@
 use std::io::Write;
 use std::path::PathBuf;
 
+use anyhow::Context;
+
 use super::common::{emit_json, write_atomic, ColumnsArg};
 use super::UsageError;
 use crate::data::FlightRecord;
@@ -103,7 +105,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         Some(r) => {
             return Err(UsageError(format!("--replay-rate-hz {r}: must be positive")).into())
         }
-        None => rate_of(&train)?,
+        None => rate_of(&train).with_context(|| args.data.display().to_string())?,
     };
     let starting = super::common::spinner("diagnose: starting the simulations");
     let workers = start_workers(&source, rate, args.workers);

@@ -149,6 +149,46 @@ impl Channel {
         Channel::ALL.into_iter().find(|c| c.name() == name)
     }
 
+    /// The values the column can physically hold, `(min, max)` in its SI unit, or `None` (time: any finite
+    /// value). The bounds lie far beyond any aircraft's flight, so a value outside is a corrupt sample or a
+    /// unit gone wrong, never a manoeuvre; they are wide enough that a column logged in degrees, deg/s,
+    /// knots, ft/s, ft, g or percent stays inside, for the unit-sanity warnings to name the unit. The
+    /// reader refuses a value outside (docs/data.md, "Plausible values").
+    pub const fn plausible_range(self) -> Option<(f64, f64)> {
+        match self {
+            Channel::Time => None,
+            // 1000 rad is 159 turns; an angle logged in degrees (at most 360) stays inside.
+            Channel::Elevator
+            | Channel::Aileron
+            | Channel::Rudder
+            | Channel::Phi
+            | Channel::Theta
+            | Channel::Alpha
+            | Channel::Beta
+            | Channel::Latitude => Some((-1e3, 1e3)),
+            // A heading may be unwrapped over a long flight of turns.
+            Channel::Psi => Some((-1e6, 1e6)),
+            // A fraction 0..1; percent (0..100) stays inside.
+            Channel::Throttle => Some((-1e3, 1e3)),
+            // 10 rad/s is a fast roll; 10⁴ leaves room for deg/s.
+            Channel::P | Channel::Q | Channel::R => Some((-1e4, 1e4)),
+            Channel::PDot | Channel::QDot | Channel::RDot => Some((-1e5, 1e5)),
+            // A pitot never reads negative; 3000 m/s (Mach 9 at sea level) leaves room for ft/s and knots.
+            Channel::Airspeed => Some((0.0, 3e3)),
+            // The Dead Sea shore (−430 m, −1410 ft) to 100 km.
+            Channel::Altitude => Some((-2e3, 1e5)),
+            // 1000 g.
+            Channel::Ax | Channel::Ay | Channel::Az => Some((-1e4, 1e4)),
+            // Ten times the thrust of the heaviest aircraft (An-225, 1.4 MN).
+            Channel::Thrust => Some((-1e7, 1e7)),
+            // A differential pressure sensor's offset at rest may read slightly negative; Mach 3 at sea level
+            // is 0.6 MPa.
+            Channel::Qbar => Some((-1e3, 1e7)),
+            // Sea level is 1.225 kg/m³.
+            Channel::Density => Some((0.0, 100.0)),
+        }
+    }
+
     /// The surface a control input moves, as the simulation names it (`elevator`, ..., `throttle`); `None`
     /// for a channel that is not a control input.
     pub fn surface(self) -> Option<&'static str> {

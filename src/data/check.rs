@@ -490,11 +490,27 @@ pub fn check_compatibility(
             instrument.push(est);
         }
     }
-    let residual_rms = outputs
+    let residual_rms: Vec<(String, f64)> = outputs
         .iter()
         .zip(&r)
         .map(|(&j, rj)| (OUT_NAMES[j].to_string(), (sum_sq(rj) / n as f64).sqrt()))
         .collect();
+    // A fit whose cost is not finite has not converged, whatever the optimiser's stop says.
+    let diverged: Vec<&str> = residual_rms
+        .iter()
+        .filter(|(_, rms)| !rms.is_finite())
+        .map(|(c, _)| c.as_str())
+        .collect();
+    if !diverged.is_empty() || theta_p.iter().any(|x| !x.is_finite()) {
+        return Err(DataError::Diverged {
+            what: "the flight-path reconstruction".into(),
+            columns: if diverged.is_empty() {
+                "the estimates".into()
+            } else {
+                diverged.join(", ")
+            },
+        });
+    }
     Ok(CheckReport {
         pieces: data.piece_starts.len() + 1,
         instrument,

@@ -26,7 +26,7 @@ mod chunk;
 mod mat;
 mod text;
 mod write;
-use chunk::{parse_chunk, shift_lines, split_chunks, Chunk};
+use chunk::{parse_chunk, shift_lines, split_chunks, Chunk, FileRange};
 use text::{comment, is_numbers_row, is_units_row, whitespace_separated, whitespace_to_commas};
 pub use write::{write_csv_atomic, write_csv_to};
 
@@ -105,7 +105,14 @@ fn read_csv_in_blocks(
     let (mut parsed, quoted_tail) =
         stream_chunks(&mut f, carry, eof, &pre, file, block_bytes).map_err(BlockReadError::Io)?;
     if let Some(tail) = quoted_tail {
-        parsed.push(parse_chunk(&tail, true, &pre.names, pre.time_index, file));
+        parsed.push(parse_chunk(
+            &tail,
+            true,
+            &pre.names,
+            &pre.ranges,
+            pre.time_index,
+            file,
+        ));
     }
     assemble(parsed, pre, file).map_err(BlockReadError::Data)
 }
@@ -172,7 +179,8 @@ fn stream_chunks(
                 v.len() - 1
             };
             s.spawn(move |_| {
-                let chunk = parse_chunk(&block, false, &pre.names, pre.time_index, file);
+                let chunk =
+                    parse_chunk(&block, false, &pre.names, &pre.ranges, pre.time_index, file);
                 slots.lock().expect("no parser panics")[k] = Some(chunk);
             });
             if eof {
@@ -239,7 +247,7 @@ pub fn parse_csv_bytes_mapped(
     let (chunks, quoted) = split_chunks(body);
     let parsed: Vec<Result<Chunk, DataError>> = chunks
         .par_iter()
-        .map(|c| parse_chunk(c, quoted, &pre.names, pre.time_index, file))
+        .map(|c| parse_chunk(c, quoted, &pre.names, &pre.ranges, pre.time_index, file))
         .collect();
     assemble(parsed, pre, file)
 }
@@ -257,6 +265,8 @@ struct Preamble {
     factors: Vec<f64>,
     /// Columns a column map forms as weighted sums of the file's columns (their values as read).
     derived: Vec<PlacedDerivedColumn>,
+    /// Per column: its plausible range as the file holds it (a bounded schema column), checked while parsing.
+    ranges: Vec<Option<FileRange>>,
 }
 
 /// Parses the metadata (`#` lines and blank lines before the header) and the header.
@@ -352,6 +362,11 @@ fn parse_preamble(
                 line,
                 found: names.join(", "),
             })?;
+    let ranges = names
+        .iter()
+        .zip(&factors)
+        .map(|(name, &factor)| FileRange::of(name, factor))
+        .collect();
     Ok(Preamble {
         metadata,
         names,
@@ -360,6 +375,7 @@ fn parse_preamble(
         body_start,
         factors,
         derived,
+        ranges,
     })
 }
 
@@ -466,6 +482,14 @@ fn assemble(
         }
     }
     rec.columns.extend(derived);
+    if let Some(v) = rec.column(super::Channel::Airspeed) {
+        if v.iter().all(|&v| v <= 0.0) {
+            return Err(DataError::NoAirspeed {
+                file: file.to_string(),
+                rows: v.len(),
+            });
+        }
+    }
     Ok(rec)
 }
 
@@ -689,6 +713,71 @@ mod tests {
                 assert!(blocks.starts_with("f.csv:"), "case {k}: {blocks}");
             }
         }
+    }
+
+    /// A sample far beyond what its column can hold (a corrupt 1e300, a negative airspeed) is refused naming
+    /// the file, the line, the column and the value in exponent form; an airspeed of 0 on every row is not a
+    /// record of flight. Values logged in another unit (degrees, knots) stay inside, for the unit warnings.
+    #[test]
+    fn implausible_values_are_refused_naming_line_column_and_value() {
+        let good = "time_s,q_rad_s,airspeed_m_s,alpha_rad\n0,0.01,50,0.05\n0.05,0.02,50.1,0.06\n0.1,0.01,50.2,0.05\n";
+        assert!(parse_csv_bytes(good.as_bytes(), "f.csv").is_ok());
+        let huge = good.replace("0.05,0.02,", "0.05,1e300,");
+        let e = parse_csv_bytes(huge.as_bytes(), "f.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("f.csv:3: column `q_rad_s`: 1e300 is outside")
+                && e.contains("-10000 to 10000"),
+            "{e}"
+        );
+        let negative = good.replace(",50.1,", ",-50.1,");
+        let e = parse_csv_bytes(negative.as_bytes(), "f.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("f.csv:3: column `airspeed_m_s`: -50.1 is outside"),
+            "{e}"
+        );
+        let zero = good
+            .replace(",50,", ",0,")
+            .replace(",50.1,", ",0,")
+            .replace(",50.2,", ",0.0,");
+        let e = parse_csv_bytes(zero.as_bytes(), "f.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("f.csv: column `airspeed_m_s` is 0 on every one of its 3 rows"),
+            "{e}"
+        );
+        // Degrees and knots are a unit warning's business, not this check's.
+        let degrees = good
+            .replace(",0.05\n", ",3.0\n")
+            .replace(",0.06\n", ",179.0\n");
+        let rec = parse_csv_bytes(degrees.as_bytes(), "f.csv").unwrap();
+        assert!(rec
+            .warnings()
+            .iter()
+            .any(|w| w.kind == crate::data::WarningKind::LooksLikeDegrees));
+        // Through a column map the range applies to the converted value, and the message gives both.
+        let dir = tempfile::tempdir().unwrap();
+        let map_path = dir.path().join("m.toml");
+        fs::write(
+            &map_path,
+            "[columns]\nQ = { to = \"q_rad_s\", unit = \"deg/s\" }\n",
+        )
+        .unwrap();
+        let map = ColumnMap::load(&map_path).unwrap();
+        let in_deg = good
+            .replace("q_rad_s", "Q")
+            .replace("0.05,0.02,", "0.05,900000,");
+        let e = parse_csv_bytes_mapped(in_deg.as_bytes(), "f.csv", Some(&map))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`q_rad_s`: 900000 (15707.963267948966 after the column map's conversion)"),
+            "{e}"
+        );
     }
 
     #[test]

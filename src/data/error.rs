@@ -70,6 +70,31 @@ pub enum DataError {
         column: String,
         cell: String,
     },
+    /// A value outside what its schema column can physically hold (`Channel::plausible_range`).
+    #[error("{file}:{line}: column `{column}`: {value} is outside what this column can hold ({min} to {max} in its \
+             unit); a corrupt sample, or a unit that a column map (`--columns`) should convert")]
+    Implausible {
+        file: String,
+        line: usize,
+        column: String,
+        /// The value as the file holds it, and in SI where a column map converts it.
+        value: String,
+        min: f64,
+        max: f64,
+    },
+    /// An airspeed column that is zero on every row: not a record of flight.
+    #[error("{file}: column `airspeed_m_s` is 0 on every one of its {rows} rows: this is not a record of an \
+             aircraft in flight (a pitot not connected?); fix the column, or leave it out of the file")]
+    NoAirspeed { file: String, rows: usize },
+    /// A fit on the data ended with a non-finite cost or residual: its estimates are no estimates.
+    #[error("{what} diverged: the residual of {columns} is not finite; the record holds values the model cannot \
+             follow (a corrupt sample, a wrong unit?)")]
+    Diverged {
+        /// The fit, e.g. "the flight-path reconstruction of f.csv".
+        what: String,
+        /// The outputs whose residual is not finite.
+        columns: String,
+    },
     /// Time does not strictly increase.
     #[error("{file}:{line}: column `time_s`: {time_s} {relation} the previous time {previous_s} (line {previous_line}); time must strictly increase")]
     TimeNotIncreasing {
@@ -154,6 +179,8 @@ pub enum WarningKind {
     LooksLikeKnotsOrFeet,
     /// Accelerations look like g instead of m/s².
     LooksLikeG,
+    /// `time_s` steps look like milliseconds or microseconds instead of seconds.
+    LooksLikeMilliseconds,
     /// `throttle` lies outside 0..1 (percent?).
     ThrottleOutOfRange,
     /// A column has the other sign convention (a load factor for `az_m_s2`, a rate of the other sign).

@@ -17,7 +17,9 @@ pub use csv_io::{
     write_csv_atomic, write_csv_to,
 };
 pub use error::{DataError, Warning, WarningKind, IN_MEMORY};
-pub use record::{sampling_warning, unit_warnings, FlightRecord, G0_M_S2, SCHEMA_COLUMNS};
+pub use record::{
+    sampling_warning, time_unit_suspicion, unit_warnings, FlightRecord, G0_M_S2, SCHEMA_COLUMNS,
+};
 pub use resample::{
     dropout_starts, resample_uniform, uniform_pieces, UniformPieces, RESAMPLE_METHOD,
 };

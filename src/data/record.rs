@@ -235,9 +235,17 @@ fn max_abs(values: &[f64]) -> Option<(usize, f64)> {
 ///   fast as the specific force along the flight path says (dV/dt = ax cos α + az sin α − g sin γ,
 ///   fitted over 1 s windows when they correlate);
 /// - a median specific-force magnitude of 0.5..2 means g (in m/s² it is ≈ 9.81 in 1-g flight);
-/// - `throttle` outside −0.05..1.05 is not a 0..1 fraction (percent?).
+/// - `throttle` outside −0.05..1.05 is not a 0..1 fraction (percent?);
+/// - `time_s` steps of a whole number of 2 or more: milliseconds ([`time_unit_suspicion`]).
 pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
     let mut out: Vec<Warning> = Vec::new();
+    if let Some(message) = time_unit_suspicion(&rec.time_s) {
+        out.push(Warning {
+            kind: WarningKind::LooksLikeMilliseconds,
+            column: Some(Channel::Time.to_string()),
+            message,
+        });
+    }
     let at = |i: usize| rec.time_s.get(i).copied().unwrap_or(f64::NAN);
     for (name, values) in &rec.columns {
         let Some((i, m)) = max_abs(values) else {
@@ -604,6 +612,41 @@ fn accel_g_warning(rec: &FlightRecord) -> Option<Warning> {
         });
     }
     None
+}
+
+/// What makes `time_s` look like milliseconds (or microseconds), in a sentence, or `None`: a median step that
+/// is a whole number of 2 s or more. A logger's clock in ms at 500 Hz down to 20 Hz writes steps of 2 to 50, and
+/// no record meant for identification samples every 2 s or slower (a light aircraft's short period lasts about a
+/// second). A median step of exactly 1 s is left alone: 1 Hz flight-data recorders exist, as do 1 kHz loggers.
+pub fn time_unit_suspicion(time_s: &[f64]) -> Option<String> {
+    let mut steps = time_steps(time_s);
+    if steps.is_empty() {
+        return None;
+    }
+    let median = median_in_place(&mut steps);
+    if !(median >= 2.0 && (median - median.round()).abs() <= 1e-9 * median) {
+        return None;
+    }
+    let (unit, factor) = if median >= 1000.0 {
+        ("microseconds", 1e6)
+    } else {
+        ("milliseconds", 1e3)
+    };
+    Some(format!(
+        "steps of {median} look like {unit}: in seconds the record would last {:.1} h at {} Hz; \
+         convert it with a column map (`time_s = {{ to = \"time_s\", unit = \"{}\" }}`)",
+        (time_s[time_s.len() - 1] - time_s[0]) / 3600.0,
+        short_rate(1.0 / median),
+        if factor == 1e6 { "us" } else { "ms" }
+    ))
+}
+
+/// A sampling rate for a message: a few significant digits.
+fn short_rate(rate_hz: f64) -> String {
+    format!("{:.3}", rate_hz)
+        .trim_end_matches('0')
+        .trim_end_matches('.')
+        .to_string()
 }
 
 /// Flags non-uniform sampling: steps deviating more than 10 % from the median step.

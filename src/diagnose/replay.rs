@@ -181,12 +181,21 @@ impl ReplayCase {
                 record.len()
             )));
         }
+        // A replay at the rate of a record timed in milliseconds would integrate at a fraction of a hertz.
+        if let Some(why) = crate::data::time_unit_suspicion(&record.time_s) {
+            return Err(DiagnoseError::BadData(format!("column `time_s`: {why}")));
+        }
+        let whole = record.len();
         let (longest, sampling_notes) = longest_uniform_piece(record)?;
         let record = &longest;
         let n = record.len();
         if n < 50 {
             return Err(DiagnoseError::TooShort(format!(
-                "{n} samples; replay and identification need at least 50"
+                "its longest uninterrupted piece (t = {} s to {} s) has {n} of its {whole} samples; replay and \
+                 identification need at least 50 ({})",
+                record.time_s[0],
+                record.time_s[n - 1],
+                sampling_notes.join("; ")
             )));
         }
         let t = &record.time_s;

@@ -4,6 +4,7 @@
 
 use super::next_line_end;
 use crate::data::error::DataError;
+use crate::data::Channel;
 
 /// Splits the body at line boundaries into roughly equal chunks for parallel parsing; one chunk if
 /// the body holds a quote (a quoted field may contain a newline).
@@ -90,7 +91,58 @@ pub(super) fn shift_lines(e: DataError, offset: usize) -> DataError {
             line: line + offset,
             message,
         },
+        DataError::Implausible {
+            file,
+            line,
+            column,
+            value,
+            min,
+            max,
+        } => DataError::Implausible {
+            file,
+            line: line + offset,
+            column,
+            value,
+            min,
+            max,
+        },
         other => other,
+    }
+}
+
+/// A schema column's plausible range ([`Channel::plausible_range`]) as the file holds the column: the SI
+/// range over the factor a column map converts it by, so that each cell is checked as it is read.
+pub(super) struct FileRange {
+    lo: f64,
+    hi: f64,
+    factor: f64,
+    si: (f64, f64),
+}
+
+impl FileRange {
+    /// The range of the column `name` (after the column map's renaming) whose values the map multiplies by
+    /// `factor`; `None` for a column that is not a bounded schema column.
+    pub(super) fn of(name: &str, factor: f64) -> Option<FileRange> {
+        let si @ (min, max) = Channel::from_name(name)?.plausible_range()?;
+        if factor == 0.0 || !factor.is_finite() {
+            return None;
+        }
+        let (a, b) = (min / factor, max / factor);
+        Some(FileRange {
+            lo: a.min(b),
+            hi: a.max(b),
+            factor,
+            si,
+        })
+    }
+}
+
+/// A value for a message: plain decimals where they are short, else in exponent form (1e300, not 301 digits).
+fn short_number(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e7).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 
@@ -110,6 +162,7 @@ pub(super) fn parse_chunk(
     bytes: &[u8],
     quoted: bool,
     names: &[String],
+    ranges: &[Option<FileRange>],
     time_index: usize,
     file: &str,
 ) -> Result<Chunk, DataError> {
@@ -121,6 +174,7 @@ pub(super) fn parse_chunk(
         first_line: 0,
         last_line: 0,
         names,
+        ranges,
         time_index,
         file,
         repeated: Vec::new(),
@@ -148,6 +202,8 @@ pub(super) struct ChunkSink<'a> {
     first_line: usize,
     last_line: usize,
     names: &'a [String],
+    /// Per column, its plausible range as the file holds it, if it is a bounded schema column.
+    ranges: &'a [Option<FileRange>],
     time_index: usize,
     file: &'a str,
     repeated: Vec<usize>,
@@ -230,8 +286,39 @@ impl ChunkSink<'_> {
         } else {
             self.first_line = line;
         }
+        self.check_plausible(line)?;
         self.last_line = line;
         self.rows += 1;
+        Ok(())
+    }
+
+    /// [`DataError::Implausible`] for the first cell of the row just pushed (at `line`) that lies outside its
+    /// column's plausible range.
+    fn check_plausible(&self, line: usize) -> Result<(), DataError> {
+        let rows = self.rows;
+        for (k, range) in self.ranges.iter().enumerate() {
+            let Some(r) = range else { continue };
+            let v = self.columns[k][rows];
+            if !(r.lo..=r.hi).contains(&v) {
+                let value = if r.factor == 1.0 {
+                    short_number(v)
+                } else {
+                    format!(
+                        "{} ({} after the column map's conversion)",
+                        short_number(v),
+                        short_number(v * r.factor)
+                    )
+                };
+                return Err(DataError::Implausible {
+                    file: self.file.to_string(),
+                    line,
+                    column: self.names[k].clone(),
+                    value,
+                    min: r.si.0,
+                    max: r.si.1,
+                });
+            }
+        }
         Ok(())
     }
 }
