@@ -70,6 +70,61 @@ fn a_report_never_replaces_a_directory_flightid_did_not_make() {
 }
 
 #[test]
+fn an_output_path_that_cannot_be_written_is_refused_before_any_work_and_no_other_output_is_left() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("afile"), "x").unwrap(); // a regular file used as if it were a directory
+    let tlog = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/flight.tlog");
+    let t0 = Instant::now();
+    for args in [
+        vec![
+            "diagnose",
+            "--data",
+            "train.csv",
+            "--json",
+            "d.json",
+            "--report",
+            "drep",
+            "--extension-out",
+            "afile/x.json",
+        ],
+        vec!["diagnose", "--data", "train.csv", "--json", "afile/x.json"],
+        vec![
+            "compare",
+            "--sweep-deg",
+            "1",
+            "--method",
+            "ls",
+            "--json",
+            "afile/x.json",
+            "--report",
+            "crep",
+        ],
+        vec!["fly", "--duration-s", "2", "--out", "afile/x.csv"],
+        vec![
+            "ingest",
+            "--tlog",
+            tlog.to_str().unwrap(),
+            "--out",
+            "afile/x.csv",
+        ],
+    ] {
+        let o = run(tmp.path(), &args);
+        assert_bad_input(
+            &o,
+            &[
+                "afile, which is not a directory",
+                "refusing to write afile/x.",
+            ],
+        );
+    }
+    // refused before any data is read or JSBSim started, and nothing else written
+    assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
+    for left in ["d.json", "drep", "crep"] {
+        assert!(!tmp.path().join(left).exists(), "{left} left behind");
+    }
+}
+
+#[test]
 fn out_of_range_numbers_exit_2_naming_the_allowed_range() {
     let tmp = tempfile::tempdir().unwrap();
     let csv = tmp.path().join("x.csv");

@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use super::common::{emit_json, write_atomic, ColumnsArg};
+use super::common::{check_outputs, emit_json, json_path, write_atomic, ColumnsArg};
 use super::UsageError;
 use crate::data::FlightRecord;
 use crate::diagnose::model::write_model;
@@ -84,9 +84,16 @@ fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
 
 /// Runs `flightid diagnose`.
 pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
-    for dir in [&args.report, &args.model_out].into_iter().flatten() {
-        crate::report::check_output_dir(dir)?;
+    if args.model_out.is_some() && args.linear.is_some() {
+        return Err(UsageError(
+            "--model-out needs a JSBSim aircraft; with --linear use --extension-out".into(),
+        )
+        .into());
     }
+    check_outputs(
+        &[json_path(&args.json), args.extension_out.as_deref()],
+        &[args.report.as_deref(), args.model_out.as_deref()],
+    )?;
     let train = args.columns.read(&args.data)?;
     crate::limits::check_rows(&args.data.display().to_string(), train.len())?;
     let valid = args
@@ -129,22 +136,11 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         Box::new(std::io::stdout())
     };
     summary(&d, workers.len(), &mut out)?;
-    if let Some(target) = &args.json {
-        emit_json(target, &d)?;
-    }
     let mut ext = d.extension_file(&args.aircraft);
     ext.notes
         .insert("data".into(), args.data.display().to_string());
-    if let Some(p) = &args.extension_out {
-        write_atomic(p, serde_json::to_string_pretty(&ext)?.as_bytes())?;
-    }
+    // The directories, which take work to fill, first; the single files, already checked, last.
     if let Some(dir) = &args.model_out {
-        if args.linear.is_some() {
-            return Err(UsageError(
-                "--model-out needs a JSBSim aircraft; with --linear use --extension-out".into(),
-            )
-            .into());
-        }
         let m = write_model(workers[0].sim.as_mut(), &ext, dir)?;
         writeln!(
             out,
@@ -155,6 +151,12 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     if let Some(dir) = &args.report {
         let index = report::write_report(&d, &args.aircraft, &train, valid.as_ref(), dir)?;
         eprintln!("report written to {}", index.display());
+    }
+    if let Some(p) = &args.extension_out {
+        write_atomic(p, serde_json::to_string_pretty(&ext)?.as_bytes())?;
+    }
+    if let Some(target) = &args.json {
+        emit_json(target, &d)?;
     }
     Ok(())
 }

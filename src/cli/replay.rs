@@ -43,6 +43,7 @@ pub struct ReplayCmd {
 
 /// Runs `flightid replay`.
 pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
+    super::common::check_outputs(&[super::common::json_path(&args.json)], &[])?;
     let rec = args.columns.read(&args.data)?;
     let case = ReplayCase::new(&rec)?;
     let model = args.model.as_deref().map(ExtendedModel::read).transpose()?;
