@@ -274,6 +274,34 @@ amplitudes_deg = [1.0]
 }
 
 #[test]
+fn a_message_of_several_lines_prints_real_line_breaks_not_backslash_n() {
+    let tmp = tempfile::tempdir().unwrap();
+    let tlog =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/flight.tlog"))
+            .unwrap();
+    std::fs::write(tmp.path().join("twice.tlog"), [tlog.clone(), tlog].concat()).unwrap();
+    let o = run(
+        tmp.path(),
+        &[
+            "ingest",
+            "--tlog",
+            "twice.tlog",
+            "--servo-map",
+            "c172x",
+            "--out",
+            "x.csv",
+        ],
+    );
+    assert_bad_input(&o, &["2 stretches", "\n  1: 0.00 to 30.00 s"]);
+    assert!(!stderr(&o).contains("\\n"), "{}", stderr(&o));
+    std::fs::write(tmp.path().join("map.toml"), "[columns\nq_rad_s = ").unwrap();
+    std::fs::write(tmp.path().join("x.csv"), "time_s,q_rad_s\n0,0\n").unwrap();
+    let o = run(tmp.path(), &["segments", "--columns", "map.toml", "x.csv"]);
+    assert_bad_input(&o, &["column map map.toml", "invalid table header\n"]);
+    assert!(!stderr(&o).contains("\\n"), "{}", stderr(&o));
+}
+
+#[test]
 fn control_characters_in_user_data_are_escaped_in_messages() {
     let tmp = tempfile::tempdir().unwrap();
     std::fs::write(
