@@ -301,6 +301,74 @@ fn a_message_of_several_lines_prints_real_line_breaks_not_backslash_n() {
     assert!(!stderr(&o).contains("\\n"), "{}", stderr(&o));
 }
 
+/// A 3 s, 50 Hz level record: enough to replay, nothing moving.
+fn level_record(columns: &str, row: &str) -> String {
+    let mut text = format!("time_s,{columns}\n");
+    for k in 0..150 {
+        text.push_str(&format!("{},{row}\n", k as f64 * 0.02));
+    }
+    text
+}
+
+#[test]
+fn a_bad_record_or_file_is_named_with_its_role_and_the_reason_in_words() {
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| std::fs::write(tmp.path().join(name), text).unwrap();
+    let full = "elevator_rad,q_rad_s,theta_rad,airspeed_m_s,altitude_m";
+    write("flat.csv", &level_record(full, "0,0,0,50,1200"));
+    write(
+        "tworow.csv",
+        &format!("time_s,{full}\n0,0,0,0,50,1200\n0.02,0,0,0,50,1200\n"),
+    );
+    write("onerow.csv", &format!("time_s,{full}\n0,0,0,0,50,1200\n"));
+    write(
+        "noairspeed.csv",
+        &level_record("elevator_rad,q_rad_s,altitude_m", "0,0,1200"),
+    );
+    write("semicolon.csv", "time_s;elevator_rad\n0;0\n0.02;0\n");
+    write("lin_bad.json", r#"{"A": [[1,2],[3]]}"#);
+    for (args, needles) in [
+        (
+            vec!["diagnose", "--data", "tworow.csv"],
+            vec!["tworow.csv (the training record)", "2 samples"],
+        ),
+        (
+            vec!["diagnose", "--data", "flat.csv", "--validate", "tworow.csv"],
+            vec!["tworow.csv (the validation record)", "2 samples"],
+        ),
+        (
+            vec!["derivatives", "--data", "tworow.csv", "--airframe", "c172x"],
+            vec!["tworow.csv: the record is 2 samples (0.02 s) long; at least 2 s is needed"],
+        ),
+        (
+            vec!["derivatives", "--data", "onerow.csv", "--airframe", "c172x"],
+            vec!["onerow.csv: the record is 1 sample (0 s) long; at least 2 s is needed"],
+        ),
+        (
+            vec!["diagnose", "--linear", "lin_bad.json", "--data", "flat.csv"],
+            vec!["linear-model file lin_bad.json"],
+        ),
+        (
+            vec!["diagnose", "--data", "noairspeed.csv"],
+            vec![
+                "noairspeed.csv (the training record)",
+                "is required because replay trims",
+            ],
+        ),
+        (
+            vec!["segments", "semicolon.csv"],
+            vec![
+                "separate its columns with `;`",
+                "flightid reads comma-separated files",
+            ],
+        ),
+    ] {
+        let o = run(tmp.path(), &args);
+        assert_bad_input(&o, &needles);
+        assert!(!stderr(&o).contains("dropout"), "{}", stderr(&o));
+    }
+}
+
 #[test]
 fn control_characters_in_user_data_are_escaped_in_messages() {
     let tmp = tempfile::tempdir().unwrap();

@@ -1,7 +1,9 @@
 //! `flightid diagnose`: what the simulation gets wrong on measured data, the named cause, the validation gain.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
 
 use super::common::{check_outputs, emit_json, json_path, write_atomic, ColumnsArg};
 use super::UsageError;
@@ -77,9 +79,9 @@ pub struct DiagnoseCmd {
     pub columns: ColumnsArg,
 }
 
-/// The rate the simulation integrates a replay of `rec` at (a whole multiple of the record's rate).
-fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
-    Ok(ReplayCase::new(rec)?.sim_rate_hz())
+/// The replay of `rec`, read from `path` as the `role` record ("training", "validation"): an error names both.
+fn replay_case(rec: &FlightRecord, path: &Path, role: &str) -> anyhow::Result<ReplayCase> {
+    ReplayCase::new(rec).with_context(|| format!("{} (the {role} record)", path.display()))
 }
 
 /// Runs `flightid diagnose`.
@@ -101,6 +103,12 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         .as_deref()
         .map(|p| args.columns.read(p))
         .transpose()?;
+    // Each record is prepared for replay once here, where its file is known, so a record that cannot be replayed
+    // is named before the simulations start.
+    let train_case = replay_case(&train, &args.data, "training")?;
+    if let (Some(v), Some(p)) = (&valid, &args.validate) {
+        replay_case(v, p, "validation")?;
+    }
     let source = match &args.linear {
         Some(p) => SimSource::Linear(p),
         None => SimSource::Aircraft(&args.aircraft),
@@ -110,7 +118,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         Some(r) => {
             return Err(UsageError(format!("--replay-rate-hz {r}: must be positive")).into())
         }
-        None => rate_of(&train)?,
+        None => train_case.sim_rate_hz(),
     };
     let starting = super::common::spinner("diagnose: starting the simulations");
     let workers = start_workers(&source, rate, args.workers);
