@@ -301,6 +301,56 @@ fn a_message_of_several_lines_prints_real_line_breaks_not_backslash_n() {
     assert!(!stderr(&o).contains("\\n"), "{}", stderr(&o));
 }
 
+#[test]
+fn option_and_extension_values_outside_their_range_are_refused_naming_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| std::fs::write(tmp.path().join(name), text).unwrap();
+    write(
+        "flat.csv",
+        &level_record(
+            "elevator_rad,q_rad_s,theta_rad,beta_rad,airspeed_m_s,altitude_m",
+            "0,0,0,0,50,1200",
+        ),
+    );
+    write(
+        "ext_huge.json",
+        r#"{"aircraft":"c172x","effects":[{"effect":"sensor_scale","target":"beta_rad","value":1e308,"std_error":0.1}],
+            "model_effects":[],"notes":{}}"#,
+    );
+    for value in ["nan", "-1"] {
+        let flag = format!("--min-amplitude-deg={value}");
+        let o = run(tmp.path(), &["segments", "flat.csv", &flag]);
+        assert_bad_input(&o, &["--min-amplitude-deg", "[0, 30] deg"]);
+    }
+    let t0 = Instant::now();
+    let o = run(
+        tmp.path(),
+        &[
+            "replay",
+            "--data",
+            "flat.csv",
+            "--extension",
+            "ext_huge.json",
+            "--json",
+            "r.json",
+        ],
+    );
+    assert_bad_input(
+        &o,
+        &[
+            "ext_huge.json",
+            "sensor_scale on beta_rad: value 1e308",
+            "outside the effect's range [",
+        ],
+    );
+    assert!(
+        t0.elapsed() < Duration::from_secs(5),
+        "refused before JSBSim starts: {:?}",
+        t0.elapsed()
+    );
+    assert!(!tmp.path().join("r.json").exists());
+}
+
 /// A 3 s, 50 Hz level record: enough to replay, nothing moving.
 fn level_record(columns: &str, row: &str) -> String {
     let mut text = format!("time_s,{columns}\n");
