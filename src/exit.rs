@@ -81,7 +81,8 @@ impl ExitCode for crate::diagnose::DiagnoseError {
             Self::TooShort(_)
             | Self::BadData(_)
             | Self::UnknownExtension(_)
-            | Self::ExtensionFile { .. } => BAD_INPUT,
+            | Self::ExtensionFile { .. }
+            | Self::LinearModelFile { .. } => BAD_INPUT,
         }
     }
 }

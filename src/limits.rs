@@ -208,6 +208,8 @@ pub const RESAMPLE_HZ: Range = Range::new("--resample-hz", 0.1, 2000.0, "Hz");
 pub const FREQUENCY_HZ: Range = Range::new("frequency", 0.001, 1000.0, "Hz");
 /// Surface deflection amplitude relative to trim, deg.
 pub const AMPLITUDE_DEG: Range = Range::new("--amplitude-deg", -30.0, 30.0, "deg");
+/// Smallest input that counts as a maneuver (`segments`), deg.
+pub const MIN_AMPLITUDE_DEG: Range = Range::new("--min-amplitude-deg", 0.0, 30.0, "deg");
 /// Trim altitude above sea level, ft.
 pub const ALTITUDE_FT: Range = Range::new("--altitude-ft", 0.0, 100_000.0, "ft");
 /// Trim true airspeed, kts.

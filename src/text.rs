@@ -20,6 +20,24 @@ pub fn escape_control(s: &str) -> Cow<'_, str> {
     Cow::Owned(out)
 }
 
+/// [`escape_control`] for a whole message flightid composed: its own line breaks and tabs (a list of stretches, a
+/// TOML parser's pointer to the bad line) are kept as they are, every other control character is escaped.
+pub fn escape_control_in_message(s: &str) -> Cow<'_, str> {
+    let escaped = |c: char| c.is_control() && c != '\n' && c != '\t';
+    if !s.chars().any(escaped) {
+        return Cow::Borrowed(s);
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        if escaped(c) {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    Cow::Owned(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -32,6 +50,14 @@ mod tests {
         assert_eq!(
             escape_control("a\nb\tc\u{7f}\u{9b}"),
             "a\\nb\\tc\\u{7f}\\u{9b}"
+        );
+    }
+
+    #[test]
+    fn a_message_keeps_its_line_breaks_and_escapes_the_rest() {
+        assert_eq!(
+            escape_control_in_message("stretches:\n  1: 0 s\tto 30 s\n  2: \u{1b}[31m\r"),
+            "stretches:\n  1: 0 s\tto 30 s\n  2: \\u{1b}[31m\\r"
         );
     }
 }

@@ -70,6 +70,61 @@ fn a_report_never_replaces_a_directory_flightid_did_not_make() {
 }
 
 #[test]
+fn an_output_path_that_cannot_be_written_is_refused_before_any_work_and_no_other_output_is_left() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("afile"), "x").unwrap(); // a regular file used as if it were a directory
+    let tlog = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/flight.tlog");
+    let t0 = Instant::now();
+    for args in [
+        vec![
+            "diagnose",
+            "--data",
+            "train.csv",
+            "--json",
+            "d.json",
+            "--report",
+            "drep",
+            "--extension-out",
+            "afile/x.json",
+        ],
+        vec!["diagnose", "--data", "train.csv", "--json", "afile/x.json"],
+        vec![
+            "compare",
+            "--sweep-deg",
+            "1",
+            "--method",
+            "ls",
+            "--json",
+            "afile/x.json",
+            "--report",
+            "crep",
+        ],
+        vec!["fly", "--duration-s", "2", "--out", "afile/x.csv"],
+        vec![
+            "ingest",
+            "--tlog",
+            tlog.to_str().unwrap(),
+            "--out",
+            "afile/x.csv",
+        ],
+    ] {
+        let o = run(tmp.path(), &args);
+        assert_bad_input(
+            &o,
+            &[
+                "afile, which is not a directory",
+                "refusing to write afile/x.",
+            ],
+        );
+    }
+    // refused before any data is read or JSBSim started, and nothing else written
+    assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
+    for left in ["d.json", "drep", "crep"] {
+        assert!(!tmp.path().join(left).exists(), "{left} left behind");
+    }
+}
+
+#[test]
 fn out_of_range_numbers_exit_2_naming_the_allowed_range() {
     let tmp = tempfile::tempdir().unwrap();
     let csv = tmp.path().join("x.csv");
@@ -216,6 +271,152 @@ amplitudes_deg = [1.0]
         &["campaign", "run", "huge.toml", "--out", "camp"],
     );
     assert_bad_input(&o, &["duration_s", "36000"]);
+}
+
+#[test]
+fn a_message_of_several_lines_prints_real_line_breaks_not_backslash_n() {
+    let tmp = tempfile::tempdir().unwrap();
+    let tlog =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/flight.tlog"))
+            .unwrap();
+    std::fs::write(tmp.path().join("twice.tlog"), [tlog.clone(), tlog].concat()).unwrap();
+    let o = run(
+        tmp.path(),
+        &[
+            "ingest",
+            "--tlog",
+            "twice.tlog",
+            "--servo-map",
+            "c172x",
+            "--out",
+            "x.csv",
+        ],
+    );
+    assert_bad_input(&o, &["2 stretches", "\n  1: 0.00 to 30.00 s"]);
+    assert!(!stderr(&o).contains("\\n"), "{}", stderr(&o));
+    std::fs::write(tmp.path().join("map.toml"), "[columns\nq_rad_s = ").unwrap();
+    std::fs::write(tmp.path().join("x.csv"), "time_s,q_rad_s\n0,0\n").unwrap();
+    let o = run(tmp.path(), &["segments", "--columns", "map.toml", "x.csv"]);
+    assert_bad_input(&o, &["column map map.toml", "invalid table header\n"]);
+    assert!(!stderr(&o).contains("\\n"), "{}", stderr(&o));
+}
+
+#[test]
+fn option_and_extension_values_outside_their_range_are_refused_naming_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| std::fs::write(tmp.path().join(name), text).unwrap();
+    write(
+        "flat.csv",
+        &level_record(
+            "elevator_rad,q_rad_s,theta_rad,beta_rad,airspeed_m_s,altitude_m",
+            "0,0,0,0,50,1200",
+        ),
+    );
+    write(
+        "ext_huge.json",
+        r#"{"aircraft":"c172x","effects":[{"effect":"sensor_scale","target":"beta_rad","value":1e308,"std_error":0.1}],
+            "model_effects":[],"notes":{}}"#,
+    );
+    for value in ["nan", "-1"] {
+        let flag = format!("--min-amplitude-deg={value}");
+        let o = run(tmp.path(), &["segments", "flat.csv", &flag]);
+        assert_bad_input(&o, &["--min-amplitude-deg", "[0, 30] deg"]);
+    }
+    let t0 = Instant::now();
+    let o = run(
+        tmp.path(),
+        &[
+            "replay",
+            "--data",
+            "flat.csv",
+            "--extension",
+            "ext_huge.json",
+            "--json",
+            "r.json",
+        ],
+    );
+    assert_bad_input(
+        &o,
+        &[
+            "ext_huge.json",
+            "sensor_scale on beta_rad: value 1e308",
+            "outside the effect's range [",
+        ],
+    );
+    assert!(
+        t0.elapsed() < Duration::from_secs(5),
+        "refused before JSBSim starts: {:?}",
+        t0.elapsed()
+    );
+    assert!(!tmp.path().join("r.json").exists());
+}
+
+/// A 3 s, 50 Hz level record: enough to replay, nothing moving.
+fn level_record(columns: &str, row: &str) -> String {
+    let mut text = format!("time_s,{columns}\n");
+    for k in 0..150 {
+        text.push_str(&format!("{},{row}\n", k as f64 * 0.02));
+    }
+    text
+}
+
+#[test]
+fn a_bad_record_or_file_is_named_with_its_role_and_the_reason_in_words() {
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| std::fs::write(tmp.path().join(name), text).unwrap();
+    let full = "elevator_rad,q_rad_s,theta_rad,airspeed_m_s,altitude_m";
+    write("flat.csv", &level_record(full, "0,0,0,50,1200"));
+    write(
+        "tworow.csv",
+        &format!("time_s,{full}\n0,0,0,0,50,1200\n0.02,0,0,0,50,1200\n"),
+    );
+    write("onerow.csv", &format!("time_s,{full}\n0,0,0,0,50,1200\n"));
+    write(
+        "noairspeed.csv",
+        &level_record("elevator_rad,q_rad_s,altitude_m", "0,0,1200"),
+    );
+    write("semicolon.csv", "time_s;elevator_rad\n0;0\n0.02;0\n");
+    write("lin_bad.json", r#"{"A": [[1,2],[3]]}"#);
+    for (args, needles) in [
+        (
+            vec!["diagnose", "--data", "tworow.csv"],
+            vec!["tworow.csv (the training record)", "2 samples"],
+        ),
+        (
+            vec!["diagnose", "--data", "flat.csv", "--validate", "tworow.csv"],
+            vec!["tworow.csv (the validation record)", "2 samples"],
+        ),
+        (
+            vec!["derivatives", "--data", "tworow.csv", "--airframe", "c172x"],
+            vec!["tworow.csv: the record is 2 samples (0.02 s) long; at least 2 s is needed"],
+        ),
+        (
+            vec!["derivatives", "--data", "onerow.csv", "--airframe", "c172x"],
+            vec!["onerow.csv: the record is 1 sample (0 s) long; at least 2 s is needed"],
+        ),
+        (
+            vec!["diagnose", "--linear", "lin_bad.json", "--data", "flat.csv"],
+            vec!["linear-model file lin_bad.json"],
+        ),
+        (
+            vec!["diagnose", "--data", "noairspeed.csv"],
+            vec![
+                "noairspeed.csv (the training record)",
+                "is required because replay trims",
+            ],
+        ),
+        (
+            vec!["segments", "semicolon.csv"],
+            vec![
+                "separate its columns with `;`",
+                "flightid reads comma-separated files",
+            ],
+        ),
+    ] {
+        let o = run(tmp.path(), &args);
+        assert_bad_input(&o, &needles);
+        assert!(!stderr(&o).contains("dropout"), "{}", stderr(&o));
+    }
 }
 
 #[test]

@@ -353,7 +353,7 @@ pub fn run(args: &CampaignCmd) -> anyhow::Result<()> {
         }
         CampaignAction::Report { dir, report, json } => {
             let target = report.clone().unwrap_or_else(|| dir.join("report"));
-            crate::report::check_output_dir(&target)?;
+            super::common::check_outputs(&[super::common::json_path(json)], &[Some(&target)])?;
             let (rep, value) = campaign::campaign_report(dir)?;
             let index = crate::report::write_report_dir(&target, &rep, &value)?;
             if let Some(t) = json {

@@ -73,6 +73,26 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     crate::report::write_atomic(path, bytes).map_err(Into::into)
 }
 
+/// Checks every output a command will write before any work starts (see [`crate::report::check_output_file`]
+/// and [`crate::report::check_output_dir`]), so a bad path is refused at once and no other output is written
+/// before it. `files` are single files (`-`, stdout, is skipped); `dirs` are output directories.
+pub fn check_outputs(files: &[Option<&Path>], dirs: &[Option<&Path>]) -> anyhow::Result<()> {
+    for file in files.iter().flatten() {
+        if file.as_os_str() != "-" {
+            crate::report::check_output_file(file)?;
+        }
+    }
+    for dir in dirs.iter().flatten() {
+        crate::report::check_output_dir(dir)?;
+    }
+    Ok(())
+}
+
+/// A `--json` target as a path for [`check_outputs`] (`-` is skipped there).
+pub fn json_path(target: &Option<String>) -> Option<&Path> {
+    target.as_deref().map(Path::new)
+}
+
 /// Emits a JSON value: to stdout for `-`, else atomically to the file.
 pub fn emit_json<T: serde::Serialize>(target: &str, value: &T) -> anyhow::Result<()> {
     let mut text = serde_json::to_string_pretty(value)?;

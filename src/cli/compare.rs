@@ -68,9 +68,10 @@ fn parse_scale(s: &str) -> Result<(String, f64), String> {
 
 /// Runs `flightid compare`.
 pub fn run(args: &CompareCmd) -> anyhow::Result<()> {
-    if let Some(dir) = &args.report {
-        crate::report::check_output_dir(dir)?;
-    }
+    super::common::check_outputs(
+        &[super::common::json_path(&args.json)],
+        &[args.report.as_deref()],
+    )?;
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;
     let methods: Vec<Method> = args

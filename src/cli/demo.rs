@@ -35,7 +35,10 @@ pub struct DemoCmd {
 
 /// Runs `flightid demo`.
 pub fn run(args: &DemoCmd) -> anyhow::Result<()> {
-    crate::report::check_output_dir(&args.report)?;
+    super::common::check_outputs(
+        &[super::common::json_path(&args.json)],
+        &[Some(&args.report)],
+    )?;
     let quiet = args.json.as_deref() == Some("-");
     let cfg = args.trim.config()?;
     let point = args.trim.point(&cfg)?;

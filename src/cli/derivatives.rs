@@ -103,9 +103,10 @@ pub struct DerivativesCmd {
 
 /// Runs `flightid derivatives`.
 pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
-    if let Some(dir) = &args.report {
-        crate::report::check_output_dir(dir)?;
-    }
+    super::common::check_outputs(
+        &[super::common::json_path(&args.json)],
+        &[args.report.as_deref()],
+    )?;
     if let Some(airframe) = &args.airframe {
         return run_measured(args, airframe);
     }

@@ -1,11 +1,11 @@
 //! `flightid diagnose`: what the simulation gets wrong on measured data, the named cause, the validation gain.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 
-use super::common::{emit_json, write_atomic, ColumnsArg};
+use super::common::{check_outputs, emit_json, json_path, write_atomic, ColumnsArg};
 use super::UsageError;
 use crate::data::FlightRecord;
 use crate::diagnose::model::write_model;
@@ -79,16 +79,23 @@ pub struct DiagnoseCmd {
     pub columns: ColumnsArg,
 }
 
-/// The rate the simulation integrates a replay of `rec` at (a whole multiple of the record's rate).
-fn rate_of(rec: &FlightRecord) -> anyhow::Result<f64> {
-    Ok(ReplayCase::new(rec)?.sim_rate_hz())
+/// The replay of `rec`, read from `path` as the `role` record ("training", "validation"): an error names both.
+fn replay_case(rec: &FlightRecord, path: &Path, role: &str) -> anyhow::Result<ReplayCase> {
+    ReplayCase::new(rec).with_context(|| format!("{} (the {role} record)", path.display()))
 }
 
 /// Runs `flightid diagnose`.
 pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
-    for dir in [&args.report, &args.model_out].into_iter().flatten() {
-        crate::report::check_output_dir(dir)?;
+    if args.model_out.is_some() && args.linear.is_some() {
+        return Err(UsageError(
+            "--model-out needs a JSBSim aircraft; with --linear use --extension-out".into(),
+        )
+        .into());
     }
+    check_outputs(
+        &[json_path(&args.json), args.extension_out.as_deref()],
+        &[args.report.as_deref(), args.model_out.as_deref()],
+    )?;
     let train = args.columns.read(&args.data)?;
     crate::limits::check_rows(&args.data.display().to_string(), train.len())?;
     let valid = args
@@ -96,6 +103,12 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         .as_deref()
         .map(|p| args.columns.read(p))
         .transpose()?;
+    // Each record is prepared for replay once here, where its file is known, so a record that cannot be replayed
+    // is named before the simulations start.
+    let train_case = replay_case(&train, &args.data, "training")?;
+    if let (Some(v), Some(p)) = (&valid, &args.validate) {
+        replay_case(v, p, "validation")?;
+    }
     let source = match &args.linear {
         Some(p) => SimSource::Linear(p),
         None => SimSource::Aircraft(&args.aircraft),
@@ -105,7 +118,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         Some(r) => {
             return Err(UsageError(format!("--replay-rate-hz {r}: must be positive")).into())
         }
-        None => rate_of(&train).with_context(|| args.data.display().to_string())?,
+        None => train_case.sim_rate_hz(),
     };
     let starting = super::common::spinner("diagnose: starting the simulations");
     let workers = start_workers(&source, rate, args.workers);
@@ -131,22 +144,11 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
         Box::new(std::io::stdout())
     };
     summary(&d, workers.len(), &mut out)?;
-    if let Some(target) = &args.json {
-        emit_json(target, &d)?;
-    }
     let mut ext = d.extension_file(&args.aircraft);
     ext.notes
         .insert("data".into(), args.data.display().to_string());
-    if let Some(p) = &args.extension_out {
-        write_atomic(p, serde_json::to_string_pretty(&ext)?.as_bytes())?;
-    }
+    // The directories, which take work to fill, first; the single files, already checked, last.
     if let Some(dir) = &args.model_out {
-        if args.linear.is_some() {
-            return Err(UsageError(
-                "--model-out needs a JSBSim aircraft; with --linear use --extension-out".into(),
-            )
-            .into());
-        }
         let m = write_model(workers[0].sim.as_mut(), &ext, dir)?;
         writeln!(
             out,
@@ -157,6 +159,12 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     if let Some(dir) = &args.report {
         let index = report::write_report(&d, &args.aircraft, &train, valid.as_ref(), dir)?;
         eprintln!("report written to {}", index.display());
+    }
+    if let Some(p) = &args.extension_out {
+        write_atomic(p, serde_json::to_string_pretty(&ext)?.as_bytes())?;
+    }
+    if let Some(target) = &args.json {
+        emit_json(target, &d)?;
     }
     Ok(())
 }

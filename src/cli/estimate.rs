@@ -63,12 +63,13 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
         }
     };
     let hold: InputHold = args.input_hold.parse().map_err(UsageError)?;
-    if let Some(dir) = &args.report {
-        if method.is_none() {
-            return Err(UsageError("--report is available with --method oe and fem".into()).into());
-        }
-        crate::report::check_output_dir(dir)?;
+    if args.report.is_some() && method.is_none() {
+        return Err(UsageError("--report is available with --method oe and fem".into()).into());
     }
+    super::common::check_outputs(
+        &[super::common::json_path(&args.json)],
+        &[args.report.as_deref()],
+    )?;
     let model = match &args.model {
         Some(path) => Some(UserModel::load(path).map_err(|e| UsageError(e.to_string()))?),
         None => None,

@@ -200,6 +200,10 @@ pub fn simulation_rate(log_rate_hz: f64, sim_rate_hz: Option<f64>) -> anyhow::Re
 
 /// Runs `flightid fly`.
 pub fn run(args: &FlyCmd) -> anyhow::Result<()> {
+    super::common::check_outputs(
+        &[Some(&args.out), super::common::json_path(&args.json)],
+        &[],
+    )?;
     let log_rate_hz = args.trim.rate_hz;
     let (sim_rate_hz, step) = simulation_rate(log_rate_hz, args.sim_rate_hz)?;
     let mut sim_args = args.trim.clone();

@@ -89,6 +89,7 @@ fn fmt_c(z: &num_complex::Complex64) -> String {
 
 /// Runs `flightid identify`.
 pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
+    super::common::check_outputs(&[super::common::json_path(&args.json)], &[])?;
     let method: Method = args
         .method
         .parse()

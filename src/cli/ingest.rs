@@ -41,6 +41,7 @@ pub struct IngestArgs {
 
 /// Runs `flightid ingest`.
 pub fn run(args: &IngestArgs) -> anyhow::Result<()> {
+    super::common::check_outputs(&[Some(&args.out)], &[])?;
     let servo_map = match &args.servo_map {
         Some(name) => Some(ServoMap::resolve(name)?),
         None => None,

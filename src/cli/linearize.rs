@@ -21,6 +21,7 @@ pub struct LinearizeCmd {
 
 /// Runs `flightid linearize`.
 pub fn run(args: &LinearizeCmd) -> anyhow::Result<()> {
+    super::common::check_outputs(&[super::common::json_path(&args.json)], &[])?;
     let (mut sim, trim) = args.trim.start_and_trim()?;
     let lin = sim.linearize()?;
     let tfs = paper_transfer_functions(&lin)?;

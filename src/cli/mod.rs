@@ -112,11 +112,11 @@ pub fn main() -> i32 {
 pub fn warn(message: &dyn std::fmt::Display) {
     eprintln!(
         "warning: {}",
-        crate::text::escape_control(&message.to_string())
+        crate::text::escape_control_in_message(&message.to_string())
     );
 }
 
-/// Prints an error chain on one line and returns its exit code ([`exit_code`]).
+/// Prints an error chain (its causes joined by `: `) and returns its exit code ([`exit_code`]).
 pub fn report_error(e: &anyhow::Error) -> i32 {
     let mut message = String::new();
     for cause in e.chain() {
@@ -129,8 +129,12 @@ pub fn report_error(e: &anyhow::Error) -> i32 {
         }
         message.push_str(&text);
     }
-    // messages echo user data (column names, cells, paths): no control character reaches the terminal
-    eprintln!("error: {}", crate::text::escape_control(&message));
+    // messages echo user data (column names, cells, paths): no control character but the message's own line
+    // breaks reaches the terminal
+    eprintln!(
+        "error: {}",
+        crate::text::escape_control_in_message(&message)
+    );
     i32::from(exit_code(e))
 }
 

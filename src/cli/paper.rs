@@ -57,9 +57,10 @@ pub(crate) fn text_table(t: &Table) -> String {
 
 /// Runs `flightid paper`.
 pub fn run(args: &PaperCmd) -> anyhow::Result<()> {
-    if let Some(dir) = &args.report {
-        crate::report::check_output_dir(dir)?;
-    }
+    super::common::check_outputs(
+        &[super::common::json_path(&args.json)],
+        &[args.report.as_deref()],
+    )?;
     let mut opts = PaperOptions::new(args.noise);
     opts.seed = args.seed;
     opts.duration_s = args.duration_s;

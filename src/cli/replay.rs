@@ -43,9 +43,15 @@ pub struct ReplayCmd {
 
 /// Runs `flightid replay`.
 pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
+    super::common::check_outputs(&[super::common::json_path(&args.json)], &[])?;
     let rec = args.columns.read(&args.data)?;
     let case = ReplayCase::new(&rec)?;
     let model = args.model.as_deref().map(ExtendedModel::read).transpose()?;
+    // read (and range-checked) before any simulation starts
+    let extension = match (&model, &args.extension) {
+        (None, Some(p)) => Some(ExtensionFile::read(p).map_err(|e| UsageError(e.to_string()))?),
+        _ => None,
+    };
     let source = match (&model, &args.linear) {
         (Some(m), _) => SimSource::Model(m),
         (None, Some(p)) => SimSource::Linear(p),
@@ -53,11 +59,9 @@ pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
     };
     let mut workers = start_workers(&source, case.sim_rate_hz(), 1)?;
     let names = workers[0].sim.coefficient_names();
-    let exts = match (&model, &args.extension) {
+    let exts = match (&model, &extension) {
         (Some(m), _) => m.effects(&names)?,
-        (None, Some(p)) => ExtensionFile::read(p)
-            .and_then(|f| f.build(&names))
-            .map_err(|e| UsageError(e.to_string()))?,
+        (None, Some(f)) => f.build(&names).map_err(|e| UsageError(e.to_string()))?,
         (None, None) => Vec::new(),
     };
     let refs: Vec<_> = exts

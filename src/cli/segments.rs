@@ -14,7 +14,7 @@ pub struct SegmentsArgs {
     /// Flight-data CSV (docs/data.md).
     pub file: PathBuf,
     /// Smallest input that counts as a maneuver, degrees.
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = 0.25, value_parser = crate::limits::MIN_AMPLITUDE_DEG.parser())]
     pub min_amplitude_deg: f64,
     /// Print the segments as JSON on stdout.
     #[arg(long)]

@@ -18,6 +18,7 @@ pub struct TrimCmd {
 
 /// Runs `flightid trim`.
 pub fn run(args: &TrimCmd) -> anyhow::Result<()> {
+    super::common::check_outputs(&[super::common::json_path(&args.json)], &[])?;
     let (_sim, t) = args.trim.start_and_trim()?;
     if let Some(target) = &args.json {
         return emit_json(target, &t);

@@ -26,7 +26,7 @@ pub enum DataError {
     #[error("{file}: the header (line {line}) is not followed by any data row")]
     NoRows { file: String, line: usize },
     /// The header lacks the required `time_s` column.
-    #[error("{file}:{line}: the header has no `time_s` column (found: {found}); every flight-data CSV needs time in seconds")]
+    #[error("{file}:{line}: the header has no `time_s` column (found: {found}){}; every flight-data CSV needs time in seconds", separator_hint(found))]
     MissingTime {
         file: String,
         line: usize,
@@ -139,6 +139,20 @@ pub enum DataError {
         /// ` (1 … N)` or empty.
         listing: String,
     },
+    /// The record, or every piece of it between dropouts, is shorter than an estimator can use.
+    #[error(
+        "the record is {samples} sample{} ({span_s} s) long{}; at least {min_s} s is needed",
+        if *samples == 1 { "" } else { "s" },
+        if *dropouts == 0 { String::new() } else {
+            format!(" and no piece of it between its {dropouts} dropout{} is that long", if *dropouts == 1 { "" } else { "s" })
+        }
+    )]
+    TooShort {
+        samples: usize,
+        span_s: f64,
+        dropouts: usize,
+        min_s: f64,
+    },
     /// An argument is out of range (e.g. a non-positive resampling rate).
     #[error("invalid argument: {0}")]
     InvalidArgument(String),
@@ -204,6 +218,17 @@ pub struct Warning {
     pub message: String,
 }
 
+/// For a header read as one column holding `;`: advice that the file seems to use `;` as its separator (a header
+/// separated by spaces or tabs is read as such, docs/data.md).
+fn separator_hint(header: &str) -> &'static str {
+    if header.contains(';') && !header.contains(',') {
+        "; the file seems to separate its columns with `;`, and flightid reads comma-separated files (replace the \
+         separators with commas)"
+    } else {
+        ""
+    }
+}
+
 impl DataError {
     /// Turns an I/O error on `path` into [`DataError::Io`], `action` saying what failed:
     /// `.map_err(DataError::io(path, "cannot read the column map"))`.
@@ -247,5 +272,26 @@ impl fmt::Display for Warning {
             Some(c) => write!(f, "column `{c}`: {}", self.message),
             None => write!(f, "{}", self.message),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_header_separated_by_semicolons_is_named_as_such() {
+        let missing = |found: &str| DataError::MissingTime {
+            file: "f.csv".into(),
+            line: 1,
+            found: found.into(),
+        };
+        let e = missing("time_s;elevator_rad").to_string();
+        assert!(
+            e.contains("separate its columns with `;`") && e.contains("comma-separated"),
+            "{e}"
+        );
+        let e = missing("t, elevator_rad").to_string();
+        assert!(!e.contains("separate"), "{e}");
     }
 }

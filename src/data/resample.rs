@@ -107,11 +107,14 @@ pub fn uniform_pieces(rec: &FlightRecord) -> Result<UniformPieces, DataError> {
     rec.validate()?;
     let t = &rec.time_s;
     let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let too_short = |dropouts: usize| DataError::TooShort {
+        samples: t.len(),
+        span_s: t.last().zip(t.first()).map_or(0.0, |(b, a)| b - a),
+        dropouts,
+        min_s: MIN_PIECE_S,
+    };
     if steps.is_empty() {
-        return Ok(UniformPieces {
-            pieces: vec![rec.clone()],
-            notes: Vec::new(),
-        });
+        return Err(too_short(0));
     }
     let mut sorted = steps.clone();
     let median = super::record::median_in_place(&mut sorted);
@@ -152,9 +155,7 @@ pub fn uniform_pieces(rec: &FlightRecord) -> Result<UniformPieces, DataError> {
         }
     }
     if pieces.is_empty() {
-        return Err(DataError::InvalidArgument(format!(
-            "no piece of the record between its dropouts is {MIN_PIECE_S} s long"
-        )));
+        return Err(too_short(bounds.len() - 2));
     }
     Ok(UniformPieces { pieces, notes })
 }

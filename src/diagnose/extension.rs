@@ -590,16 +590,44 @@ pub struct ExtensionFile {
 }
 
 impl ExtensionFile {
-    /// Reads an extension file (JSON).
+    /// Reads an extension file (JSON). A value outside its catalogue entry's range ([`ParamSpec`] `min..max`)
+    /// is refused, naming the effect, the value and the range: the search never fits one, so it was not written
+    /// by flightid or was edited.
     pub fn read(path: &std::path::Path) -> Result<Self, DiagnoseError> {
-        let text = std::fs::read_to_string(path).map_err(|e| DiagnoseError::ExtensionFile {
+        let err = |message: String| DiagnoseError::ExtensionFile {
             path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        serde_json::from_str(&text).map_err(|e| DiagnoseError::ExtensionFile {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })
+            message,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        let file: Self = serde_json::from_str(&text).map_err(|e| err(e.to_string()))?;
+        file.check_ranges().map_err(err)?;
+        Ok(file)
+    }
+
+    /// Every effect of a known kind has its value within its catalogue entry's range (unknown effects are
+    /// refused by [`ExtensionFile::build`], naming the ones known).
+    pub fn check_ranges(&self) -> Result<(), String> {
+        for f in self.effects.iter().chain(&self.model_effects) {
+            let Some(kind) = REGISTRY.iter().find(|k| k.effect == f.effect) else {
+                continue;
+            };
+            let spec = (kind.param)(&f.target);
+            if !(f.value >= spec.min && f.value <= spec.max) {
+                let value = if f.value.abs() >= 1e6 {
+                    format!("{:e}", f.value)
+                } else {
+                    f.value.to_string()
+                };
+                return Err(format!(
+                    "{} on {}: value {value} is outside the effect's range [{}, {}]",
+                    f.effect,
+                    crate::text::escape_control(&f.target),
+                    spec.min,
+                    spec.max
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Builds the extensions with their values.

@@ -57,6 +57,9 @@ pub enum DiagnoseError {
     /// An extension file that cannot be read.
     #[error("extension file {path}: {message}")]
     ExtensionFile { path: String, message: String },
+    /// A linear-model file (`--linear`, `flightid linearize --json` output) that cannot be read.
+    #[error("linear-model file {path}: {message}")]
+    LinearModelFile { path: String, message: String },
     /// The aircraft configuration cannot be loaded.
     #[error(transparent)]
     Aircraft(#[from] crate::aircraft::AircraftError),

@@ -221,7 +221,7 @@ impl ReplayCase {
         for c in ["airspeed_m_s", "altitude_m"] {
             rec.require(
                 c,
-                "replay trims the model at the measured airspeed and altitude",
+                "because replay trims the model at the measured airspeed and altitude",
             )
             .map_err(|e| DiagnoseError::BadData(e.to_string()))?;
         }
@@ -502,7 +502,7 @@ impl LinearReplay {
 
     /// Reads `flightid linearize --json` output.
     pub fn from_json(path: &std::path::Path) -> Result<Self, DiagnoseError> {
-        let err = |m: String| DiagnoseError::ExtensionFile {
+        let err = |m: String| DiagnoseError::LinearModelFile {
             path: path.display().to_string(),
             message: m,
         };

@@ -9,7 +9,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 pub mod outdir;
-pub use outdir::{check_output_dir, replace_output_dir};
+pub use outdir::{check_output_dir, check_output_file, replace_output_dir};
 
 /// Report-writing failures.
 #[derive(Debug, thiserror::Error)]
@@ -310,7 +310,8 @@ pub struct Report {
     pub sections: Vec<Section>,
 }
 
-/// Writes `bytes` to `path` through a temporary file and a rename: readers never see a partial file.
+/// Writes `bytes` to `path` through a temporary file and a rename: readers never see a partial file. Missing
+/// parent directories are made (as `mkdir -p` would).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     let io = |source| ReportError::Io {
         path: path.to_path_buf(),
@@ -326,6 +327,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
         .unwrap_or_default();
     let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
     let result = (|| -> std::io::Result<()> {
+        std::fs::create_dir_all(dir)?;
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;

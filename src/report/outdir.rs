@@ -1,5 +1,5 @@
 //! Output directories (`--report`, `--model-out`): the one rule every command follows before it writes a
-//! directory of files.
+//! directory of files; and [`check_output_file`], the check before it writes a single file (`--json`, `--out`).
 //!
 //! A directory is replaced only when it does not exist, is empty, or is one flightid made itself and that holds
 //! nothing but what flightid wrote there. flightid marks each directory it makes with [`MARKER`], a file listing
@@ -82,6 +82,54 @@ pub fn check_output_dir(dir: &Path) -> Result<(), ReportError> {
                     crate::text::escape_control(name)
                 ),
             ));
+        }
+    }
+    Ok(())
+}
+
+/// Checks that a single output file may be written at `path`; call it before any work, for every output a
+/// command writes, so a bad path costs nothing and leaves no other output behind. Refused: a path naming no file
+/// of its own (`.`, `/`), an existing directory, and a path inside something that exists and is not a directory
+/// (that thing is named). Missing parent directories are fine: they are made when the file is written.
+pub fn check_output_file(path: &Path) -> Result<(), ReportError> {
+    if path.file_name().is_none() {
+        return Err(refused(path, "names no file; give a file name"));
+    }
+    if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
+        return Err(refused(path, "is a directory; give a file name"));
+    }
+    for ancestor in path.ancestors().skip(1) {
+        let ancestor = if ancestor.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            ancestor
+        };
+        match std::fs::metadata(ancestor) {
+            Ok(m) if m.is_dir() => return Ok(()),
+            Ok(_) => {
+                return Err(refused(
+                    path,
+                    format!(
+                        "would go inside {}, which is not a directory",
+                        crate::text::escape_control(&ancestor.display().to_string())
+                    ),
+                ))
+            }
+            // `a/b` where `a` is a file: the culprit is found further up
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory
+                ) =>
+            {
+                continue
+            }
+            Err(source) => {
+                return Err(ReportError::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })
+            }
         }
     }
     Ok(())
@@ -201,6 +249,24 @@ mod tests {
             .collect();
         names.sort();
         assert_eq!(names, ["empty", "hand", "out"]);
+    }
+
+    #[test]
+    fn an_output_file_inside_a_file_or_on_a_directory_is_refused_naming_the_culprit() {
+        let tmp = tempfile::tempdir().unwrap();
+        let afile = tmp.path().join("afile");
+        std::fs::write(&afile, "x").unwrap();
+        let e = check_output_file(&afile.join("deeper/x.json")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains(&format!("{}, which is not a directory", afile.display())),
+            "{e}"
+        );
+        let e = check_output_file(tmp.path()).unwrap_err();
+        assert!(e.to_string().contains("is a directory"), "{e}");
+        assert!(check_output_file(&tmp.path().join("new/dir/x.json")).is_ok());
+        assert!(check_output_file(&afile).is_ok()); // an existing file is replaced
+        assert!(check_output_file(Path::new("x.json")).is_ok());
     }
 
     #[test]
