@@ -388,11 +388,11 @@ fn a_bad_record_or_file_is_named_with_its_role_and_the_reason_in_words() {
         ),
         (
             vec!["derivatives", "--data", "tworow.csv", "--airframe", "c172x"],
-            vec!["tworow.csv: the record is 2 samples (0.02 s) long; at least 2 s is needed"],
+            vec!["tworow.csv: the record is 2 samples, 0.02 s long; at least 2 s is needed"],
         ),
         (
             vec!["derivatives", "--data", "onerow.csv", "--airframe", "c172x"],
-            vec!["onerow.csv: the record is 1 sample (0 s) long; at least 2 s is needed"],
+            vec!["onerow.csv: the record is 1 sample, 0 s long; at least 2 s is needed"],
         ),
         (
             vec!["diagnose", "--linear", "lin_bad.json", "--data", "flat.csv"],

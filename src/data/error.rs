@@ -26,7 +26,11 @@ pub enum DataError {
     #[error("{file}: the header (line {line}) is not followed by any data row")]
     NoRows { file: String, line: usize },
     /// The header lacks the required `time_s` column.
-    #[error("{file}:{line}: the header has no `time_s` column (found: {found}){}; every flight-data CSV needs time in seconds", separator_hint(found))]
+    #[error(
+        "{file}:{line}: the header has no `time_s` column (found: {found}){}; every flight-data CSV needs time in \
+         seconds",
+        separator_hint(found)
+    )]
     MissingTime {
         file: String,
         line: usize,
@@ -140,13 +144,7 @@ pub enum DataError {
         listing: String,
     },
     /// The record, or every piece of it between dropouts, is shorter than an estimator can use.
-    #[error(
-        "the record is {samples} sample{} ({span_s} s) long{}; at least {min_s} s is needed",
-        if *samples == 1 { "" } else { "s" },
-        if *dropouts == 0 { String::new() } else {
-            format!(" and no piece of it between its {dropouts} dropout{} is that long", if *dropouts == 1 { "" } else { "s" })
-        }
-    )]
+    #[error("{}", too_short(*samples, *span_s, *dropouts, *min_s))]
     TooShort {
         samples: usize,
         span_s: f64,
@@ -216,6 +214,21 @@ pub struct Warning {
     pub column: Option<String>,
     /// The evidence in words and numbers.
     pub message: String,
+}
+
+/// The message of [`DataError::TooShort`]: the record's length, and its dropouts only when it has some.
+fn too_short(samples: usize, span_s: f64, dropouts: usize, min_s: f64) -> String {
+    let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
+    let length = format!("{}, {span_s} s", plural(samples, "sample"));
+    if dropouts == 0 {
+        format!("the record is {length} long; at least {min_s} s is needed")
+    } else {
+        format!(
+            "no piece of the record ({length}) between its {} is {min_s} s long; at least {min_s} s without a \
+             dropout is needed",
+            plural(dropouts, "dropout")
+        )
+    }
 }
 
 /// For a header read as one column holding `;`: advice that the file seems to use `;` as its separator (a header
@@ -293,5 +306,27 @@ mod tests {
         );
         let e = missing("t, elevator_rad").to_string();
         assert!(!e.contains("separate"), "{e}");
+    }
+
+    #[test]
+    fn a_short_record_speaks_of_dropouts_only_when_it_has_some() {
+        let short = |samples, span_s, dropouts| {
+            DataError::TooShort {
+                samples,
+                span_s,
+                dropouts,
+                min_s: 2.0,
+            }
+            .to_string()
+        };
+        assert_eq!(
+            short(1, 0.0, 0),
+            "the record is 1 sample, 0 s long; at least 2 s is needed"
+        );
+        assert_eq!(
+            short(300, 6.0, 2),
+            "no piece of the record (300 samples, 6 s) between its 2 dropouts is 2 s long; at least 2 s without a \
+             dropout is needed"
+        );
     }
 }
