@@ -173,8 +173,10 @@ impl Channel {
             // 10 rad/s is a fast roll; 10⁴ leaves room for deg/s.
             Channel::P | Channel::Q | Channel::R => Some((-1e4, 1e4)),
             Channel::PDot | Channel::QDot | Channel::RDot => Some((-1e5, 1e5)),
-            // A pitot never reads negative; 3000 m/s (Mach 9 at sea level) leaves room for ft/s and knots.
-            Channel::Airspeed => Some((0.0, 3e3)),
+            // A pitot never reads far below zero: a logger that takes the root of a noisy differential pressure
+            // with its sign reads a few m/s below zero at rest, a negated column reads tens. 3000 m/s (Mach 9 at
+            // sea level) leaves room for ft/s and knots.
+            Channel::Airspeed => Some((-10.0, 3e3)),
             // The Dead Sea shore (−430 m, −1410 ft) to 100 km.
             Channel::Altitude => Some((-2e3, 1e5)),
             // 1000 g.
