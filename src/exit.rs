@@ -109,7 +109,11 @@ impl ExitCode for crate::estimate::EstimateError {
     fn exit_code(&self) -> u8 {
         match self {
             Self::Record { .. } => BAD_INPUT,
-            Self::Invalid(_) | Self::StartDiverges { .. } | Self::Singular(_) => FAILURE,
+            Self::Invalid(_)
+            | Self::StartDiverges { .. }
+            | Self::Singular(_)
+            | Self::Diverged { .. }
+            | Self::NotConverged { .. } => FAILURE,
         }
     }
 }

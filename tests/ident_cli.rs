@@ -88,6 +88,41 @@ fn identify_recovers_the_short_period_from_a_clean_csv_and_emits_json() {
     }
 }
 
+/// Specification (docs/data.md, dropouts): a record with 3 s of samples missing is refused, naming the file and
+/// the gap, with and without --resample-hz (interpolating over the dropout would invent the motion in it), and
+/// no JSON is written; the same record without the gap is identified.
+#[test]
+fn identify_refuses_a_record_with_a_dropout_even_when_resampling() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole.csv");
+    write_record(&whole, 3001, None, false);
+    let text = std::fs::read_to_string(&whole).unwrap();
+    // drop the samples after t = 15.00 s up to 18.05 s: lines 1502..1806 (data row k is line k + 2)
+    let gapped: String = text
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| !(1502..1807).contains(i))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    let csv = dir.path().join("gap.csv");
+    std::fs::write(&csv, gapped).unwrap();
+    let json = dir.path().join("out.json");
+    for extra in [vec![], vec!["--resample-hz", "100"]] {
+        let mut args = vec!["--json", json.to_str().unwrap()];
+        args.extend(extra);
+        let out = identify(&csv, &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("gap.csv: a dropout of 3.060 s after t = 15 s")
+                && err.contains("invent the motion"),
+            "{args:?}: {err}"
+        );
+        assert!(!json.exists(), "{args:?}: a JSON was written");
+    }
+    assert!(identify(&whole, &[]).status.success());
+}
+
 #[test]
 fn identify_bad_input_is_a_one_line_error_with_exit_code_2() {
     let dir = tempfile::tempdir().unwrap();

@@ -130,6 +130,8 @@ pub fn run(args: &EstimateCmd) -> anyhow::Result<()> {
         ..Options::default()
     };
     let est = estimate::fit(&model, &parameters, &records, &model.nuisance, &options)?;
+    // As `check`: a fit that diverged or did not converge is an error, and nothing is printed or written.
+    est.outcome()?;
     print!("{}", est.table());
     if let Some(target) = &args.json {
         super::common::emit_json(target, &est.to_json())?;

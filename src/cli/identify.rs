@@ -98,7 +98,7 @@ pub fn run(args: &IdentifyCmd) -> anyhow::Result<()> {
         return run_joint(args, method);
     }
     let data_path = &args.data[0];
-    let rec = read_record(data_path, args)?;
+    let rec = read_record(data_path, args, true)?;
     let (in_col, out_col) = io_columns(&rec, args, &data_path.display().to_string())?;
     let u = rec.column(&in_col).unwrap_or_default();
     let y = rec.column(&out_col).unwrap_or_default();
@@ -348,9 +348,43 @@ fn print_result(
     );
 }
 
-/// Reads a flight-data CSV through the column map, resampled at `--resample-hz` when given.
-fn read_record(path: &std::path::Path, args: &IdentifyCmd) -> anyhow::Result<FlightRecord> {
-    resample(args.columns.read(path)?, args.resample_hz, path)
+/// Reads a flight-data CSV through the column map, resampled at `--resample-hz` when given. A record fitted
+/// whole (`whole`: not cut to a `--segment`) with a dropout is refused: see [`refuse_dropouts`].
+fn read_record(
+    path: &std::path::Path,
+    args: &IdentifyCmd,
+    whole: bool,
+) -> anyhow::Result<FlightRecord> {
+    let rec = args.columns.read(path)?;
+    if whole {
+        refuse_dropouts(&rec, path)?;
+    }
+    resample(rec, args.resample_hz, path)
+}
+
+/// Bad input when the record has a dropout (a step over 2.5 median steps, `data::dropout_starts`, the rule
+/// that splits records for `estimate`): identify fits one uniformly sampled record, and interpolating over the
+/// missing samples, with `--resample-hz` or without, would invent the motion in them (docs/data.md).
+fn refuse_dropouts(rec: &FlightRecord, path: &std::path::Path) -> anyhow::Result<()> {
+    let starts = data::dropout_starts(&rec.time_s);
+    let Some(&k) = starts.first() else {
+        return Ok(());
+    };
+    let t = &rec.time_s;
+    let more = match starts.len() {
+        1 => String::new(),
+        n => format!(" (and {} more)", n - 1),
+    };
+    Err(UsageError(format!(
+        "{}: a dropout of {:.3} s after t = {} s{more}: identify fits one uniformly sampled record, and \
+         interpolating over the missing samples (with --resample-hz or without) would invent the motion in \
+         them; fit a maneuver on one side of it (`--segment N`, see `flightid segments`), or use `flightid \
+         estimate`, which fits the pieces between dropouts",
+        path.display(),
+        t[k] - t[k - 1],
+        t[k - 1]
+    ))
+    .into())
 }
 
 /// The records a joint identification runs on: every `--data` file whole, or the `--segment`s.
@@ -358,7 +392,7 @@ fn joint_records(args: &IdentifyCmd) -> anyhow::Result<Vec<(String, FlightRecord
     let recs: Vec<FlightRecord> = args
         .data
         .iter()
-        .map(|p| read_record(p, args))
+        .map(|p| read_record(p, args, args.segment.is_empty()))
         .collect::<anyhow::Result<_>>()?;
     if args.segment.is_empty() {
         if args.window_s.is_some() {

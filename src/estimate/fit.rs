@@ -198,6 +198,25 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// Whether the fit is an estimate: [`EstimateError::Diverged`] for a cost that is not finite,
+    /// [`EstimateError::NotConverged`] for iterations that stopped before converging, else `Ok`.
+    pub fn outcome(&self) -> Result<(), EstimateError> {
+        if !self.cost.is_finite() {
+            return Err(EstimateError::Diverged {
+                cost: self.cost,
+                iterations: self.iterations,
+            });
+        }
+        if !self.converged {
+            return Err(EstimateError::NotConverged {
+                stop: self.stop,
+                iterations: self.iterations,
+                cost: self.cost,
+            });
+        }
+        Ok(())
+    }
+
     /// Fit percent of output `o` over all records together.
     pub fn fit_percent(&self, o: usize) -> f64 {
         let z: Vec<f64> = self

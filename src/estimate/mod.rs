@@ -70,6 +70,27 @@ pub enum EstimateError {
     /// The information matrix is singular: some parameters are not identifiable from these records.
     #[error("the information matrix is singular: {0}")]
     Singular(String),
+    /// The fit ended with a cost that is not a number: nothing it estimated is an estimate.
+    #[error("the fit diverged: its cost is {cost} after {iterations} iterations; the records hold values the \
+             model cannot follow, or the start values are far off")]
+    Diverged {
+        /// The final cost.
+        cost: f64,
+        /// Iterations taken.
+        iterations: usize,
+    },
+    /// The iterations stopped before the fit converged: its values are not estimates.
+    #[error("the fit did not converge ({stop:?} after {iterations} iterations, cost {cost:.6e}): its values are \
+             not estimates. Check that the records excite every parameter (a surface that moves), or start \
+             nearer (parameters \"auto\" in the model file)")]
+    NotConverged {
+        /// Why the iterations stopped.
+        stop: StopReason,
+        /// Iterations taken.
+        iterations: usize,
+        /// The final cost.
+        cost: f64,
+    },
 }
 
 #[cfg(test)]

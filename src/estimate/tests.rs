@@ -422,3 +422,42 @@ fn a_considered_held_parameter_widens_the_others_by_their_refit_shift() {
         assert!(c.std_error > b.std_error, "{}", b.name);
     }
 }
+
+/// A fit stopped by the iteration limit, or one whose cost is not finite, is not an estimate: `outcome` says
+/// so, and the binary ends with exit 1 (a failure of the work, as `check`'s unconverged reconstruction).
+#[test]
+fn an_unconverged_or_diverged_fit_is_an_error() {
+    use crate::exit::ExitCode;
+    let rec = record("a", 0.02, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], 1);
+    let fit_with = |max_iterations| {
+        let options = Options {
+            max_iterations,
+            ..Options::default()
+        };
+        fit(
+            &short_period(),
+            &start(),
+            std::slice::from_ref(&rec),
+            &Nuisance::default(),
+            &options,
+        )
+        .unwrap()
+    };
+    let mut est = fit_with(50);
+    assert!(est.outcome().is_ok(), "{:?}", est.stop);
+    let stopped = fit_with(1).outcome().unwrap_err();
+    assert!(
+        matches!(stopped, EstimateError::NotConverged { iterations: 1, .. }),
+        "{stopped}"
+    );
+    assert_eq!(stopped.exit_code(), crate::exit::FAILURE);
+    est.cost = f64::NAN;
+    let diverged = est.outcome().unwrap_err();
+    assert!(
+        diverged
+            .to_string()
+            .starts_with("the fit diverged: its cost is NaN"),
+        "{diverged}"
+    );
+    assert_eq!(diverged.exit_code(), crate::exit::FAILURE);
+}
