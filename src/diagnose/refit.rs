@@ -101,9 +101,10 @@ pub fn refit_in_turbulence(
         } = sel;
         // The refit tests the entries output error could not identify as well (see `determined_on`).
         let entries = entries.joined(undetermined);
-        let undetermined: Vec<String> = match retry {
-            true => undetermined.catalogue.iter().map(|e| e.key()).collect(),
-            false => Vec::new(),
+        let undetermined: Vec<String> = if retry {
+            undetermined.catalogue.iter().map(|e| e.key()).collect()
+        } else {
+            Vec::new()
         };
         // Without the share of the cost a named effect must explain: that gate guards output error against its
         // coloured residual, and the innovations are white but for what the lag window still finds; their cost is
