@@ -6,14 +6,17 @@
 //! the gusts' response (Jategaonkar, *Flight Vehicle System Identification*, 2nd ed., §5.1). Once the causes
 //! are named, the extended model's residual holds the gusts and the noise only, so the process noise is
 //! estimated from it ([`super::process_noise::estimate`]) and, when the likelihood finds it, the named
-//! effects are refitted jointly on the filter's innovations.
+//! effects are refitted jointly on the filter's innovations: each tested again against the model without it
+//! (backward elimination) and against its alternatives (sequential replacement), then output error's near
+//! misses and what it could not identify are tried there.
 
 use super::process_noise::{self, ProcessNoise};
 use super::progress::Progress;
 use super::search::{self, Active, Worker};
 use super::select::{
-    determined_on, drop_below_resolution, eliminate_backward, substitute_dropped, Replacement,
-    Selection, BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE,
+    determined_on, drop_below_resolution, eliminate_backward, replace_ambiguous,
+    substitute_dropped, Replacement, Selection, BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT,
+    SMALL_SHARE,
 };
 use super::{prepare::Prepared, sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 
@@ -133,6 +136,9 @@ pub fn refit_in_turbulence(
             // What the refit dropped may have hidden the right effect from output error: its alternatives are
             // fitted again on the innovations.
             let dropped = alternatives_of_dropped(&reference_named, alternatives, &state);
+            // Sequential replacement again, where the gusts no longer colour the residual: each named effect
+            // against its ambiguity group and the runner-ups of its round, the lower cost kept.
+            replace_ambiguous(&mut refiner, None, alternatives, state.reborrow(), held)?;
             let substituted = substitute_dropped(
                 &mut refiner,
                 state.reborrow(),

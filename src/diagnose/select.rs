@@ -35,8 +35,10 @@ use gates::{beaten_within_resolution, rejection, unconfirmed_in_time};
 pub(super) use gates::{BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
 pub use identifiability::profiled_information;
 use identifiability::{identifiable, Identifiable};
-pub(super) use refine::{determined_on, eliminate_backward, substitute_dropped, Replacement};
-use refine::{replace_ambiguous, Refiner};
+use refine::Refiner;
+pub(super) use refine::{
+    determined_on, eliminate_backward, replace_ambiguous, substitute_dropped, Replacement,
+};
 
 use super::baseline::Baseline;
 use super::extension::Extension;
@@ -366,18 +368,28 @@ fn settle(
     progress: &Progress,
     state: Replacement<'_, '_>,
     coarse_sensitivities: &[Vec<f64>],
+    held: impl Fn(&Active) -> bool,
 ) -> Result<(), DiagnoseError> {
-    if !state.selected.is_empty() {
+    if state.selected.iter().any(|s| !held(s)) {
         progress.stage("refit at the replay's rate", 1);
-        let mut active = with_freedom(state.selected, true);
+        let mut active: Vec<Active> = state
+            .selected
+            .iter()
+            .map(|s| Active {
+                free: !held(s),
+                ..s.clone()
+            })
+            .collect();
         let o = search::polish(worker, w, &mut active, coarse_sensitivities)
             .map_err(sim_err("replay"))?;
         progress.fitted();
         let mut k = 0;
         for (a, n) in active.iter().zip(state.named.iter_mut()) {
             n.value = a.params[0];
-            n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
-            k += a.params.len();
+            if a.free {
+                n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
+                k += a.params.len();
+            }
         }
         adopt(state.selected, active);
         *state.cost = o.cost_after;
@@ -616,6 +628,7 @@ pub fn select<'e>(
             progress,
             state,
             &best_fit.sensitivities,
+            |_| false,
         )
         .and_then(|()| match (&vw, valid_cost) {
             // The validation record only reports the gain of the accepted effects.
@@ -675,7 +688,13 @@ pub fn select<'e>(
         .filter(|&m| runner_ups[m + 1..].iter().any(|(k, _)| in_model(k)))
         .map(|m| runner_ups[m].clone())
         .collect();
-    replace_ambiguous(&mut refiner, &sens, &later_in_model, state.reborrow())?;
+    replace_ambiguous(
+        &mut refiner,
+        Some(&sens),
+        &later_in_model,
+        state.reborrow(),
+        |_| false,
+    )?;
     if opts.backward_elimination {
         state.round += 1;
         eliminate_backward(&mut refiner, state, "backward elimination", false, |_| {

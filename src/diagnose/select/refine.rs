@@ -5,7 +5,7 @@
 
 use super::{
     adopt, fit_starts, rejection, score_test, settle, unconfirmed_in_time, with_candidate,
-    with_freedom, RoundContext,
+    RoundContext,
 };
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
@@ -201,12 +201,16 @@ pub(in crate::diagnose) struct Replacement<'a, 'e> {
 /// only once those are modelled. A runner-up can lose its round by much for the same reason: with `Cn_beta`
 /// ×1.57 still unmodelled, `Cl_p` ×1.84 fitted a record with `Cl_da` ×0.46 better than `Cl_da` did. Both models
 /// have the same number of parameters, so the lower cost is the better criterion value; the alternative must
-/// also pass every significance test against the model without the effect it replaces.
-pub(super) fn replace_ambiguous<'e>(
+/// also pass every significance test against the model without the effect it replaces. Each alternative starts
+/// from its score-test step, on `sens` (the unextended model's sensitivities, by catalogue index) or, without
+/// them, on its sensitivity at the model without the effect (one replay each). The effects `held` says are
+/// neither replaced nor freed (the filter error refit holds the sensor biases).
+pub(in crate::diagnose) fn replace_ambiguous<'e>(
     refiner: &mut Refiner<'_, 'e>,
-    sens: &[Vec<f64>],
+    sens: Option<&[Vec<f64>]>,
     runner_ups: &[(String, Vec<String>)],
     state: Replacement<'_, 'e>,
+    held: impl Fn(&Active) -> bool,
 ) -> Result<(), DiagnoseError> {
     let workers = &mut *refiner.workers;
     let (w, catalogue, resolution) = (refiner.w, refiner.catalogue, refiner.resolution);
@@ -214,6 +218,9 @@ pub(super) fn replace_ambiguous<'e>(
     // The sensitivities of the last adopted fit, whose free parameters are those of the final selection.
     let mut adopted_sensitivities = Vec::new();
     for i in 0..state.named.len() {
+        if held(&state.selected[i]) {
+            continue;
+        }
         let key = format!("{}/{}", state.named[i].effect, state.named[i].target);
         let seconds = runner_ups
             .iter()
@@ -240,17 +247,25 @@ pub(super) fn replace_ambiguous<'e>(
             .map_err(sim_err("replay"))?;
         let cost_without = crate::signal::sum_sq(&r);
         let n_eff = effective_n(&r, w.case.len());
-        // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate.
-        let starts: Vec<Vec<Active<'e>>> = alternatives
-            .iter()
-            .map(|&j| {
-                let start = score_test(catalogue[j], &sens[j], &r, cost_without, n_eff).values[0];
-                let mut a = with_freedom(state.selected, true);
-                let one = with_candidate(&[], catalogue[j], start, true);
-                a[i] = one[0].clone();
-                a
-            })
-            .collect();
+        // Each alternative in effect i's place (position kept), every effect free but those `held`, from its
+        // score-test estimate: on the given sensitivities of the unextended model, else on those of the model
+        // without effect i.
+        let mut starts: Vec<Vec<Active<'e>>> = Vec::new();
+        for &j in &alternatives {
+            let s = match sens {
+                Some(sens) => sens[j].clone(),
+                None => {
+                    let base = without(state.selected, i);
+                    search::null_sensitivity(&mut workers[0], w, &base, catalogue[j], &r)
+                        .map_err(sim_err("replay"))?
+                }
+            };
+            let start = score_test(catalogue[j], &s, &r, cost_without, n_eff).values[0];
+            let mut a: Vec<Active<'e>> = free_unless_held(state.selected, &held).collect();
+            let one = with_candidate(&[], catalogue[j], start, true);
+            a[i] = one[0].clone();
+            starts.push(a);
+        }
         let fits = search::coarse(workers, w, state.selected, |ws, cw| {
             fit_starts(ws, cw, &starts, progress)
         })
@@ -305,16 +320,20 @@ pub(super) fn replace_ambiguous<'e>(
             Vec::new()
         };
         group.dedup();
+        let mut free = 0;
         for (k, (n, s)) in state
             .named
             .iter_mut()
-            .zip(state.selected.iter())
+            .zip(free_unless_held(state.selected, &held))
             .enumerate()
         {
             n.effect = s.ext.effect().into();
             n.target = s.ext.target().into();
             n.value = s.params[0];
-            n.std_error = o.std_errors.get(k).copied().unwrap_or(f64::NAN);
+            if s.free {
+                n.std_error = o.std_errors.get(free).copied().unwrap_or(f64::NAN);
+                free += s.params.len();
+            }
             if k == i {
                 n.ambiguous_with = group.clone();
             }
@@ -324,7 +343,14 @@ pub(super) fn replace_ambiguous<'e>(
         return Ok(());
     }
     // The replacement frees every named effect: one may now sit within its resolution of no effect.
-    settle(&mut workers[0], w, progress, state, &adopted_sensitivities)
+    settle(
+        &mut workers[0],
+        w,
+        progress,
+        state,
+        &adopted_sensitivities,
+        held,
+    )
 }
 
 impl<'e> Replacement<'_, 'e> {
