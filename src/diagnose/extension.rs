@@ -210,26 +210,29 @@ fn bias_resolution(column: &str) -> f64 {
     }
 }
 
-/// docs/diagnose.md derivative names and the coefficient function names of JSBSim's c172x that carry them.
-pub const DERIVATIVE_KNOBS: [(&str, &str); 18] = [
-    ("CL_alpha", "CLwbh"),
-    ("CD_0", "CDo"),
-    ("Cm_0", "Cmo"),
-    ("Cm_alpha", "Cmalpha"),
-    ("Cm_q", "Cmq"),
-    ("Cm_alphadot", "Cmadot"),
-    ("Cm_de", "Cmde"),
-    ("CY_beta", "CYb"),
-    ("Cl_beta", "Clb"),
-    ("Cl_p", "Clp"),
-    ("Cl_r", "Clr"),
-    ("Cl_da", "Clda"),
-    ("Cl_dr", "Cldr"),
-    ("Cn_beta", "Cnb"),
-    ("Cn_p", "Cnp"),
-    ("Cn_r", "Cnr"),
-    ("Cn_da", "Cnda"),
-    ("Cn_dr", "Cndr"),
+/// docs/diagnose.md derivative names, each with the names JSBSim's aircraft give the coefficient function that
+/// carries it (`aero/coefficient/<name>`): the c172x's first, then those of the 737, c310, pa28, A320, f15 and
+/// f16 where they differ. The first name the simulation has is the one scaled ([`knob_of`]); an aircraft with
+/// none of them leaves the derivative out of the catalogue, with the names looked for.
+pub const DERIVATIVE_KNOBS: [(&str, &[&str]); 18] = [
+    ("CL_alpha", &["CLwbh", "CLalpha"]),
+    ("CD_0", &["CDo", "CD0"]),
+    ("Cm_0", &["Cmo", "Cm0"]),
+    ("Cm_alpha", &["Cmalpha"]),
+    ("Cm_q", &["Cmq"]),
+    ("Cm_alphadot", &["Cmadot", "Cmalphadot"]),
+    ("Cm_de", &["Cmde", "CmDe"]),
+    ("CY_beta", &["CYb", "CYbeta"]),
+    ("Cl_beta", &["Clb", "Clbeta"]),
+    ("Cl_p", &["Clp"]),
+    ("Cl_r", &["Clr"]),
+    ("Cl_da", &["Clda", "ClDa"]),
+    ("Cl_dr", &["Cldr", "ClDr"]),
+    ("Cn_beta", &["Cnb", "Cnbeta"]),
+    ("Cn_p", &["Cnp"]),
+    ("Cn_r", &["Cnr"]),
+    ("Cn_da", &["Cnda", "CnDa"]),
+    ("Cn_dr", &["Cndr", "CnDr"]),
 ];
 
 /// Output columns that may carry a sensor bias or scale. Airspeed and altitude are not among them: they set
@@ -451,13 +454,19 @@ impl Extension for Entry {
     }
 }
 
-/// The simulation's coefficient name of a derivative (the name itself when it is not in the table).
-fn knob_of(target: &str) -> String {
-    DERIVATIVE_KNOBS
+/// The coefficient function that carries derivative `target` in a simulation with `coefficient_names`: the first
+/// of its [`DERIVATIVE_KNOBS`] names the simulation has (a name not in the table stands for itself); `Err` with
+/// the names looked for when it has none.
+fn knob_of(target: &str, coefficient_names: &[String]) -> Result<String, String> {
+    let names: Vec<&str> = DERIVATIVE_KNOBS
         .iter()
         .find(|(n, _)| *n == target)
-        .map(|(_, k)| k.to_string())
-        .unwrap_or_else(|| target.to_string())
+        .map_or_else(|| vec![target], |(_, k)| k.to_vec());
+    names
+        .iter()
+        .find(|n| coefficient_names.iter().any(|c| c == *n))
+        .map(|n| n.to_string())
+        .ok_or_else(|| names.join(", "))
 }
 
 /// Builds one extension from its effect and target names (the `--extension` file and the catalogue use it).
@@ -479,12 +488,13 @@ pub fn make(
                 "{effect} needs a surface target (elevator, aileron, rudder, throttle), got '{target}'"
             )))
         }
-        Targets::Derivatives if !coefficient_names.contains(&knob_of(target)) => {
-            Err(DiagnoseError::UnknownExtension(format!(
-                "the simulation has no aerodynamic coefficient for '{target}'"
-            )))
-        }
-        _ => Ok(Box::new(Entry::new(kind, target, &knob_of(target)))),
+        Targets::Derivatives => match knob_of(target, coefficient_names) {
+            Ok(knob) => Ok(Box::new(Entry::new(kind, target, &knob))),
+            Err(looked_for) => Err(DiagnoseError::UnknownExtension(format!(
+                "the simulation has no aerodynamic coefficient for '{target}' (looked for {looked_for})"
+            ))),
+        },
+        _ => Ok(Box::new(Entry::new(kind, target, target))),
     }
 }
 
@@ -513,18 +523,17 @@ pub fn catalogue(
                 .collect(),
             Targets::Derivatives => DERIVATIVE_KNOBS
                 .iter()
-                .filter(|(name, knob)| {
-                    let has = coefficient_names.iter().any(|k| k == knob);
-                    if !has {
+                .filter_map(|(name, _)| match knob_of(name, coefficient_names) {
+                    Ok(knob) => Some((name.to_string(), knob)),
+                    Err(looked_for) => {
                         skipped.push((
                             kind.effect.to_string(),
                             name.to_string(),
-                            format!("the simulation has no coefficient knob '{knob}'"),
+                            format!("the simulation has no coefficient function {looked_for}"),
                         ));
+                        None
                     }
-                    has
                 })
-                .map(|(n, k)| (n.to_string(), k.to_string()))
                 .collect(),
             Targets::AddedTerms => added_terms
                 .iter()
@@ -653,7 +662,7 @@ mod tests {
     fn every_registry_row_builds_an_extension_with_its_metadata() {
         let coefficients: Vec<String> = DERIVATIVE_KNOBS
             .iter()
-            .map(|(_, k)| k.to_string())
+            .map(|(_, k)| k[0].to_string())
             .collect();
         for kind in &REGISTRY {
             let target = match kind.targets {
@@ -739,5 +748,39 @@ mod tests {
         );
         let d = make("sensor_bias", "q_rad_s", &[]).unwrap();
         assert_eq!(d.refines(), None);
+    }
+
+    /// A derivative is found under the name the aircraft gives its coefficient function: the 737's lift is
+    /// `CLalpha` and its zero-lift drag `CD0`, the c310's `CmDe` and `Clbeta`; an aircraft with none of the names
+    /// gets the derivative skipped with the names looked for, and the c172x keeps its own.
+    #[test]
+    fn a_derivative_is_found_under_each_aircraft_s_coefficient_name() {
+        let names = |v: &[&str]| v.iter().map(|n| n.to_string()).collect::<Vec<_>>();
+        let b737 = names(&["CD0", "CLalpha", "Cmalpha", "Cmde", "Clb", "Cnb"]);
+        let c310 = names(&["CDo", "CLalpha", "CmDe", "Clbeta", "Cnbeta", "CnDr"]);
+        let c172x = names(&["CLwbh", "CLalpha", "CDo"]);
+        assert_eq!(knob_of("CL_alpha", &b737), Ok("CLalpha".into()));
+        assert_eq!(knob_of("CD_0", &b737), Ok("CD0".into()));
+        assert_eq!(knob_of("Cm_de", &c310), Ok("CmDe".into()));
+        assert_eq!(knob_of("Cl_beta", &c310), Ok("Clbeta".into()));
+        assert_eq!(knob_of("Cn_dr", &c310), Ok("CnDr".into()));
+        assert_eq!(knob_of("CL_alpha", &c172x), Ok("CLwbh".into()));
+        assert_eq!(knob_of("Cm_0", &b737), Err("Cmo, Cm0".into()));
+        let rec = FlightRecord {
+            time_s: vec![0.0, 0.1],
+            columns: Vec::new(),
+            metadata: Vec::new(),
+        };
+        let (usable, skipped) = catalogue(&rec, &b737, &[]);
+        assert!(usable
+            .iter()
+            .any(|e| e.effect() == "aero_derivative" && e.target() == "CL_alpha"));
+        assert!(skipped
+            .iter()
+            .any(|(e, t, why)| e == "aero_derivative" && t == "Cm_0" && why.contains("Cmo, Cm0")));
+        let e = make("aero_derivative", "Cm_q", &b737)
+            .err()
+            .expect("no Cmq in the list");
+        assert!(e.to_string().contains("looked for Cmq"), "{e}");
     }
 }
