@@ -5,7 +5,7 @@
 
 use super::{
     adopt, fit_starts, rejection, score_test, settle, unconfirmed_in_time, with_candidate,
-    RoundContext,
+    with_freedom, RoundContext,
 };
 use crate::diagnose::extension::Extension;
 use crate::diagnose::progress::Progress;
@@ -203,8 +203,9 @@ pub(in crate::diagnose) struct Replacement<'a, 'e> {
 /// have the same number of parameters, so the lower cost is the better criterion value; the alternative must
 /// also pass every significance test against the model without the effect it replaces. Each alternative starts
 /// from its score-test step, on `sens` (the unextended model's sensitivities, by catalogue index) or, without
-/// them, on its sensitivity at the model without the effect (one replay each). The effects `held` says are
-/// neither replaced nor freed (the filter error refit holds the sensor biases).
+/// them, on its sensitivity at the model without the effect (one replay each). The effects `held` says (the
+/// filter error refit holds the sensor biases) are not replaced; they are free in the fits that judge an
+/// alternative, as in a refit of the effect it would replace, and keep their values when it does.
 pub(in crate::diagnose) fn replace_ambiguous<'e>(
     refiner: &mut Refiner<'_, 'e>,
     sens: Option<&[Vec<f64>]>,
@@ -247,9 +248,8 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
             .map_err(sim_err("replay"))?;
         let cost_without = crate::signal::sum_sq(&r);
         let n_eff = effective_n(&r, w.case.len());
-        // Each alternative in effect i's place (position kept), every effect free but those `held`, from its
-        // score-test estimate: on the given sensitivities of the unextended model, else on those of the model
-        // without effect i.
+        // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate:
+        // on the given sensitivities of the unextended model, else on those of the model without effect i.
         let mut starts: Vec<Vec<Active<'e>>> = Vec::new();
         for &j in &alternatives {
             let s = match sens {
@@ -261,15 +261,26 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
                 }
             };
             let start = score_test(catalogue[j], &s, &r, cost_without, n_eff).values[0];
-            let mut a: Vec<Active<'e>> = free_unless_held(state.selected, &held).collect();
+            let mut a = with_freedom(state.selected, true);
             let one = with_candidate(&[], catalogue[j], start, true);
             a[i] = one[0].clone();
             starts.push(a);
         }
-        let fits = search::coarse(workers, w, state.selected, |ws, cw| {
+        // The effects `held` keep their values in the model, but a held value was sized with effect i beside it
+        // (a sensor bias beside `Cm_de` in gusts held an elevator effectiveness to a cost 8 % above `Cm_de`'s,
+        // most of it on α): the alternatives are judged with them free, against effect i refitted the same way.
+        let refit_incumbent = state.selected.iter().any(&held);
+        if refit_incumbent {
+            starts.push(with_freedom(state.selected, true));
+        }
+        let mut fits = search::coarse(workers, w, state.selected, |ws, cw| {
             fit_starts(ws, cw, &starts, progress)
         })
         .map_err(sim_err("replay"))?;
+        let incumbent_cost = match refit_incumbent.then(|| fits.pop()).flatten() {
+            Some(Ok((o, _))) => o.cost_after,
+            _ => *state.cost,
+        };
         let ctx = RoundContext {
             round: state.round,
             base_cost: cost_without,
@@ -284,7 +295,7 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
             c.rejected_because =
                 rejection(&c, catalogue[j], &o_last, cost_without, opts, &masks[j]);
             if c.rejected_because.is_none()
-                && o.cost_after < *state.cost
+                && o.cost_after < incumbent_cost
                 && best
                     .as_ref()
                     .is_none_or(|(_, b, _)| o.cost_after < b.cost_after)
@@ -293,7 +304,7 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
             } else if c.rejected_because.is_none() {
                 c.rejected_because = Some(format!(
                     "in place of {}/{}: cost {:.1} not below {:.1}",
-                    state.named[i].effect, state.named[i].target, o.cost_after, *state.cost
+                    state.named[i].effect, state.named[i].target, o.cost_after, incumbent_cost
                 ));
             }
             state.candidates.push(c);
@@ -301,7 +312,14 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
         let Some((j, o, a)) = best else { continue };
         let replaced = format!("{}/{}", state.named[i].effect, state.named[i].target);
         let kept = catalogue[j].key();
+        // The held effects go back to their values (the settling fit below refits the others).
+        let before = state.selected.clone();
         adopt(state.selected, a);
+        for (s, b) in state.selected.iter_mut().zip(&before) {
+            if held(b) {
+                s.params = b.params.clone();
+            }
+        }
         *state.cost = o.cost_after;
         adopted_sensitivities = o.sensitivities.clone();
         // A member of the ambiguity group takes the group over, with the effect it replaced; a runner-up that
@@ -320,20 +338,20 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
             Vec::new()
         };
         group.dedup();
-        let mut free = 0;
+        let mut first = 0;
         for (k, (n, s)) in state
             .named
             .iter_mut()
-            .zip(free_unless_held(state.selected, &held))
+            .zip(state.selected.iter())
             .enumerate()
         {
             n.effect = s.ext.effect().into();
             n.target = s.ext.target().into();
             n.value = s.params[0];
-            if s.free {
-                n.std_error = o.std_errors.get(free).copied().unwrap_or(f64::NAN);
-                free += s.params.len();
+            if !held(s) {
+                n.std_error = o.std_errors.get(first).copied().unwrap_or(f64::NAN);
             }
+            first += s.params.len();
             if k == i {
                 n.ambiguous_with = group.clone();
             }
