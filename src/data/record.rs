@@ -236,7 +236,8 @@ fn max_abs(values: &[f64]) -> Option<(usize, f64)> {
 ///   specific force (about −g in level flight);
 /// - a median airspeed above 300 m/s, or airspeed changing 1.94 (knots) or 3.28 (ft/s) times as
 ///   fast as the specific force along the flight path says (dV/dt = ax cos α + az sin α − g sin γ,
-///   fitted over 1 s windows when they correlate);
+///   fitted over 1 s windows when they correlate, on 8 windows or more, and only when the slope ± 2
+///   standard errors lies wholly nearer one of those factors than 1: [`kinematics::speed_kinematics_warning`]);
 /// - a median specific-force magnitude of 0.5..2 means g (in m/s² it is ≈ 9.81 in 1-g flight);
 /// - `throttle` outside −0.05..1.05 is not a 0..1 fraction (percent?);
 /// - `time_s` steps of a whole number of 2 or more: milliseconds ([`time_unit_suspicion`]).
