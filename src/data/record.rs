@@ -240,7 +240,9 @@ fn max_abs(values: &[f64]) -> Option<(usize, f64)> {
 ///   standard errors lies wholly nearer one of those factors than 1: [`kinematics::speed_kinematics_warning`]);
 /// - a median specific-force magnitude of 0.5..2 means g (in m/s² it is ≈ 9.81 in 1-g flight);
 /// - `throttle` outside −0.05..1.05 is not a 0..1 fraction (percent?);
-/// - `time_s` steps of a whole number of 2 or more: milliseconds ([`time_unit_suspicion`]).
+/// - `time_s` steps of a whole number of 2 or more: milliseconds ([`time_unit_suspicion`]);
+/// - a flight-state sensor that never moves: a stuck or unplugged sensor ([`stuck_sensor_warnings`]); the
+///   column checks above pass over its column (the kinematic ones find nothing in a constant).
 pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
     let mut out: Vec<Warning> = Vec::new();
     if let Some(message) = time_unit_suspicion(&rec.time_s) {
@@ -250,8 +252,14 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             message,
         });
     }
+    let stuck = stuck_sensor_warnings(rec);
+    let flagged = |out: &[Warning], c: &str| out.iter().any(|w| w.column.as_deref() == Some(c));
     let at = |i: usize| rec.time_s.get(i).copied().unwrap_or(f64::NAN);
     for (name, values) in &rec.columns {
+        // A stuck sensor's constant says nothing of its unit.
+        if flagged(&stuck, name) {
+            continue;
+        }
         let Some((i, m)) = max_abs(values) else {
             continue;
         };
@@ -340,7 +348,6 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             }
         }
     }
-    let flagged = |out: &[Warning], c: &str| out.iter().any(|w| w.column.as_deref() == Some(c));
     for w in [
         angle_rate_warning(rec, Channel::Theta, Channel::Q),
         angle_rate_warning(rec, Channel::Phi, Channel::P),
@@ -360,7 +367,79 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             out.push(w);
         }
     }
+    out.extend(stuck);
     out
+}
+
+/// The flight-state sensors that move in any record of flight: attitude, body rates, air data, altitude and
+/// specific forces. Not the inputs (a surface or the throttle the maneuver leaves alone is constant), nor thrust,
+/// dynamic pressure, density, latitude or the angular accelerations, which a record may hold constant or derive.
+pub(crate) const MOVING_SENSORS: [Channel; 13] = [
+    Channel::Phi,
+    Channel::Theta,
+    Channel::Psi,
+    Channel::P,
+    Channel::Q,
+    Channel::R,
+    Channel::Alpha,
+    Channel::Beta,
+    Channel::Airspeed,
+    Channel::Altitude,
+    Channel::Ax,
+    Channel::Ay,
+    Channel::Az,
+];
+
+/// How little a stuck sensor's samples spread, as a fraction of the width of its plausible range
+/// ([`Channel::plausible_range`]): 2·10⁻⁸ rad/s for a gyro, 10⁻⁷ m for an altimeter, 3·10⁻⁹ m/s for an
+/// airspeed. Far below any sensor's noise or resolution; a constant written with a rounding error stays within.
+const STUCK_SPREAD: f64 = 1e-12;
+
+/// The fewest samples, and the shortest span in seconds, on which a sensor is called stuck: a handful of equal
+/// samples, or a second or two of them, may be a quiet moment logged at a coarse resolution.
+const STUCK_MIN_SAMPLES: usize = 20;
+const STUCK_MIN_SPAN_S: f64 = 5.0;
+
+/// Flags each of the [`MOVING_SENSORS`] whose samples all lie within [`STUCK_SPREAD`] of its plausible range
+/// of each other, on a record of [`STUCK_MIN_SAMPLES`] or more over [`STUCK_MIN_SPAN_S`] or longer: a stuck or
+/// unplugged sensor (a gyro reading 0 while the elevator moves). In flight none of them holds still to that
+/// degree. An airspeed of 0 on every row never gets here: the readers refuse it ([`DataError::NoAirspeed`]).
+pub(crate) fn stuck_sensor_warnings(rec: &FlightRecord) -> Vec<Warning> {
+    let span_s = rec
+        .time_s
+        .last()
+        .zip(rec.time_s.first())
+        .map_or(0.0, |(b, a)| b - a);
+    MOVING_SENSORS
+        .into_iter()
+        .filter_map(|c| {
+            let values = rec.column(c)?;
+            let (lo, hi) = c.plausible_range()?;
+            if values.len() < STUCK_MIN_SAMPLES || span_s < STUCK_MIN_SPAN_S {
+                return None;
+            }
+            let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let spread = max - min;
+            if spread.is_nan() || spread > STUCK_SPREAD * (hi - lo) {
+                return None;
+            }
+            let value = values[0];
+            let held = if spread == 0.0 {
+                format!("{value} on every one of its {} rows", values.len())
+            } else {
+                format!("within {spread:.1e} of {value} on every one of its {} rows", values.len())
+            };
+            Some(Warning {
+                kind: WarningKind::StuckSensor,
+                column: Some(c.to_string()),
+                message: format!(
+                    "{held} ({span_s} s): a stuck or unplugged sensor (no flight holds a measured state this \
+                     still); fix the column, or leave it out of the file"
+                ),
+            })
+        })
+        .collect()
 }
 
 /// The `q`-quantile of |values| (nearest rank).
