@@ -554,3 +554,43 @@ fn a_short_record_is_not_taken_for_knots_and_a_whole_one_in_knots_or_ft_s_is() {
         }
     }
 }
+
+/// Only a flight-state sensor is called stuck, and only over 20 samples and 5 s: an elevator, a throttle, a
+/// thrust or a latitude held constant draw nothing; a pitch gyro at 0 and an altimeter within 2·10⁻⁹ m of
+/// 1200 m over 6 s are named with their values; the first 4.9 s of the same record draw nothing.
+#[test]
+fn a_stuck_sensor_is_a_flight_state_held_over_5_s_and_an_idle_input_is_not() {
+    let n = 601; // 6 s at 100 Hz
+    let mut rec = synthetic_record(n);
+    for c in ["elevator_rad", "throttle", "thrust_n", "latitude_rad"] {
+        rec.push_column(c, vec![0.3; n]);
+    }
+    let stuck = |rec: &FlightRecord| -> Vec<String> {
+        rec.warnings()
+            .into_iter()
+            .filter(|w| w.kind == WarningKind::StuckSensor)
+            .map(|w| w.to_string())
+            .collect()
+    };
+    assert_eq!(stuck(&rec), Vec::<String>::new());
+    rec.push_column("q_rad_s", vec![0.0; n]);
+    let h = rec
+        .time_s
+        .iter()
+        .map(|t| 1200.0 + 1e-9 * (7.0 * t).sin())
+        .collect();
+    rec.push_column("altitude_m", h);
+    let w = stuck(&rec);
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(
+        w[0].starts_with(
+            "column `q_rad_s`: 0 on every one of its 601 rows (6 s): a stuck or unplugged sensor"
+        ),
+        "{w:?}"
+    );
+    assert!(
+        w[1].starts_with("column `altitude_m`: within 2.0e-9 of 1200 on every one of its 601 rows"),
+        "{w:?}"
+    );
+    assert_eq!(stuck(&rec.between(0.0, 4.9)), Vec::<String>::new());
+}
