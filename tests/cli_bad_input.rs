@@ -532,3 +532,77 @@ fn no_scratch_directory_is_left_after_sigint_sigterm_or_a_killed_bridge() {
         scratch_dirs(tmp.path())
     );
 }
+
+/// A stuck or unplugged gyro is named by every command that reads the record, through the one warning path
+/// (`FlightRecord::warnings`): case 1 of the independent generator `scripts/gen_diagnose_records.py` (seed 4,
+/// JSBSim's c172x, 75 s of elevator, aileron and rudder maneuvers) with `q_rad_s` written as 0.0 on every row.
+/// The record as generated draws no warning at all.
+#[test]
+fn a_stuck_gyro_is_named_by_every_command_and_a_working_one_is_not() {
+    let tmp = tempfile::tempdir().unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_diagnose_records.py");
+    let out = Command::new(flightid::sim::env::python().expect("provisioned Python"))
+        .arg(script)
+        .args([
+            "--cases",
+            "1",
+            "--first",
+            "1",
+            "--seed",
+            "4",
+            "--stratified",
+            "--out",
+        ])
+        .arg(tmp.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let good = tmp.path().join("case_001_train.csv");
+    let mut rec = flightid::data::read_csv(&good).unwrap();
+    let n = rec.len();
+    rec.push_column("q_rad_s", vec![0.0; n]);
+    flightid::data::write_csv_atomic(&tmp.path().join("stuck.csv"), &rec).unwrap();
+    for file in ["case_001_train.csv", "stuck.csv"] {
+        for args in [
+            vec!["segments", file],
+            vec!["check", file],
+            vec![
+                "identify",
+                "--data",
+                file,
+                "--input",
+                "elevator",
+                "--output",
+                "theta_rad",
+            ],
+            vec![
+                "estimate",
+                "--data",
+                file,
+                "--method",
+                "n4sid",
+                "--inputs",
+                "elevator_rad",
+                "--outputs",
+                "alpha_rad,theta_rad",
+                "--order",
+                "2",
+            ],
+        ] {
+            let o = run(tmp.path(), &args);
+            let e = stderr(&o);
+            assert!(o.status.success(), "{args:?}: {e}");
+            let warnings: Vec<&str> = e.lines().filter(|l| l.starts_with("warning:")).collect();
+            if file == "stuck.csv" {
+                let want = format!(
+                    "warning: stuck.csv: column `q_rad_s`: 0 on every one of its {n} rows (74.975 s): a stuck or \
+                     unplugged sensor"
+                );
+                assert_eq!(warnings.len(), 1, "{args:?}: {e}");
+                assert!(warnings[0].starts_with(&want), "{args:?}: {e}");
+            } else {
+                assert!(warnings.is_empty(), "{args:?}: {e}");
+            }
+        }
+    }
+}

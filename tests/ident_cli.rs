@@ -35,7 +35,13 @@ fn write_record(path: &Path, n: usize, corrupt: Option<usize>, still: bool) {
         let theta = if corrupt == Some(k) {
             "NaN".to_string()
         } else {
-            format!("{}", 0.05 + y[k])
+            // At rest the attitude still moves a little (an exactly constant one is a stuck sensor).
+            let rest = if still {
+                1e-4 * (k as f64 * 0.37).sin()
+            } else {
+                0.0
+            };
+            format!("{}", 0.05 + y[k] + rest)
         };
         s.push_str(&format!("{},{},{}\n", k as f64 * dt, -0.01 + u[k], theta));
     }

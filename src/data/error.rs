@@ -201,6 +201,8 @@ pub enum WarningKind {
     IrregularSampling,
     /// The reader dropped rows that repeat the row before them (same time, same values).
     RepeatedRows,
+    /// A flight-state sensor that never moves over the whole record: stuck or unplugged.
+    StuckSensor,
     /// Anything else the reader wants the user to know (e.g. skipped bytes in a tlog).
     Other,
 }

@@ -3,6 +3,9 @@
 use super::channel::Channel;
 use super::error::{DataError, Warning, WarningKind, IN_MEMORY};
 
+mod kinematics;
+use kinematics::{aero_angle_sign_warning, angle_rate_warning, speed_kinematics_warning};
+
 /// The schema columns of docs/data.md, in their canonical order.
 pub const SCHEMA_COLUMNS: &[&str] = &super::channel::names(Channel::ALL);
 
@@ -233,10 +236,13 @@ fn max_abs(values: &[f64]) -> Option<(usize, f64)> {
 ///   specific force (about −g in level flight);
 /// - a median airspeed above 300 m/s, or airspeed changing 1.94 (knots) or 3.28 (ft/s) times as
 ///   fast as the specific force along the flight path says (dV/dt = ax cos α + az sin α − g sin γ,
-///   fitted over 1 s windows when they correlate);
+///   fitted over 1 s windows when they correlate, on 8 windows or more, and only when the slope ± 2
+///   standard errors lies wholly nearer one of those factors than 1: [`kinematics::speed_kinematics_warning`]);
 /// - a median specific-force magnitude of 0.5..2 means g (in m/s² it is ≈ 9.81 in 1-g flight);
 /// - `throttle` outside −0.05..1.05 is not a 0..1 fraction (percent?);
-/// - `time_s` steps of a whole number of 2 or more: milliseconds ([`time_unit_suspicion`]).
+/// - `time_s` steps of a whole number of 2 or more: milliseconds ([`time_unit_suspicion`]);
+/// - a flight-state sensor that never moves: a stuck or unplugged sensor ([`stuck_sensor_warnings`]); the
+///   column checks above pass over its column (the kinematic ones find nothing in a constant).
 pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
     let mut out: Vec<Warning> = Vec::new();
     if let Some(message) = time_unit_suspicion(&rec.time_s) {
@@ -246,8 +252,14 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             message,
         });
     }
+    let stuck = stuck_sensor_warnings(rec);
+    let flagged = |out: &[Warning], c: &str| out.iter().any(|w| w.column.as_deref() == Some(c));
     let at = |i: usize| rec.time_s.get(i).copied().unwrap_or(f64::NAN);
     for (name, values) in &rec.columns {
+        // A stuck sensor's constant says nothing of its unit.
+        if flagged(&stuck, name) {
+            continue;
+        }
         let Some((i, m)) = max_abs(values) else {
             continue;
         };
@@ -336,7 +348,6 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             }
         }
     }
-    let flagged = |out: &[Warning], c: &str| out.iter().any(|w| w.column.as_deref() == Some(c));
     for w in [
         angle_rate_warning(rec, Channel::Theta, Channel::Q),
         angle_rate_warning(rec, Channel::Phi, Channel::P),
@@ -356,7 +367,79 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
             out.push(w);
         }
     }
+    out.extend(stuck);
     out
+}
+
+/// The flight-state sensors that move in any record of flight: attitude, body rates, air data, altitude and
+/// specific forces. Not the inputs (a surface or the throttle the maneuver leaves alone is constant), nor thrust,
+/// dynamic pressure, density, latitude or the angular accelerations, which a record may hold constant or derive.
+pub(crate) const MOVING_SENSORS: [Channel; 13] = [
+    Channel::Phi,
+    Channel::Theta,
+    Channel::Psi,
+    Channel::P,
+    Channel::Q,
+    Channel::R,
+    Channel::Alpha,
+    Channel::Beta,
+    Channel::Airspeed,
+    Channel::Altitude,
+    Channel::Ax,
+    Channel::Ay,
+    Channel::Az,
+];
+
+/// How little a stuck sensor's samples spread, as a fraction of the width of its plausible range
+/// ([`Channel::plausible_range`]): 2·10⁻⁸ rad/s for a gyro, 10⁻⁷ m for an altimeter, 3·10⁻⁹ m/s for an
+/// airspeed. Far below any sensor's noise or resolution; a constant written with a rounding error stays within.
+const STUCK_SPREAD: f64 = 1e-12;
+
+/// The fewest samples, and the shortest span in seconds, on which a sensor is called stuck: a handful of equal
+/// samples, or a second or two of them, may be a quiet moment logged at a coarse resolution.
+const STUCK_MIN_SAMPLES: usize = 20;
+const STUCK_MIN_SPAN_S: f64 = 5.0;
+
+/// Flags each of the [`MOVING_SENSORS`] whose samples all lie within [`STUCK_SPREAD`] of its plausible range
+/// of each other, on a record of [`STUCK_MIN_SAMPLES`] or more over [`STUCK_MIN_SPAN_S`] or longer: a stuck or
+/// unplugged sensor (a gyro reading 0 while the elevator moves). In flight none of them holds still to that
+/// degree. An airspeed of 0 on every row never gets here: the readers refuse it ([`DataError::NoAirspeed`]).
+pub(crate) fn stuck_sensor_warnings(rec: &FlightRecord) -> Vec<Warning> {
+    let span_s = rec
+        .time_s
+        .last()
+        .zip(rec.time_s.first())
+        .map_or(0.0, |(b, a)| b - a);
+    MOVING_SENSORS
+        .into_iter()
+        .filter_map(|c| {
+            let values = rec.column(c)?;
+            let (lo, hi) = c.plausible_range()?;
+            if values.len() < STUCK_MIN_SAMPLES || span_s < STUCK_MIN_SPAN_S {
+                return None;
+            }
+            let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let spread = max - min;
+            if spread.is_nan() || spread > STUCK_SPREAD * (hi - lo) {
+                return None;
+            }
+            let value = values[0];
+            let held = if spread == 0.0 {
+                format!("{value} on every one of its {} rows", values.len())
+            } else {
+                format!("within {spread:.1e} of {value} on every one of its {} rows", values.len())
+            };
+            Some(Warning {
+                kind: WarningKind::StuckSensor,
+                column: Some(c.to_string()),
+                message: format!(
+                    "{held} ({span_s} s): a stuck or unplugged sensor (no flight holds a measured state this \
+                     still); fix the column, or leave it out of the file"
+                ),
+            })
+        })
+        .collect()
 }
 
 /// The `q`-quantile of |values| (nearest rank).
@@ -367,203 +450,6 @@ fn abs_percentile(values: &[f64], q: f64) -> f64 {
     }
     let k = ((q * (a.len() - 1) as f64).round() as usize).min(a.len() - 1);
     *a.select_nth_unstable_by(k, |x, y| x.total_cmp(y)).1
-}
-
-/// Least-squares slope of `y` on `x` with an intercept, and their correlation.
-fn slope_and_correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
-    let n = x.len() as f64;
-    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-    for (a, b) in x.iter().zip(y) {
-        sxx += (a - mx) * (a - mx);
-        syy += (b - my) * (b - my);
-        sxy += (a - mx) * (b - my);
-    }
-    if sxx <= 0.0 || syy <= 0.0 {
-        return (0.0, 0.0);
-    }
-    (sxy / sxx, sxy / (sxx * syy).sqrt())
-}
-
-/// Slope and correlation of an angle's change over half-second windows against its rate's integral over the
-/// same windows (trapezoids). A differentiated angle is too noisy: on a 50 Hz record with 0.05° of attitude
-/// noise dθ/dt correlates with q by 0.63 only, the windowed increments by 0.99.
-fn windowed_slope(rec: &FlightRecord, x: &[f64], rate: &[f64]) -> Option<(f64, f64)> {
-    let t = &rec.time_s;
-    let dt = rec.dt_s()?;
-    let span = ((0.5 / dt).round() as usize).max(1);
-    if rec.len() < 20 || rec.len() <= 2 * span {
-        return None;
-    }
-    let mut integral = vec![0.0; rec.len()];
-    for i in 1..rec.len() {
-        integral[i] = integral[i - 1] + 0.5 * (rate[i] + rate[i - 1]) * (t[i] - t[i - 1]);
-    }
-    let (kin, dx): (Vec<f64>, Vec<f64>) = (span..rec.len())
-        .map(|i| (integral[i] - integral[i - span], x[i] - x[i - span]))
-        .unzip();
-    Some(slope_and_correlation(&kin, &dx))
-}
-
-/// Flags an α or β of the other sign convention: its change over half-second windows anticorrelated
-/// (r < −0.8, slope near −1) with the integral of the rate the kinematics give (flat earth; β ≈ 0 in α̇):
-/// α̇ = q + [a_z cos α − a_x sin α + g (cos φ cos θ cos α + sin θ sin α)]/V,
-/// β̇ = p sin α − r cos α + (a_y + g cos θ sin φ)/V (Klein & Morelli eq. 3.32–3.33, specific forces).
-/// A missing attitude is taken as level.
-fn aero_angle_sign_warning(rec: &FlightRecord, angle: Channel) -> Option<Warning> {
-    let x = rec.column(angle)?;
-    let v = rec.column(Channel::Airspeed)?;
-    let zero = vec![0.0; rec.len()];
-    let col = |c: Channel| rec.column(c).unwrap_or(&zero);
-    let (theta, phi) = (col(Channel::Theta), col(Channel::Phi));
-    let g = G0_M_S2;
-    let rate: Vec<f64> = match angle {
-        Channel::Alpha => {
-            let (q, ax, az) = (
-                rec.column(Channel::Q)?,
-                rec.column(Channel::Ax)?,
-                rec.column(Channel::Az)?,
-            );
-            (0..rec.len())
-                .map(|i| {
-                    let (sa, ca) = x[i].sin_cos();
-                    let grav = g * (phi[i].cos() * theta[i].cos() * ca + theta[i].sin() * sa);
-                    q[i] + (az[i] * ca - ax[i] * sa + grav) / v[i].max(1.0)
-                })
-                .collect()
-        }
-        Channel::Beta => {
-            let (p, r, ay) = (
-                rec.column(Channel::P)?,
-                rec.column(Channel::R)?,
-                rec.column(Channel::Ay)?,
-            );
-            let alpha = col(Channel::Alpha);
-            (0..rec.len())
-                .map(|i| {
-                    let (sa, ca) = alpha[i].sin_cos();
-                    p[i] * sa - r[i] * ca
-                        + (ay[i] + g * theta[i].cos() * phi[i].sin()) / v[i].max(1.0)
-                })
-                .collect()
-        }
-        _ => return None,
-    };
-    let (k, corr) = windowed_slope(rec, x, &rate)?;
-    (corr < -0.8 && (k + 1.0).abs() < 0.3).then(|| Warning {
-        kind: WarningKind::OppositeSign,
-        column: Some(angle.to_string()),
-        message: format!(
-            "its change is {k:.3} × what the body rates and specific forces make of it (correlation {corr:.2}): \
-             the other sign convention (flightid: α positive nose up, β positive with the wind from the \
-             right); map it with scale = -1.0"
-        ),
-    })
-}
-
-/// Flags an angle and its body rate that disagree by the degree factor (see [`unit_warnings`]).
-fn angle_rate_warning(rec: &FlightRecord, angle: Channel, rate: Channel) -> Option<Warning> {
-    let (x, w) = (rec.column(angle)?, rec.column(rate)?);
-    if rec.len() < 20 {
-        return None;
-    }
-    // The Euler-angle rate the body rates give (small-angle terms dropped where columns lack).
-    let rate_of_angle: Vec<f64> = match angle {
-        Channel::Theta => {
-            let phi = rec.column(Channel::Phi);
-            let r = rec.column(Channel::R);
-            (0..rec.len())
-                .map(|i| match (phi, r) {
-                    (Some(phi), Some(r)) => w[i] * phi[i].cos() - r[i] * phi[i].sin(),
-                    _ => w[i],
-                })
-                .collect()
-        }
-        _ => w.to_vec(),
-    };
-    let (k, corr) = windowed_slope(rec, x, &rate_of_angle)?;
-    let deg = 180.0 / std::f64::consts::PI;
-    let near = |k: f64, target: f64| (k / target - 1.0).abs() < 0.3;
-    if corr < -0.8 && [-1.0, -deg, -1.0 / deg].iter().any(|&t| near(k, t)) {
-        return Some(Warning {
-            kind: WarningKind::OppositeSign,
-            column: Some(rate.to_string()),
-            message: format!(
-                "d{angle}/dt = {k:.4} × {rate} (correlation {corr:.2}): the two have opposite signs; \
-                 flightid's body rates are positive nose up, right wing down and nose right, like the \
-                 angles they turn: map the one of the other convention with scale = -1.0"
-            ),
-        });
-    }
-    if corr < 0.8 {
-        return None;
-    }
-    let (column, what) = if near(k, deg) {
-        (angle, "the angle is in degrees")
-    } else if near(k, 1.0 / deg) {
-        (rate, "the rate is in deg/s")
-    } else {
-        return None;
-    };
-    Some(Warning {
-        kind: if column == angle {
-            WarningKind::LooksLikeDegrees
-        } else {
-            WarningKind::LooksLikeDegreesPerSecond
-        },
-        column: Some(column.to_string()),
-        message: format!(
-            "d{angle}/dt = {k:.4} × {rate} (correlation {corr:.2}); radians would give 1, so {what}"
-        ),
-    })
-}
-
-/// Flags an airspeed in knots or ft/s from the flight-path kinematics (see [`unit_warnings`]).
-fn speed_kinematics_warning(rec: &FlightRecord) -> Option<Warning> {
-    let v = rec.column(Channel::Airspeed)?;
-    let (ax, az) = (rec.column(Channel::Ax)?, rec.column(Channel::Az)?);
-    let (theta, alpha) = (rec.column(Channel::Theta)?, rec.column(Channel::Alpha)?);
-    let phi = rec.column(Channel::Phi);
-    let dt = rec.dt_s()?;
-    let window = (1.0 / dt).round().max(1.0) as usize;
-    if rec.len() < 4 * window {
-        return None;
-    }
-    // Along-path specific force minus gravity (wings-level γ generalised with φ, β = 0).
-    let rhs: Vec<f64> = (0..rec.len())
-        .map(|i| {
-            let (ca, sa) = (alpha[i].cos(), alpha[i].sin());
-            let cphi = phi.map_or(1.0, |p| p[i].cos());
-            let sin_gamma = ca * theta[i].sin() - sa * cphi * theta[i].cos();
-            ax[i] * ca + az[i] * sa - G0_M_S2 * sin_gamma
-        })
-        .collect();
-    let (mut dv, mut integral) = (Vec::new(), Vec::new());
-    let mut i = 0;
-    while i + window < rec.len() {
-        dv.push(v[i + window] - v[i]);
-        let s: f64 = (i..i + window)
-            .map(|k| 0.5 * (rhs[k] + rhs[k + 1]) * (rec.time_s[k + 1] - rec.time_s[k]))
-            .sum();
-        integral.push(s);
-        i += window;
-    }
-    let (k, corr) = slope_and_correlation(&integral, &dv);
-    if corr < 0.8 {
-        return None;
-    }
-    let unit = [(1.0 / 0.514_444, "knots"), (1.0 / 0.3048, "ft/s")]
-        .into_iter()
-        .find(|(f, _)| (k / f - 1.0).abs() < 0.25)?
-        .1;
-    Some(Warning {
-        kind: WarningKind::LooksLikeKnotsOrFeet,
-        column: Some(Channel::Airspeed.to_string()),
-        message: format!(
-            "airspeed changes {k:.2} times as fast as the specific force along the flight path \
-             says (correlation {corr:.2} over 1 s windows); m/s would give 1: it looks like {unit}"
-        ),
-    })
 }
 
 /// Flags accelerations recorded in g: the median specific-force magnitude is 0.5..2.
