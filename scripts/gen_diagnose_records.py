@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Independent generator of diagnose test records: JSBSim's c172x through JSBSim's own Python API.
+"""Independent generator of diagnose test records: JSBSim's c172x (or 737) through JSBSim's own Python API.
 
 It shares nothing with flightid's bridge or `fly`: its own private aircraft copy, its own actuator, its own
 sample timing. Each case is a pair of records (training and validation) of the same aircraft with the same
@@ -18,10 +18,19 @@ Hidden effects and how they are made:
   aero_derivative: the coefficient function is multiplied by a declared factor property;
   aero_nonlinearity: an added term (Cm_alpha2: dCm = k alpha^2, CL_alpha2: dCL = k alpha^2, alpha in rad).
 
-Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--turbulence] [--clean-share 0.25] [--stratified] [--first K]
-       [--effects JSON] [--duration S | --min-duration S --max-duration S] [--plan NAME|random] [--max-noise L]
-       [--without COLUMNS]
-Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema).
+--aircraft 737 flies JSBSim's stock Boeing 737 instead (AIRCRAFT holds one entry per aircraft): gear up, flaps 0,
+both engines running, a trim point drawn in 15000-30000 ft and 280-450 kts true airspeed and drawn again until
+the aircraft with its effects trims there at alpha <= 8 deg and at most 340 kts calibrated (its linear lift range
+ends at 13 deg); smaller maneuver amplitudes (elevator 1-2 deg, aileron about 3-5 deg, rudder 2-4 deg) and longer
+pulses for its slower modes; Cm_alpha2 and CL_alpha2 in 1-2 and 5-10 (the same share of the local slope at the
+median trim alpha as 4-8 and 15-30 on the c172x; 4-8 makes the 737 diverge). The aero reads the script's own
+deflection as on the c172x, so the 737's yaw damper (in its FCS) does not act. The 737 has no Cm_0, Cn_p, Cn_da.
+
+Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--aircraft c172x|737] [--turbulence]
+       [--clean-share 0.25] [--stratified] [--first K] [--effects JSON]
+       [--duration S | --min-duration S --max-duration S] [--plan NAME|random] [--max-noise L] [--without COLUMNS]
+Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema; the
+truth's "aircraft" names the model).
 """
 
 import argparse
@@ -74,6 +83,29 @@ AIRCRAFT = {
         "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
         "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
         "ranges": {},
+    },
+    "737": {
+        "model": "737",
+        "surfaces": {
+            "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
+            "aileron": ("fcs/left-aileron-pos-rad", None, "fcs/aileron-cmd-norm"),
+            "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
+        },
+        "derivatives": {
+            "CL_alpha": "CLalpha", "CD_0": "CD0", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "Cmde",
+            "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "Clda", "Cn_beta": "Cnb",
+            "Cn_r": "Cnr", "Cn_dr": "Cndr", "Cm_alphadot": "Cmadot", "Cl_dr": "Cldr",
+        },
+        "added": {
+            "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
+            "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
+        },
+        "pre_trim": {"gear/gear-cmd-norm": 0.0, "gear/gear-pos-norm": 0.0, "fcs/flap-cmd-norm": 0.0},
+        "envelope": {"altitude_ft": (15000, 30000), "speed_kts": (280, 450),
+                     "limits": {"aero/alpha-deg": 8.0, "velocities/vc-kts": 340.0}},
+        "amplitude": {"e3211": (0.0175, 0.035), "ad": (0.05, 0.09), "rd": (0.035, 0.07), "ed": (0.0175, 0.035)},
+        "pulse": {"e3211": (0.6, 1.0), "ad": (1.0, 1.6), "rd": (1.0, 1.6), "ed": (1.0, 1.6)},
+        "ranges": {("aero_nonlinearity", "Cm_alpha2"): (1.0, 2.0), ("aero_nonlinearity", "CL_alpha2"): (5.0, 10.0)},
     },
 }
 LOGGED = [
@@ -208,6 +240,33 @@ class Aircraft:
             fdm[prop] = value
         fdm["simulation/do_simple_trim"] = 1
         return {s: fdm[self.surfaces[s][0]] for s in self.surfaces}
+
+    def trimmable(self, cond, effects):
+        """Whether the aircraft with its effects trims at cond, within the envelope's limits (upper bounds)."""
+        try:
+            self.trim(cond, effects)
+        except jsbsim.TrimFailureError:
+            return False
+        return all(self.fdm[prop] <= limit for prop, limit in self.spec["envelope"]["limits"].items())
+
+
+def trim_point(ac, cond, effects, rng, attempts=200):
+    """cond, or the first of up to `attempts` trim points drawn after it, where the aircraft trims within its
+    envelope's limits; None if none does."""
+    for _ in range(attempts):
+        if ac.trimmable(cond, effects):
+            return cond
+        cond = draw_condition(rng, ac.spec)
+    return None
+
+
+def draw_condition(rng, spec):
+    env = spec["envelope"]
+    return {
+        "altitude_ft": float(rng.uniform(*env["altitude_ft"])), "speed_kts": float(rng.uniform(*env["speed_kts"])),
+        "heading_deg": float(rng.uniform(0, 360)), "latitude_deg": float(rng.uniform(-60, 60)),
+        "longitude_deg": float(rng.uniform(-180, 180)),
+    }
 
 
 # Maneuver plans of the false-alarm Monte Carlo (--plan random): which of the four maneuvers are flown, in order.
@@ -447,13 +506,16 @@ def main():
                 if args.stratified:
                     n = {0: 0, 3: int(rng.integers(2, 4))}.get(i % 4, 1)
                 effects = draw_effects(rng, n, cat, unlogged)
-            env = spec["envelope"]
-            cond = {
-                "altitude_ft": float(rng.uniform(*env["altitude_ft"])),
-                "speed_kts": float(rng.uniform(*env["speed_kts"])),
-                "heading_deg": float(rng.uniform(0, 360)), "latitude_deg": float(rng.uniform(-60, 60)),
-                "longitude_deg": float(rng.uniform(-180, 180)),
-            }
+            cond = draw_condition(rng, spec)
+            if "limits" in spec["envelope"]:  # a trim point the aircraft cannot hold is drawn again
+                cond = trim_point(ac, cond, effects, rng)
+                while cond is None:  # nowhere in the envelope (two effects that both cost lift, at their largest)
+                    if args.effects is not None:
+                        sys.exit(f"case {i}: the {args.aircraft} with {args.effects} trims nowhere in its envelope")
+                    print(f"case {i}: {json.dumps(effects)} trims nowhere in the envelope, drawn again",
+                          file=sys.stderr)
+                    effects = draw_effects(rng, len(effects), cat, unlogged)
+                    cond = trim_point(ac, draw_condition(rng, spec), effects, rng)
             duration = args.duration or float(rng.uniform(args.min_duration, args.max_duration))
             noise_level = float(rng.uniform(0.5, args.max_noise))
             plan = None
