@@ -19,12 +19,13 @@ Hidden effects and how they are made:
   aero_nonlinearity: an added term (Cm_alpha2: dCm = k alpha^2, CL_alpha2: dCL = k alpha^2, alpha in rad).
 
 --aircraft 737 flies JSBSim's stock Boeing 737 instead (AIRCRAFT holds one entry per aircraft): gear up, flaps 0,
-both engines running, a trim point drawn in 15000-30000 ft and 280-450 kts true airspeed and drawn again until
-the aircraft with its effects trims there at alpha <= 8 deg and at most 340 kts calibrated (its linear lift range
-ends at 13 deg); smaller maneuver amplitudes (elevator 1-2 deg, aileron about 3-5 deg, rudder 2-4 deg) and longer
-pulses for its slower modes; Cm_alpha2 and CL_alpha2 in 1-2 and 5-10 (the same share of the local slope at the
-median trim alpha as 4-8 and 15-30 on the c172x; 4-8 makes the 737 diverge). The aero reads the script's own
-deflection as on the c172x, so the 737's yaw damper (in its FCS) does not act. The 737 has no Cm_0, Cn_p, Cn_da.
+both engines running, the tanks filled again before each trim, a trim point drawn in 15000-30000 ft and 280-450 kts
+true airspeed and drawn again until the aircraft with its effects trims there at alpha <= 8 deg (its linear lift
+range ends at 13 deg) and at most 340 kts calibrated; smaller maneuver amplitudes (elevator 1-2 deg, aileron about
+3-5 deg, rudder 2-4 deg), longer elevator and aileron pulses for its slower short period and roll mode; Cm_alpha2
+and CL_alpha2 in 1-2 and 5-10 (the same share of the local slope at the median trim alpha as 4-8 and 15-30 on the
+c172x; 4-8 makes the 737 diverge). The aero reads the script's own deflection as on the c172x, so the 737's yaw
+damper (in its FCS) does not act. The 737 has no Cm_0, Cn_p, Cn_da: they are never drawn for it.
 
 Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--aircraft c172x|737] [--turbulence]
        [--clean-share 0.25] [--stratified] [--first K] [--effects JSON]
@@ -57,8 +58,10 @@ AIRCRAFT = {
     #   surfaces: surface -> (position property the aero model reads, its magnitude property or None, command);
     #   derivatives: vocabulary name -> coefficient function (a name the model lacks is left out, never drawn);
     #   added: added term -> (axis, the properties that make its coefficient a force or moment);
+    #   pre_ic: properties set before each trim's initial conditions are run;
     #   pre_trim: properties set after the engines are started, before the trim;
-    #   envelope: the random trim point's altitude (ft) and true airspeed (kts) ranges;
+    #   envelope: the random trim point's altitude (ft) and true airspeed (kts) ranges; limits, if given: upper
+    #       bounds on properties at the trim (a point where the trim fails or exceeds one is drawn again);
     #   amplitude, pulse: the maneuvers' surface amplitude (rad) and pulse width (s) ranges;
     #   ranges: the catalogue's magnitude ranges that differ from its default for this aircraft.
     "c172x": {
@@ -78,6 +81,7 @@ AIRCRAFT = {
             "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
             "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
         },
+        "pre_ic": {},
         "pre_trim": {"fcs/mixture-cmd-norm": 1.0},
         "envelope": {"altitude_ft": (2000, 8000), "speed_kts": (85, 115)},
         "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
@@ -100,11 +104,18 @@ AIRCRAFT = {
             "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
             "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
         },
+        # The tanks filled as in 737.xml before every trim: the fuel an earlier flight burned would otherwise change
+        # the weight and balance, and a trim point found trimmable before a record might not trim for the next.
+        "pre_ic": {"propulsion/tank[0]/contents-lbs": 10000.0, "propulsion/tank[1]/contents-lbs": 10000.0,
+                   "propulsion/tank[2]/contents-lbs": 4000.0},
         "pre_trim": {"gear/gear-cmd-norm": 0.0, "gear/gear-pos-norm": 0.0, "fcs/flap-cmd-norm": 0.0},
         "envelope": {"altitude_ft": (15000, 30000), "speed_kts": (280, 450),
                      "limits": {"aero/alpha-deg": 8.0, "velocities/vc-kts": 340.0}},
         "amplitude": {"e3211": (0.0175, 0.035), "ad": (0.05, 0.09), "rd": (0.035, 0.07), "ed": (0.0175, 0.035)},
-        "pulse": {"e3211": (0.6, 1.0), "ad": (1.0, 1.6), "rd": (1.0, 1.6), "ed": (1.0, 1.6)},
+        # Elevator and aileron pulses longer than the c172x's: short period 1.6 rad/s (c172x 6.3), roll mode time
+        # constant 0.6 s (0.2); the Dutch roll is about 2 rad/s on both (flown at 22500 ft 365 kts, 5000 ft 100 kts).
+        "pulse": {"e3211": (0.6, 1.0), "ad": (1.0, 1.6), "rd": (0.7, 1.3), "ed": (1.0, 1.6)},
+        # The added terms change the local slope at the median trim alpha (0.054 rad, c172x 0.021) by the same share.
         "ranges": {("aero_nonlinearity", "Cm_alpha2"): (1.0, 2.0), ("aero_nonlinearity", "CL_alpha2"): (5.0, 10.0)},
     },
 }
@@ -234,6 +245,8 @@ class Aircraft:
             elif e["effect"] == "aero_nonlinearity":
                 fdm[f"gen/added/{e['target']}"] = e["value"]
         fdm["atmosphere/turb-type"] = 0
+        for prop, value in self.spec["pre_ic"].items():
+            fdm[prop] = value
         fdm.run_ic()
         fdm["propulsion/set-running"] = -1
         for prop, value in self.spec["pre_trim"].items():
@@ -484,6 +497,12 @@ def main():
         ap.error(f"--without names columns the generator does not log: {', '.join(sorted(unknown))}")
     spec = AIRCRAFT[args.aircraft]
     cat = catalogue(spec)
+    if args.effects is not None:
+        lacks = [e["target"] for e in json.loads(args.effects)
+                 if e["effect"] in ("aero_derivative", "aero_nonlinearity")
+                 and e["target"] not in spec["derivatives"] and e["target"] not in spec["added"]]
+        if lacks:
+            ap.error(f"--effects: the {args.aircraft} model has no {', '.join(lacks)}")
     os.makedirs(args.out, exist_ok=True)
     root = tempfile.mkdtemp(prefix="gen-diag-")
     private_aircraft(root, spec)
