@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Independent generator of diagnose test records: JSBSim's c172x through JSBSim's own Python API.
+"""Independent generator of diagnose test records: JSBSim's c172x (or 737) through JSBSim's own Python API.
 
 It shares nothing with flightid's bridge or `fly`: its own private aircraft copy, its own actuator, its own
 sample timing. Each case is a pair of records (training and validation) of the same aircraft with the same
@@ -18,10 +18,20 @@ Hidden effects and how they are made:
   aero_derivative: the coefficient function is multiplied by a declared factor property;
   aero_nonlinearity: an added term (Cm_alpha2: dCm = k alpha^2, CL_alpha2: dCL = k alpha^2, alpha in rad).
 
-Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--turbulence] [--clean-share 0.25] [--stratified] [--first K]
-       [--effects JSON] [--duration S | --min-duration S --max-duration S] [--plan NAME|random] [--max-noise L]
-       [--without COLUMNS]
-Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema).
+--aircraft 737 flies JSBSim's stock Boeing 737 instead (AIRCRAFT holds one entry per aircraft): gear up, flaps 0,
+both engines running, the tanks filled again before each trim, a trim point drawn in 15000-30000 ft and 280-450 kts
+true airspeed and drawn again until the aircraft with its effects trims there at alpha <= 8 deg (its linear lift
+range ends at 13 deg) and at most 340 kts calibrated; smaller maneuver amplitudes (elevator 1-2 deg, aileron about
+3-5 deg, rudder 2-4 deg), longer elevator and aileron pulses for its slower short period and roll mode; Cm_alpha2
+and CL_alpha2 in 1-2 and 5-10 (the same share of the local slope at the median trim alpha as 4-8 and 15-30 on the
+c172x; 4-8 makes the 737 diverge). The aero reads the script's own deflection as on the c172x, so the 737's yaw
+damper (in its FCS) does not act. The 737 has no Cm_0, Cn_p, Cn_da: they are never drawn for it.
+
+Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--aircraft c172x|737] [--turbulence]
+       [--clean-share 0.25] [--stratified] [--first K] [--effects JSON]
+       [--duration S | --min-duration S --max-duration S] [--plan NAME|random] [--max-noise L] [--without COLUMNS]
+Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema; the
+truth's "aircraft" names the model).
 """
 
 import argparse
@@ -42,22 +52,72 @@ import jsbsim  # noqa: E402
 FT = 0.3048
 KT = 0.514444
 
-SURFACES = {
-    # surface: (aircraft position property the aero model reads, its magnitude property or None, command)
-    "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
-    "aileron": ("fcs/effective-aileron-pos", None, "fcs/aileron-cmd-norm"),
-    "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
-}
-# DESIGN vocabulary name -> c172x coefficient function
-DERIVATIVES = {
-    "CL_alpha": "CLwbh", "CD_0": "CDo", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "Cmde",
-    "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "Clda", "Cn_beta": "Cnb",
-    "Cn_r": "Cnr", "Cn_dr": "Cndr", "Cm_alphadot": "Cmadot", "Cn_p": "Cnp", "Cl_dr": "Cldr",
-    "Cn_da": "Cnda", "Cm_0": "Cmo",
-}
-ADDED = {
-    "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
-    "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
+AIRCRAFT = {
+    # One entry per aircraft:
+    #   model: the JSBSim model (aircraft/<model>/<model>.xml of the jsbsim package);
+    #   surfaces: surface -> (position property the aero model reads, its magnitude property or None, command);
+    #   derivatives: vocabulary name -> coefficient function (a name the model lacks is left out, never drawn);
+    #   added: added term -> (axis, the properties that make its coefficient a force or moment);
+    #   pre_ic: properties set before each trim's initial conditions are run;
+    #   pre_trim: properties set after the engines are started, before the trim;
+    #   envelope: the random trim point's altitude (ft) and true airspeed (kts) ranges; limits, if given: upper
+    #       bounds on properties at the trim (a point where the trim fails or exceeds one is drawn again);
+    #   amplitude, pulse: the maneuvers' surface amplitude (rad) and pulse width (s) ranges;
+    #   ranges: the catalogue's magnitude ranges that differ from its default for this aircraft.
+    "c172x": {
+        "model": "c172x",
+        "surfaces": {
+            "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
+            "aileron": ("fcs/effective-aileron-pos", None, "fcs/aileron-cmd-norm"),
+            "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
+        },
+        "derivatives": {
+            "CL_alpha": "CLwbh", "CD_0": "CDo", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "Cmde",
+            "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "Clda", "Cn_beta": "Cnb",
+            "Cn_r": "Cnr", "Cn_dr": "Cndr", "Cm_alphadot": "Cmadot", "Cn_p": "Cnp", "Cl_dr": "Cldr",
+            "Cn_da": "Cnda", "Cm_0": "Cmo",
+        },
+        "added": {
+            "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
+            "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
+        },
+        "pre_ic": {},
+        "pre_trim": {"fcs/mixture-cmd-norm": 1.0},
+        "envelope": {"altitude_ft": (2000, 8000), "speed_kts": (85, 115)},
+        "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
+        "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
+        "ranges": {},
+    },
+    "737": {
+        "model": "737",
+        "surfaces": {
+            "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
+            "aileron": ("fcs/left-aileron-pos-rad", None, "fcs/aileron-cmd-norm"),
+            "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
+        },
+        "derivatives": {
+            "CL_alpha": "CLalpha", "CD_0": "CD0", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "Cmde",
+            "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "Clda", "Cn_beta": "Cnb",
+            "Cn_r": "Cnr", "Cn_dr": "Cndr", "Cm_alphadot": "Cmadot", "Cl_dr": "Cldr",
+        },
+        "added": {
+            "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
+            "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
+        },
+        # The tanks filled as in 737.xml before every trim: the fuel an earlier flight burned would otherwise change
+        # the weight and balance, and a trim point found trimmable before a record might not trim for the next.
+        "pre_ic": {"propulsion/tank[0]/contents-lbs": 10000.0, "propulsion/tank[1]/contents-lbs": 10000.0,
+                   "propulsion/tank[2]/contents-lbs": 4000.0},
+        "pre_trim": {"gear/gear-cmd-norm": 0.0, "gear/gear-pos-norm": 0.0, "fcs/flap-cmd-norm": 0.0},
+        "envelope": {"altitude_ft": (15000, 30000), "speed_kts": (280, 450),
+                     "limits": {"aero/alpha-deg": 8.0, "velocities/vc-kts": 340.0}},
+        "amplitude": {"e3211": (0.0175, 0.035), "ad": (0.05, 0.09), "rd": (0.035, 0.07), "ed": (0.0175, 0.035)},
+        # Elevator and aileron pulses longer than the c172x's: short period 1.6 rad/s (c172x 6.3), roll mode time
+        # constant 0.6 s (0.2); the Dutch roll is about 2 rad/s on both (flown at 22500 ft 365 kts, 5000 ft 100 kts).
+        "pulse": {"e3211": (0.6, 1.0), "ad": (1.0, 1.6), "rd": (0.7, 1.3), "ed": (1.0, 1.6)},
+        # The added terms change the local slope at the median trim alpha (0.054 rad, c172x 0.021) by the same share.
+        "ranges": {("aero_nonlinearity", "Cm_alpha2"): (1.0, 2.0), ("aero_nonlinearity", "CL_alpha2"): (5.0, 10.0)},
+    },
 }
 LOGGED = [
     # column, property, factor
@@ -79,19 +139,20 @@ NOISE = {
 }
 
 
-def private_aircraft(root):
-    """root/aircraft/c172x with declared effect properties; engine/ and systems/ linked to the package's."""
+def private_aircraft(root, spec):
+    """root/aircraft/<model> with declared effect properties; engine/ and systems/ linked to the package's."""
+    model = spec["model"]
     pkg = jsbsim.get_default_root_dir()
     for sub in ("engine", "systems"):
         os.symlink(os.path.join(pkg, sub), os.path.join(root, sub))
-    src = os.path.join(pkg, "aircraft", "c172x")
-    dst = os.path.join(root, "aircraft", "c172x")
+    src = os.path.join(pkg, "aircraft", model)
+    dst = os.path.join(root, "aircraft", model)
     os.makedirs(dst)
     for f in os.listdir(src):
-        if f != "c172x.xml":
+        if f != f"{model}.xml":
             s = os.path.join(src, f)
             (shutil.copytree if os.path.isdir(s) else shutil.copy)(s, os.path.join(dst, f))
-    tree = ET.parse(os.path.join(src, "c172x.xml"))
+    tree = ET.parse(os.path.join(src, f"{model}.xml"))
     top = tree.getroot()
     for tag in ("output", "input"):
         for e in top.findall(tag):
@@ -104,7 +165,7 @@ def private_aircraft(root):
         p.text = name
         head.append(p)
 
-    for s, (pos, mag, _cmd) in SURFACES.items():
+    for s, (pos, mag, _cmd) in spec["surfaces"].items():
         declare(f"gen/eff/{s}", 1.0)
         declare(f"gen/override/{s}", 0.0)
         declare(f"gen/drive/{s}-rad", 0.0)
@@ -117,14 +178,14 @@ def private_aircraft(root):
         if mag:
             head.append(ET.fromstring(
                 f'<function name="gen/aero/{s}-mag"><abs><property>gen/aero/{s}-rad</property></abs></function>'))
-    for name in DERIVATIVES.values():
+    for name in spec["derivatives"].values():
         declare(f"gen/factor/{name}", 1.0)
-    for name in ADDED:
+    for name in spec["added"]:
         declare(f"gen/added/{name}", 0.0)
     for i, e in enumerate(head):
         aero.insert(i, e)
     replace = {}
-    for s, (pos, mag, _cmd) in SURFACES.items():
+    for s, (pos, mag, _cmd) in spec["surfaces"].items():
         replace[pos] = f"gen/aero/{s}-rad"
         if mag:
             replace[mag] = f"gen/aero/{s}-mag"
@@ -134,7 +195,7 @@ def private_aircraft(root):
                 el.text = replace[el.text.strip()]
         for fn in axis.findall("function"):
             coef = fn.get("name", "").split("/")[-1]
-            if coef in DERIVATIVES.values():
+            if coef in spec["derivatives"].values():
                 body = [c for c in fn if c.tag != "description"]
                 for c in body:
                     fn.remove(c)
@@ -142,22 +203,24 @@ def private_aircraft(root):
                 prod.extend(body)
                 ET.SubElement(prod, "property").text = f"gen/factor/{coef}"
     axes = {a.get("name"): a for a in aero.iter("axis")}
-    for name, (axis, factors) in ADDED.items():
+    for name, (axis, factors) in spec["added"].items():
         props = "".join(f"<property>{p}</property>" for p in factors)
         axes[axis].append(ET.fromstring(
             f'<function name="gen/term/{name}"><product>{props}<property>aero/alpha-rad</property>'
             f'<property>aero/alpha-rad</property><property>gen/added/{name}</property></product></function>'))
-    tree.write(os.path.join(dst, "c172x.xml"))
+    tree.write(os.path.join(dst, f"{model}.xml"))
 
 
 class Aircraft:
-    def __init__(self, root, sim_hz):
+    def __init__(self, root, sim_hz, spec):
         self.fdm = jsbsim.FGFDMExec(root)
         self.fdm.set_dt(1.0 / sim_hz)
         self.fdm.set_output_path(root)
-        self.fdm.load_model("c172x")
+        self.fdm.load_model(spec["model"])
         self.fdm.disable_output()
         self.sim_hz = sim_hz
+        self.spec = spec
+        self.surfaces = spec["surfaces"]
 
     def trim(self, cond, effects):
         fdm = self.fdm
@@ -167,26 +230,56 @@ class Aircraft:
         fdm["ic/vt-kts"] = cond["speed_kts"]
         fdm["ic/psi-true-deg"] = cond["heading_deg"]
         fdm["ic/gamma-deg"] = 0.0
-        for s in SURFACES:
+        for s in self.surfaces:
             fdm[f"gen/override/{s}"] = 0.0
             fdm[f"gen/eff/{s}"] = 1.0
-        for name in DERIVATIVES.values():
+        for name in self.spec["derivatives"].values():
             fdm[f"gen/factor/{name}"] = 1.0
-        for name in ADDED:
+        for name in self.spec["added"]:
             fdm[f"gen/added/{name}"] = 0.0
         for e in effects:
             if e["effect"] == "control_effectiveness":
                 fdm[f"gen/eff/{e['target']}"] = e["value"]
             elif e["effect"] == "aero_derivative":
-                fdm[f"gen/factor/{DERIVATIVES[e['target']]}"] = e["value"]
+                fdm[f"gen/factor/{self.spec['derivatives'][e['target']]}"] = e["value"]
             elif e["effect"] == "aero_nonlinearity":
                 fdm[f"gen/added/{e['target']}"] = e["value"]
         fdm["atmosphere/turb-type"] = 0
+        for prop, value in self.spec["pre_ic"].items():
+            fdm[prop] = value
         fdm.run_ic()
         fdm["propulsion/set-running"] = -1
-        fdm["fcs/mixture-cmd-norm"] = 1.0
+        for prop, value in self.spec["pre_trim"].items():
+            fdm[prop] = value
         fdm["simulation/do_simple_trim"] = 1
-        return {s: fdm[SURFACES[s][0]] for s in SURFACES}
+        return {s: fdm[self.surfaces[s][0]] for s in self.surfaces}
+
+    def trimmable(self, cond, effects):
+        """Whether the aircraft with its effects trims at cond, within the envelope's limits (upper bounds)."""
+        try:
+            self.trim(cond, effects)
+        except jsbsim.TrimFailureError:
+            return False
+        return all(self.fdm[prop] <= limit for prop, limit in self.spec["envelope"]["limits"].items())
+
+
+def trim_point(ac, cond, effects, rng, attempts=200):
+    """cond, or the first of up to `attempts` trim points drawn after it, where the aircraft trims within its
+    envelope's limits; None if none does."""
+    for _ in range(attempts):
+        if ac.trimmable(cond, effects):
+            return cond
+        cond = draw_condition(rng, ac.spec)
+    return None
+
+
+def draw_condition(rng, spec):
+    env = spec["envelope"]
+    return {
+        "altitude_ft": float(rng.uniform(*env["altitude_ft"])), "speed_kts": float(rng.uniform(*env["speed_kts"])),
+        "heading_deg": float(rng.uniform(0, 360)), "latitude_deg": float(rng.uniform(-60, 60)),
+        "longitude_deg": float(rng.uniform(-180, 180)),
+    }
 
 
 # Maneuver plans of the false-alarm Monte Carlo (--plan random): which of the four maneuvers are flown, in order.
@@ -199,7 +292,7 @@ PLANS = {
 }
 
 
-def maneuvers(rng, duration_s, validation, plan=None):
+def maneuvers(rng, duration_s, validation, spec, plan=None):
     """Command deviations (rad of surface) as functions of time: the four maneuvers in sequence, or the plan's
     maneuvers spread evenly over the record (a maneuver not in the plan is not flown)."""
     order = ["e3211", "ad", "rd", "ed"]
@@ -210,16 +303,12 @@ def maneuvers(rng, duration_s, validation, plan=None):
         at = {m: first + (1.0 - first) * j / len(plan) for j, m in enumerate(plan)}
         slots = [at.get(m, 2.0) for m in order]  # 2.0: after the end of the record
     t0 = [max(1.0, f * duration_s + rng.uniform(-1.0, 1.0)) for f in slots]
-    a = {
-        "e3211": rng.uniform(0.025, 0.045) * rng.choice([-1, 1]),
-        "ad": rng.uniform(0.04, 0.08) * rng.choice([-1, 1]),
-        "rd": rng.uniform(0.05, 0.09) * rng.choice([-1, 1]),
-        "ed": rng.uniform(0.025, 0.045) * rng.choice([-1, 1]),
-    }
-    pulse_e = rng.uniform(0.35, 0.6)
-    pulse_a = rng.uniform(0.6, 1.2)
-    pulse_r = rng.uniform(0.7, 1.3)
-    pulse_ed = rng.uniform(0.6, 1.0)
+    amp, pulse = spec["amplitude"], spec["pulse"]
+    a = {m: rng.uniform(*amp[m]) * rng.choice([-1, 1]) for m in order}
+    pulse_e = rng.uniform(*pulse["e3211"])
+    pulse_a = rng.uniform(*pulse["ad"])
+    pulse_r = rng.uniform(*pulse["rd"])
+    pulse_ed = rng.uniform(*pulse["ed"])
 
     def sequence(t, start, pulses, amp):
         u, s = 0.0, start
@@ -249,10 +338,11 @@ def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation, plan
     n_steps = int(round(duration_s * ac.sim_hz))
     delay = {e["target"]: e["value"] for e in effects if e["effect"] == "input_delay"}
     lag = {e["target"]: e["value"] for e in effects if e["effect"] == "actuator_lag"}
-    hist = {s: [trim[s]] for s in SURFACES}  # true deflection at every sim step
+    surfaces = ac.surfaces
+    hist = {s: [trim[s]] for s in surfaces}  # true deflection at every sim step
     lagged = dict(trim)
     pos = dict(trim)
-    for s in SURFACES:
+    for s in surfaces:
         fdm[f"gen/drive/{s}-rad"] = trim[s]
         fdm[f"gen/override/{s}"] = 1.0
     if turbulence:
@@ -262,13 +352,13 @@ def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation, plan
         fdm["atmosphere/randomseed"] = int(rng.integers(1, 2**31 - 1))
         fdm["atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps"] = rng.uniform(10.0, 20.0)
         fdm["atmosphere/turbulence/milspec/severity"] = 1
-    cmd = maneuvers(rng, duration_s, validation, plan)
+    cmd = maneuvers(rng, duration_s, validation, ac.spec, plan)
     tau_act, rate_max = 0.04, 1.2  # the aircraft's own actuator: first order with a rate limit
     rows = []
 
     def log(t):
         row = {"time_s": t}
-        for s in SURFACES:
+        for s in surfaces:
             row[f"{s}_rad"] = pos[s]
         row["throttle"] = fdm["fcs/throttle-cmd-norm[0]"]
         for col, prop, f in LOGGED:
@@ -279,7 +369,7 @@ def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation, plan
     for k in range(1, n_steps + 1):
         t = k * dt
         c = cmd(t)
-        for s in SURFACES:
+        for s in surfaces:
             target = trim[s] + c[s]
             step = (target - pos[s]) * (1.0 - math.exp(-dt / tau_act))
             pos[s] += max(-rate_max * dt, min(rate_max * dt, step))
@@ -326,10 +416,11 @@ def write_csv(path, cols, data, meta):
 
 # The catalogue the effects are drawn from: (effect, target, magnitude range, both signs, null)
 DEG = math.pi / 180
+SURFACE_NAMES = ["elevator", "aileron", "rudder"]
 CATALOGUE = (
-    [("input_delay", s, (0.05, 0.15), False, 0.0) for s in SURFACES]
-    + [("actuator_lag", s, (0.08, 0.25), False, 0.0) for s in SURFACES]
-    + [("control_effectiveness", s, (0.25, 0.5), True, 1.0) for s in SURFACES]
+    [("input_delay", s, (0.05, 0.15), False, 0.0) for s in SURFACE_NAMES]
+    + [("actuator_lag", s, (0.08, 0.25), False, 0.0) for s in SURFACE_NAMES]
+    + [("control_effectiveness", s, (0.25, 0.5), True, 1.0) for s in SURFACE_NAMES]
     + [("sensor_bias", c, r, True, 0.0) for c, r in [
         ("phi_rad", (1.0 * DEG, 2.0 * DEG)), ("theta_rad", (1.0 * DEG, 2.0 * DEG)),
         ("p_rad_s", (0.5 * DEG, 1.0 * DEG)), ("q_rad_s", (0.5 * DEG, 1.0 * DEG)), ("r_rad_s", (0.5 * DEG, 1.0 * DEG)),
@@ -344,11 +435,23 @@ CATALOGUE = (
 )
 
 
-def draw_effects(rng, n, unlogged=()):
-    """n distinct effects from CATALOGUE; none on a sensor in `unlogged` (a column the records leave out)."""
+def catalogue(spec):
+    """CATALOGUE for one aircraft: without the derivatives and added terms it lacks, with its own ranges."""
+    out = []
+    for eff, target, r, both, null in CATALOGUE:
+        if (eff == "aero_derivative" and target not in spec["derivatives"]) or \
+                (eff == "aero_nonlinearity" and target not in spec["added"]):
+            continue
+        out.append((eff, target, spec["ranges"].get((eff, target), r), both, null))
+    return out
+
+
+def draw_effects(rng, n, cat, unlogged=()):
+    """n distinct effects from the catalogue cat; none on a sensor in `unlogged` (a column the records leave
+    out)."""
     effects, used = [], set()
     while len(effects) < n:
-        eff, target, (lo, hi), both, null = CATALOGUE[rng.integers(len(CATALOGUE))]
+        eff, target, (lo, hi), both, null = cat[rng.integers(len(cat))]
         key = (eff if eff not in ("input_delay", "actuator_lag", "control_effectiveness") else "signal", target)
         if key in used or (eff, target) in used or target in unlogged:
             continue
@@ -364,6 +467,7 @@ def draw_effects(rng, n, unlogged=()):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", required=True)
+    ap.add_argument("--aircraft", default="c172x", choices=sorted(AIRCRAFT), help="the JSBSim model flown")
     ap.add_argument("--cases", type=int, default=40)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--turbulence", action="store_true")
@@ -391,9 +495,17 @@ def main():
     unknown = unlogged - {c for c, _, _ in LOGGED}
     if unknown:
         ap.error(f"--without names columns the generator does not log: {', '.join(sorted(unknown))}")
+    spec = AIRCRAFT[args.aircraft]
+    cat = catalogue(spec)
+    if args.effects is not None:
+        lacks = [e["target"] for e in json.loads(args.effects)
+                 if e["effect"] in ("aero_derivative", "aero_nonlinearity")
+                 and e["target"] not in spec["derivatives"] and e["target"] not in spec["added"]]
+        if lacks:
+            ap.error(f"--effects: the {args.aircraft} model has no {', '.join(lacks)}")
     os.makedirs(args.out, exist_ok=True)
     root = tempfile.mkdtemp(prefix="gen-diag-")
-    private_aircraft(root)
+    private_aircraft(root, spec)
     rates = [(100, 20), (100, 25), (100, 50), (120, 40), (200, 50), (200, 40), (120, 20)]
     try:
         aircraft = {}
@@ -403,7 +515,7 @@ def main():
             # In turbulence every case gets a fresh FGFDMExec: the Dryden filters' states carry over from one
             # flight to the next, so a case would otherwise depend on the cases flown before it.
             if sim_hz not in aircraft or args.turbulence:
-                aircraft[sim_hz] = Aircraft(root, sim_hz)
+                aircraft[sim_hz] = Aircraft(root, sim_hz, spec)
             ac = aircraft[sim_hz]
             u = rng.uniform()
             if args.effects is not None:
@@ -412,12 +524,17 @@ def main():
                 n = 0 if u < args.clean_share else (1 if u < 1 - args.multi_share else int(rng.integers(2, 4)))
                 if args.stratified:
                     n = {0: 0, 3: int(rng.integers(2, 4))}.get(i % 4, 1)
-                effects = draw_effects(rng, n, unlogged)
-            cond = {
-                "altitude_ft": float(rng.uniform(2000, 8000)), "speed_kts": float(rng.uniform(85, 115)),
-                "heading_deg": float(rng.uniform(0, 360)), "latitude_deg": float(rng.uniform(-60, 60)),
-                "longitude_deg": float(rng.uniform(-180, 180)),
-            }
+                effects = draw_effects(rng, n, cat, unlogged)
+            cond = draw_condition(rng, spec)
+            if "limits" in spec["envelope"]:  # a trim point the aircraft cannot hold is drawn again
+                cond = trim_point(ac, cond, effects, rng)
+                while cond is None:  # nowhere in the envelope (two effects that both cost lift, at their largest)
+                    if args.effects is not None:
+                        sys.exit(f"case {i}: the {args.aircraft} with {args.effects} trims nowhere in its envelope")
+                    print(f"case {i}: {json.dumps(effects)} trims nowhere in the envelope, drawn again",
+                          file=sys.stderr)
+                    effects = draw_effects(rng, len(effects), cat, unlogged)
+                    cond = trim_point(ac, draw_condition(rng, spec), effects, rng)
             duration = args.duration or float(rng.uniform(args.min_duration, args.max_duration))
             noise_level = float(rng.uniform(0.5, args.max_noise))
             plan = None
@@ -427,14 +544,14 @@ def main():
                 plan = args.plan
             truth = {"effects": effects, "condition": cond, "sim_rate_hz": sim_hz, "log_rate_hz": log_hz,
                      "duration_s": duration, "noise_level": noise_level, "turbulence": args.turbulence,
-                     "seed": args.seed, "case": i, "plan": plan or "full"}
+                     "seed": args.seed, "case": i, "plan": plan or "full", "aircraft": args.aircraft}
             for part, validation in (("train", False), ("valid", True)):
                 rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation,
                            PLANS[plan] if plan else None)
                 cols, data = sensors(rows, effects, noise_level, rng)
                 cols = [c for c in cols if c not in unlogged]
                 write_csv(os.path.join(args.out, f"case_{i:03d}_{part}.csv"), cols, data,
-                          {"generator": "gen_diagnose_records.py (JSBSim c172x, own API)", "case": i})
+                          {"generator": f"gen_diagnose_records.py (JSBSim {spec['model']}, own API)", "case": i})
             with open(os.path.join(args.out, f"case_{i:03d}_truth.json"), "w") as f:
                 json.dump(truth, f, indent=1)
             os.write(_STDOUT, f"case {i}: {json.dumps(effects)}\n".encode())
