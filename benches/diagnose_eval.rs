@@ -1,13 +1,13 @@
 //! Acceptance evaluation of `diagnose` on records it never saw the making of: `scripts/gen_diagnose_records.py`
-//! flies JSBSim's c172x through JSBSim's own Python API with its own conventions and hides 0–3 effects drawn from
-//! the whole catalogue. Each case is diagnosed (training + validation record, two JSBSim workers) and scored:
-//! the named set exactly right (effect and target), values within 15 % of the hidden effect's size
-//! (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
+//! flies JSBSim's c172x (or its 737) through JSBSim's own Python API with its own conventions and hides 0–3
+//! effects drawn from the whole catalogue. Each case is diagnosed (training + validation record, two JSBSim
+//! workers) and scored: the named set exactly right (effect and target), values within 15 % of the hidden
+//! effect's size (|v − v_true| ≤ 0.15 |v_true − null|), no cause named on a clean record.
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
 //! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--backward-elimination] [--estimate-rate]
-//! [--without COLUMNS]
-//! [--out DIR]`
+//! [--without COLUMNS] [--aircraft c172x|737] [--out DIR]`
+//! - `--aircraft 737`: records of JSBSim's 737 in cruise, diagnosed with flightid's `737` configuration.
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
 //! - `--noise-weights`: weight every channel by its sensor noise only (`flightid diagnose --noise-weights`).
@@ -49,6 +49,7 @@ struct Args {
     out: PathBuf,
     first: usize,
     without: String,
+    aircraft: String,
 }
 
 fn args() -> Args {
@@ -66,6 +67,7 @@ fn args() -> Args {
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
         without: String::new(),
+        aircraft: "c172x".to_string(),
     };
     let v: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -77,6 +79,7 @@ fn args() -> Args {
             "--first" => a.first = next(i).parse().unwrap_or(0),
             "--out" => a.out = PathBuf::from(next(i)),
             "--without" => a.without = next(i),
+            "--aircraft" => a.aircraft = next(i),
             "--turbulence" => {
                 a.turbulence = true;
                 i += 1;
@@ -206,6 +209,7 @@ fn generate(a: &Args) {
             &a.seed.to_string(),
         ])
         .args(["--first", &a.first.to_string()])
+        .args(["--aircraft", &a.aircraft])
         .stderr(std::process::Stdio::null());
     if a.turbulence {
         cmd.arg("--turbulence");
@@ -238,7 +242,7 @@ fn main() {
     let a = args();
     let t0 = Instant::now();
     generate(&a);
-    let cfg = aircraft::load("c172x").expect("c172x");
+    let cfg = aircraft::load(&a.aircraft).expect("a configured aircraft (c172x, 737)");
     let (mut n, mut exact, mut values, mut clean, mut clean_named, mut multi, mut multi_ok) =
         (0, 0, 0, 0, 0, 0, 0);
     let mut grouped = 0;
@@ -352,10 +356,11 @@ fn main() {
     }
     let pct = |k: usize, m: usize| 100.0 * k as f64 / m.max(1) as f64;
     println!(
-        "{n} cases (seed {}, turbulence {}): named set exactly right {exact}/{n} ({:.0} %), with values within 15 % \
+        "{n} cases ({}, seed {}, turbulence {}): named set exactly right {exact}/{n} ({:.0} %), with values within 15 % \
          {values}/{n} ({:.0} %), or with a hidden effect named by the ambiguity group it is in {grouped}/{n} \
          ({:.0} %); clean records with a cause named {clean_named}/{clean} ({:.0} %); \
          cases with >= 2 effects right {multi_ok}/{multi}; mean diagnose wall {:.1} s; total {:.0} s",
+        a.aircraft,
         a.seed,
         a.turbulence,
         pct(exact, n),
