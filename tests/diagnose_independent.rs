@@ -6,8 +6,9 @@
 //! drops, a yaw-rate gyro bias that only the heading tells from a roll-angle bias, and an attitude scale that
 //! only the flight-path reconstruction sees in the gusts (a scale, and a bias read as an a_y bias), and a record
 //! whose integration step the replay must match (a rudder lag at 20 Hz in gusts), and the same lag named in place
-//! of the delay output error named. The named set must be exactly the hidden one, each value within 15 % of the
-//! effect's size.
+//! of the delay output error named, an elevator effectiveness named in place of `Cm_de` on the innovations, and
+//! the same generator's 737. The named set must be exactly the hidden one, each value within 15 % of the effect's
+//! size.
 
 use std::path::Path;
 use std::process::Command;
@@ -127,7 +128,7 @@ fn check_generated_opts(
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(file("truth.json")).unwrap()).unwrap();
     let hidden = truth["effects"].as_array().unwrap().clone();
-    let cfg = aircraft::load("c172x").unwrap();
+    let cfg = aircraft::load(truth["aircraft"].as_str().unwrap_or("c172x")).unwrap();
     let rate = ReplayCase::new(&train).unwrap().sim_rate_hz();
     let mut workers: Vec<Worker> = (0..2)
         .map(|_| Worker::new(Box::new(JsbsimSim::start(&cfg, rate).unwrap())))
@@ -574,4 +575,27 @@ fn an_elevator_effectiveness_output_error_named_as_cm_de_in_gusts_is_named_on_th
             && c.rejected_because.is_none()),
         "output error never passed Cm_de: the case no longer exercises the replacement"
     );
+}
+
+/// JSBSim's 737 in cruise (the generator's `--aircraft 737`: 27 300 ft, 416 kts, 40 s at 20 Hz) with its lift curve
+/// ×0.7 and its roll damping ×1.5. The 737 calls its lift `CLalpha` (the c172x `CLwbh`), which `diagnose` finds
+/// among each derivative's JSBSim names; before, `CL_alpha` was skipped as "no coefficient knob 'CLwbh'" and the
+/// hidden set could not be named.
+#[test]
+fn the_737_s_lift_and_roll_damping_are_named_under_its_own_coefficient_names() {
+    let effects = r#"[{"effect": "aero_derivative", "target": "CL_alpha", "value": 0.7},
+        {"effect": "aero_derivative", "target": "Cl_p", "value": 1.5}]"#;
+    let args = [
+        "--aircraft",
+        "737",
+        "--cases",
+        "1",
+        "--effects",
+        effects,
+        "--duration",
+        "40",
+        "--seed",
+        "7",
+    ];
+    check_generated(&args, 0);
 }
