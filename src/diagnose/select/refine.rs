@@ -244,8 +244,8 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
         }
         progress.stage("sequential replacement", alternatives.len());
         // The model without effect i, its residual and cost: the base the alternatives are judged against.
-        let r = residuals(&mut workers[0], w, &without(state.selected, i))
-            .map_err(sim_err("replay"))?;
+        let base = without(state.selected, i);
+        let r = residuals(&mut workers[0], w, &base).map_err(sim_err("replay"))?;
         let cost_without = crate::signal::sum_sq(&r);
         let n_eff = effective_n(&r, w.case.len());
         // Each alternative in effect i's place (position kept), every effect free, from its score-test estimate:
@@ -254,11 +254,8 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
         for &j in &alternatives {
             let s = match sens {
                 Some(sens) => sens[j].clone(),
-                None => {
-                    let base = without(state.selected, i);
-                    search::null_sensitivity(&mut workers[0], w, &base, catalogue[j], &r)
-                        .map_err(sim_err("replay"))?
-                }
+                None => search::null_sensitivity(&mut workers[0], w, &base, catalogue[j], &r)
+                    .map_err(sim_err("replay"))?,
             };
             let start = score_test(catalogue[j], &s, &r, cost_without, n_eff).values[0];
             let mut a = with_freedom(state.selected, true);
