@@ -158,7 +158,7 @@ fn main() {
         let (cpu0, bridges_cpu0) = cpu_s();
         let t0 = Instant::now();
         // started as `flightid diagnose` starts them (in parallel)
-        let mut workers = start_workers(&SimSource::Aircraft(&cfg.name), rate, 2).unwrap();
+        let mut workers = start_workers(&SimSource::Aircraft(&cfg.name, &[]), rate, 2).unwrap();
         let d = diagnose(
             &mut workers,
             &train,

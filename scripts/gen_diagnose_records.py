@@ -490,12 +490,26 @@ def main():
                     help="comma-separated sensor columns the records leave out (a log without them, e.g. "
                          "alpha_rad,beta_rad,ax_m_s2,ay_m_s2,az_m_s2: no vanes, no accelerometers); no effect is "
                          "drawn on them")
+    ap.add_argument("--property", action="append", default=[], metavar="NAME=VALUE",
+                    help="a JSBSim property set before every trim, after the aircraft's own (repeatable): a loading "
+                         "other than the model's, e.g. propulsion/tank[0]/contents-lbs=30 (written to the truth's "
+                         "\"properties\")")
     args = ap.parse_args()
+    loading = {}
+    for setting in args.property:
+        name, eq, value = setting.partition("=")
+        try:
+            loading[name.strip()] = float(value)
+        except ValueError:
+            eq = ""
+        if not eq or not name.strip():
+            ap.error(f"--property {setting}: expected NAME=VALUE with a number")
     unlogged = {c for c in args.without.split(",") if c}
     unknown = unlogged - {c for c, _, _ in LOGGED}
     if unknown:
         ap.error(f"--without names columns the generator does not log: {', '.join(sorted(unknown))}")
-    spec = AIRCRAFT[args.aircraft]
+    spec = dict(AIRCRAFT[args.aircraft])
+    spec["pre_ic"] = {**spec["pre_ic"], **loading}
     cat = catalogue(spec)
     if args.effects is not None:
         lacks = [e["target"] for e in json.loads(args.effects)
@@ -545,6 +559,8 @@ def main():
             truth = {"effects": effects, "condition": cond, "sim_rate_hz": sim_hz, "log_rate_hz": log_hz,
                      "duration_s": duration, "noise_level": noise_level, "turbulence": args.turbulence,
                      "seed": args.seed, "case": i, "plan": plan or "full", "aircraft": args.aircraft}
+            if loading:
+                truth["properties"] = loading
             for part, validation in (("train", False), ("valid", True)):
                 rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation,
                            PLANS[plan] if plan else None)

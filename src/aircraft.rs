@@ -68,6 +68,12 @@ pub struct AircraftConfig {
     pub trim: TrimDefaults,
     /// Surfaces by name: `elevator`, `aileron`, `rudder`.
     pub surfaces: BTreeMap<String, SurfaceConfig>,
+    /// The loading, where it is not the model's own: JSBSim properties set before every trim, e.g.
+    /// `"propulsion/tank[0]/contents-lbs" = 30.0` or `"inertia/pointmass-weight-lbs[1]" = 0.0`. A record flown
+    /// lighter or with the CG elsewhere trims at another α and elevator, which a replay with the model's loading
+    /// takes for an aerodynamic error (docs/diagnose.md, "Loading").
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub properties: BTreeMap<String, f64>,
 }
 
 /// Problems finding or reading an aircraft configuration.
@@ -86,6 +92,9 @@ pub enum AircraftError {
         surface: String,
         known: String,
     },
+    /// A `--property` setting that is not `NAME=VALUE` with a finite value.
+    #[error("--property {setting}: {why}")]
+    BadProperty { setting: String, why: String },
 }
 
 fn one() -> usize {
@@ -173,6 +182,16 @@ pub fn load(name: &str) -> Result<AircraftConfig, AircraftError> {
 }
 
 impl AircraftConfig {
+    /// Adds `NAME=VALUE` settings (command-line `--property`) to the loading; a later one replaces an earlier one
+    /// of the same property. An entry without `=` or with a value that is not a finite number is refused, naming it.
+    pub fn with_properties(mut self, settings: &[String]) -> Result<Self, AircraftError> {
+        for s in settings {
+            let (name, value) = parse_property(s)?;
+            self.properties.insert(name, value);
+        }
+        Ok(self)
+    }
+
     /// The configuration of one surface, or an error naming the known ones.
     pub fn surface(&self, name: &str) -> Result<&SurfaceConfig, AircraftError> {
         self.surfaces
@@ -182,6 +201,25 @@ impl AircraftConfig {
                 surface: name.to_string(),
                 known: self.surfaces.keys().cloned().collect::<Vec<_>>().join(", "),
             })
+    }
+}
+
+/// `NAME=VALUE` (white space around either part ignored) as a property and a finite value.
+fn parse_property(setting: &str) -> Result<(String, f64), AircraftError> {
+    let bad = |why: &str| AircraftError::BadProperty {
+        setting: setting.to_string(),
+        why: why.to_string(),
+    };
+    let (name, value) = setting
+        .split_once('=')
+        .ok_or_else(|| bad("expected NAME=VALUE"))?;
+    let (name, value) = (name.trim(), value.trim());
+    if name.is_empty() {
+        return Err(bad("the property name is empty"));
+    }
+    match value.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok((name.to_string(), v)),
+        _ => Err(bad("the value is not a finite number")),
     }
 }
 

@@ -36,9 +36,13 @@ always_bad_input!(
 );
 
 impl ExitCode for crate::sim::SimError {
-    /// A crash, a failed trim or a bridge error says nothing about the user's input.
+    /// A crash, a failed trim or a bridge error says nothing about the user's input; a loading the model
+    /// cannot take does.
     fn exit_code(&self) -> u8 {
-        FAILURE
+        match self {
+            Self::Loading(_) => BAD_INPUT,
+            _ => FAILURE,
+        }
     }
 }
 

@@ -606,3 +606,42 @@ fn a_stuck_gyro_is_named_by_every_command_and_a_working_one_is_not() {
         }
     }
 }
+
+/// A loading the model cannot take, a `--property` without a value or naming a property the aircraft does not
+/// have, exits 2 naming the setting, leaves no output and no scratch directory.
+#[test]
+fn a_loading_the_model_cannot_take_is_refused_naming_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let columns = "elevator_rad,q_rad_s,theta_rad,beta_rad,airspeed_m_s,altitude_m";
+    let record = level_record(columns, "0,0,0,0,50,1200");
+    std::fs::write(tmp.path().join("flat.csv"), record).unwrap();
+    let diagnose = |setting: &str| {
+        let args = [
+            "diagnose",
+            "--data",
+            "flat.csv",
+            "--json",
+            "d.json",
+            "--property",
+            setting,
+        ];
+        run(tmp.path(), &args)
+    };
+    let o = diagnose("propulsion/tank[0]/contents-lbs");
+    assert_bad_input(
+        &o,
+        &["expected NAME=VALUE", "propulsion/tank[0]/contents-lbs"],
+    );
+    let o = diagnose("propulsion/tank[9]/contents-lbs=30");
+    assert_bad_input(&o, &["has no property", "propulsion/tank[9]/contents-lbs"]);
+    assert!(!tmp.path().join("d.json").exists());
+    assert!(scratch_dirs(tmp.path()).is_empty());
+    let o = run(
+        tmp.path(),
+        &["trim", "--property", "inertia/pointmass-weight-lbs[0]=nan"],
+    );
+    assert_bad_input(
+        &o,
+        &["not a finite number", "inertia/pointmass-weight-lbs[0]"],
+    );
+}

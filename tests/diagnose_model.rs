@@ -105,6 +105,7 @@ fn model_directory_keeps_signal_path_effects_outside_the_xml() {
         ],
         model_effects: vec![],
         notes: Default::default(),
+        properties: Default::default(),
     };
     let dir = tempfile::tempdir().unwrap();
     write_model(&mut sim, &file, dir.path()).unwrap();

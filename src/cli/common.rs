@@ -8,12 +8,25 @@ use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// The loading an aircraft flies with, where it is not the model's own.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct LoadingArg {
+    /// JSBSim property set before every trim, NAME=VALUE (repeatable): the loading flown where it is not the
+    /// model's own, e.g. `--property 'propulsion/tank[0]/contents-lbs=30'` or a point mass's weight
+    /// (`inertia/pointmass-weight-lbs[N]`). Another weight or CG trims at another α and elevator, which a replay
+    /// with the model's loading takes for an aerodynamic error (docs/diagnose.md, "Loading").
+    #[arg(long = "property", value_name = "NAME=VALUE")]
+    pub properties: Vec<String>,
+}
+
 /// Which aircraft and where to trim it.
 #[derive(clap::Args, Debug, Clone)]
 pub struct TrimArgs {
     /// Aircraft configuration: a name from aircraft/ (c172x, 737, f16) or a path to an aircraft .toml.
     #[arg(long, default_value = "c172x")]
     pub aircraft: String,
+    #[command(flatten)]
+    pub loading: LoadingArg,
     /// Trim altitude above sea level, ft [default: the aircraft's default trim point].
     #[arg(long, value_parser = crate::limits::ALTITUDE_FT.parser())]
     pub altitude_ft: Option<f64>,
@@ -28,7 +41,9 @@ pub struct TrimArgs {
 impl TrimArgs {
     /// Loads the aircraft configuration (unknown names are a usage error).
     pub fn config(&self) -> anyhow::Result<AircraftConfig> {
-        aircraft::load(&self.aircraft).map_err(|e| UsageError(e.to_string()).into())
+        aircraft::load(&self.aircraft)
+            .and_then(|c| c.with_properties(&self.loading.properties))
+            .map_err(|e| UsageError(e.to_string()).into())
     }
 
     /// The trim point: given values or the aircraft's defaults.

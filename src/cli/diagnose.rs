@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 
-use super::common::{check_outputs, emit_json, json_path, write_atomic, ColumnsArg};
+use super::common::{check_outputs, emit_json, json_path, write_atomic, ColumnsArg, LoadingArg};
 use super::UsageError;
 use crate::data::FlightRecord;
 use crate::diagnose::model::write_model;
@@ -24,6 +24,8 @@ pub struct DiagnoseCmd {
     /// Aircraft configuration (c172x, 737, f16, or a path to an aircraft .toml).
     #[arg(long, default_value = "c172x")]
     pub aircraft: String,
+    #[command(flatten)]
+    pub loading: LoadingArg,
     /// Use a linear model (`flightid linearize --json` output) as the simulation instead of JSBSim
     /// (signal-path and sensor effects only).
     #[arg(long, value_name = "LIN.json")]
@@ -111,7 +113,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     }
     let source = match &args.linear {
         Some(p) => SimSource::Linear(p),
-        None => SimSource::Aircraft(&args.aircraft),
+        None => SimSource::Aircraft(&args.aircraft, &args.loading.properties),
     };
     let rate = match args.replay_rate_hz {
         Some(r) if r.is_finite() && r > 0.0 => r,
@@ -145,6 +147,9 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     };
     summary(&d, workers.len(), &mut out)?;
     let mut ext = d.extension_file(&args.aircraft);
+    ext.properties = crate::aircraft::load(&args.aircraft)?
+        .with_properties(&args.loading.properties)?
+        .properties;
     ext.notes
         .insert("data".into(), args.data.display().to_string());
     // The directories, which take work to fill, first; the single files, already checked, last.

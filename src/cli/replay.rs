@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use super::common::emit_json;
-use super::common::ColumnsArg;
+use super::common::{ColumnsArg, LoadingArg};
 use super::UsageError;
 use crate::diagnose::analyse_replay;
 use crate::diagnose::extension::ExtensionFile;
@@ -22,6 +22,8 @@ pub struct ReplayCmd {
     /// Aircraft configuration.
     #[arg(long, default_value = "c172x")]
     pub aircraft: String,
+    #[command(flatten)]
+    pub loading: LoadingArg,
     /// Measured record (flight-data CSV).
     #[arg(long)]
     pub data: PathBuf,
@@ -52,10 +54,16 @@ pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
         (None, Some(p)) => Some(ExtensionFile::read(p).map_err(|e| UsageError(e.to_string()))?),
         _ => None,
     };
+    // The loading an extension file was fitted with, then the command line's.
+    let loading: Vec<String> = extension
+        .iter()
+        .flat_map(|f| f.properties.iter().map(|(k, v)| format!("{k}={v}")))
+        .chain(args.loading.properties.iter().cloned())
+        .collect();
     let source = match (&model, &args.linear) {
-        (Some(m), _) => SimSource::Model(m),
+        (Some(m), _) => SimSource::Model(m, &loading),
         (None, Some(p)) => SimSource::Linear(p),
-        (None, None) => SimSource::Aircraft(&args.aircraft),
+        (None, None) => SimSource::Aircraft(&args.aircraft, &loading),
     };
     let mut workers = start_workers(&source, case.sim_rate_hz(), 1)?;
     let names = workers[0].sim.coefficient_names();

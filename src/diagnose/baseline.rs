@@ -54,6 +54,38 @@ pub struct Baseline {
     pub trace: FlightRecord,
 }
 
+/// The difference between the record's trim elevator and the model's above which a loading other than the
+/// model's is pointed out, rad (0.086°). The c172x replayed with its own loading trims within 0.0005 rad of the
+/// independent generator's records, in still air and in light turbulence; 200 lb less fuel (8 % of its weight)
+/// moves the trim elevator by 0.0034–0.0042 rad and α by 0.004–0.005 rad.
+const LOADING_ELEVATOR_RAD: f64 = 0.0015;
+
+impl Baseline {
+    /// A warning when the record trims at another elevator than the unextended model: a weight or CG other than
+    /// the simulation's moves the trim elevator and α as a change of `Cm_0` or of the lift does, and the search
+    /// names such a change in its place (200 lb less fuel in the c172x: `Cm_0` ×2.4 on clean records).
+    pub fn loading_warning(&self) -> Option<String> {
+        let get = |q: &str| self.trim_mismatch.iter().find(|m| m.quantity == q);
+        let e = get("elevator_rad")?;
+        if (e.measured - e.model).abs() <= LOADING_ELEVATOR_RAD {
+            return None;
+        }
+        let (measured_alpha, model_alpha) =
+            get("alpha_rad").map_or((String::new(), String::new()), |a| {
+                let deg = |x: f64| format!(" and α {:.2}°", x.to_degrees());
+                (deg(a.measured), deg(a.model))
+            });
+        Some(format!(
+            "the record trims at elevator {:.2}°{measured_alpha}, the model at {:.2}°{model_alpha} (same speed and \
+             altitude): a weight or CG other than the simulation's moves the trim as a change of Cm_0 or of the lift \
+             does, and the search names such a change in its place. If the record was flown with another loading, \
+             give it with --property (docs/diagnose.md, \"Loading\")",
+            e.measured.to_degrees(),
+            e.model.to_degrees(),
+        ))
+    }
+}
+
 /// Replays the unextended model on the training (and validation) record.
 pub fn baseline(worker: &mut Worker, p: &Prepared) -> Result<Baseline, DiagnoseError> {
     let (trace, residuals_before, trim_mismatch) = analyse_replay(worker, &p.case, &[])?;

@@ -23,6 +23,7 @@ impl Diagnosis {
                 .collect(),
             model_effects: Vec::new(),
             notes: BTreeMap::new(),
+            properties: BTreeMap::new(),
         }
     }
 }

@@ -596,6 +596,10 @@ pub struct ExtensionFile {
     /// Free-form provenance (data file, date).
     #[serde(default)]
     pub notes: BTreeMap<String, String>,
+    /// The loading the effects were fitted with, where it was not the model's own (JSBSim properties set before
+    /// every trim, as `--property` gave them).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub properties: BTreeMap<String, f64>,
 }
 
 impl ExtensionFile {

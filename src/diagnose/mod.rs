@@ -306,6 +306,7 @@ pub fn diagnose(
     };
     progress.stage("baseline replay", 0);
     let base = baseline::baseline(&mut workers[0], &p)?;
+    p.warnings.extend(base.loading_warning());
     let mut sel = select::select(workers, &p, &base, opts, &progress)?;
     let (process_noise, refit_note) = match process_noise {
         // Output error searched (no filter, or none used): the values may still want the filter.

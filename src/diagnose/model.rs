@@ -62,6 +62,7 @@ pub fn write_model(
         effects: signal,
         model_effects: [file.model_effects.clone(), in_model].concat(),
         notes: file.notes.clone(),
+        properties: file.properties.clone(),
     };
     let text = serde_json::to_string_pretty(&extension).map_err(|e| file_err(dir, e))?;
     // the whole directory is replaced at once, and only when it is new or an earlier flightid output

@@ -12,10 +12,11 @@ use crate::sim::JsbsimSim;
 
 /// Where the simulation comes from: the aircraft's JSBSim model, an exported extended model, or a linear model.
 pub enum SimSource<'a> {
-    /// JSBSim's stock aircraft of the configuration.
-    Aircraft(&'a str),
-    /// An exported model directory (aircraft configuration named in its extension.json).
-    Model(&'a ExtendedModel),
+    /// JSBSim's stock aircraft of the configuration, with `--property` settings of its loading.
+    Aircraft(&'a str, &'a [String]),
+    /// An exported model directory (aircraft configuration and loading in its extension.json), with `--property`
+    /// settings that add to or replace that loading.
+    Model(&'a ExtendedModel, &'a [String]),
     /// `flightid linearize --json` output.
     Linear(&'a Path),
 }
@@ -47,14 +48,16 @@ fn start_worker(source: &SimSource, rate_hz: f64) -> Result<Worker, DiagnoseErro
         }
     };
     Ok(match source {
-        SimSource::Aircraft(name) => {
-            let cfg = aircraft::load(name)?;
+        SimSource::Aircraft(name, loading) => {
+            let cfg = aircraft::load(name)?.with_properties(loading)?;
             let sim = JsbsimSim::start(&cfg, rate_hz)
                 .map_err(starting(format!("starting JSBSim for {}", cfg.name)))?;
             Worker::new(Box::new(sim))
         }
-        SimSource::Model(m) => {
-            let cfg = aircraft::load(&m.extension.aircraft)?;
+        SimSource::Model(m, loading) => {
+            let mut cfg = aircraft::load(&m.extension.aircraft)?;
+            cfg.properties.extend(m.extension.properties.clone());
+            let cfg = cfg.with_properties(loading)?;
             let sim = m.start(&cfg, rate_hz).map_err(starting(format!(
                 "starting JSBSim on the model in {}",
                 m.dir.display()

@@ -152,7 +152,7 @@ impl JsbsimSim {
             aircraft_dir,
         };
         let loaded: LoadReply = bridge.request(&req, &[])?.reply;
-        Ok(JsbsimSim {
+        let mut sim = JsbsimSim {
             bridge,
             config: config.clone(),
             rate_hz,
@@ -163,7 +163,17 @@ impl JsbsimSim {
             added_terms: loaded.added_terms,
             coefficient_axes: loaded.axes,
             extra_record: Vec::new(),
-        })
+        };
+        // The configuration's loading: each property must exist in the model, or the load fails naming it.
+        for (property, value) in &config.properties {
+            sim.set_pre_trim_property(property, *value).map_err(|e| {
+                SimError::Loading(format!(
+                    "the loading of aircraft '{}' ({property} = {value}): {e}",
+                    config.name
+                ))
+            })?;
+        }
+        Ok(sim)
     }
 
     /// Values of `properties` at the current trim and their slopes with respect to each aero input (α, β, p, q,
@@ -274,10 +284,13 @@ impl JsbsimSim {
     }
 
     /// Forgets every coefficient scale, pre-trim property and added term: from the next trim on the aircraft is
-    /// the stock one again (the bridge puts each property back to its value in a fresh process), so one process can
-    /// serve several configurations of an aircraft.
+    /// the configured one again, with the configuration's own loading (the bridge puts every other property back
+    /// to its value in a fresh process), so one process can serve several configurations of an aircraft.
     pub fn clear_configuration(&mut self) {
         self.knob_values.clear();
+        for (property, value) in &self.config.properties {
+            self.knob_values.insert(property.clone(), *value);
+        }
     }
 
     /// Reads arbitrary JSBSim properties (current state).

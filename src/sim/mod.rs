@@ -58,6 +58,9 @@ pub enum SimError {
     /// Request that makes no sense (e.g. fly before trim).
     #[error("{0}")]
     Usage(String),
+    /// A loading (`--property`, an aircraft file's `properties`) the model cannot take: bad input.
+    #[error("{0}")]
+    Loading(String),
 }
 
 /// A steady, wings-level trim point.
