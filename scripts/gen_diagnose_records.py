@@ -50,6 +50,7 @@ os.dup2(2, 1)  # JSBSim's C++ console output goes to stderr
 import jsbsim  # noqa: E402
 
 FT = 0.3048
+SLUG_FT3 = 515.378818  # kg/m^3 per slug/ft^3
 KT = 0.514444
 
 AIRCRAFT = {
@@ -363,6 +364,8 @@ def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation, plan
         row["throttle"] = fdm["fcs/throttle-cmd-norm[0]"]
         for col, prop, f in LOGGED:
             row[col] = fdm[prop] * f
+        if ac.spec.get("air_data"):  # a data system's density from static pressure and outside air temperature
+            row["density_kg_m3"] = fdm["atmosphere/rho-slugs_ft3"] * SLUG_FT3
         rows.append(row)
 
     log(0.0)
@@ -494,6 +497,10 @@ def main():
                     help="a JSBSim property set before every trim, after the aircraft's own (repeatable): a loading "
                          "other than the model's, e.g. propulsion/tank[0]/contents-lbs=30 (written to the truth's "
                          "\"properties\")")
+    ap.add_argument("--air-data", action="store_true",
+                    help="also log density_kg_m3, the air density a data system computes from static pressure and "
+                         "outside air temperature (with --property atmosphere/delta-T=R: a day R deg Rankine warmer "
+                         "than the standard atmosphere)")
     args = ap.parse_args()
     loading = {}
     for setting in args.property:
@@ -510,6 +517,7 @@ def main():
         ap.error(f"--without names columns the generator does not log: {', '.join(sorted(unknown))}")
     spec = dict(AIRCRAFT[args.aircraft])
     spec["pre_ic"] = {**spec["pre_ic"], **loading}
+    spec["air_data"] = args.air_data
     cat = catalogue(spec)
     if args.effects is not None:
         lacks = [e["target"] for e in json.loads(args.effects)

@@ -600,21 +600,69 @@ fn the_737_s_lift_and_roll_damping_are_named_under_its_own_coefficient_names() {
     check_generated(&args, 0);
 }
 
+/// Runs the generator with `args` into a fresh directory.
+fn generated(args: &[&str]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_diagnose_records.py");
+    let st = Command::new(flightid::sim::env::python().expect("the provisioned Python"))
+        .arg(script)
+        .arg("--out")
+        .arg(dir.path())
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .expect("running the generator");
+    assert!(st.success(), "the generator failed");
+    dir
+}
+
+/// `flightid diagnose` on case `case` of `dir` (training and validation record) with `extra` arguments; its
+/// JSON.
+fn diagnose_cli(dir: &Path, case: usize, extra: &[&str], tag: &str) -> serde_json::Value {
+    let json = dir.join(format!("{tag}.json"));
+    let file = |what: &str| dir.join(format!("case_{case:03}_{what}.csv"));
+    let out = Command::new(env!("CARGO_BIN_EXE_flightid"))
+        .arg("diagnose")
+        .arg("--data")
+        .arg(file("train"))
+        .arg("--validate")
+        .arg(file("valid"))
+        .arg("--json")
+        .arg(&json)
+        .args(extra)
+        .output()
+        .expect("running flightid diagnose");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+}
+
+/// Whether a diagnosis warns that the record trims elsewhere than the model (a loading or an atmosphere).
+fn warns_of_the_trim(d: &serde_json::Value) -> bool {
+    d["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w.as_str().unwrap().contains("--property"))
+}
+
 /// A clean record flown 200 lb lighter than JSBSim's c172x is loaded (the generator's `--property`: both tanks at
 /// 30 lb of their 130). Replayed with the model's own loading it trims 0.2° off in elevator and 0.2° in α, and the
 /// search names `Cm_0` ×2.4 for it; the warning says what a loading does to the trim. Given the record's loading
 /// with `--property`, the same record names nothing and draws no such warning.
 #[test]
 fn a_record_flown_lighter_names_nothing_once_its_loading_is_given() {
-    let dir = tempfile::tempdir().unwrap();
     let loading = [
+        "--property",
         "propulsion/tank[0]/contents-lbs=30",
+        "--property",
         "propulsion/tank[1]/contents-lbs=30",
     ];
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_diagnose_records.py");
-    let mut generator = Command::new(flightid::sim::env::python().expect("the provisioned Python"));
-    generator.arg(script).arg("--out").arg(dir.path());
-    generator.args([
+    let mut args = vec![
         "--cases",
         "1",
         "--seed",
@@ -623,52 +671,68 @@ fn a_record_flown_lighter_names_nothing_once_its_loading_is_given() {
         "[]",
         "--duration",
         "30",
-    ]);
-    for p in loading {
-        generator.args(["--property", p]);
-    }
-    let st = generator
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status()
-        .expect("running the generator");
-    assert!(st.success(), "the generator failed");
-    let diagnose_with = |settings: &[&str], tag: &str| -> serde_json::Value {
-        let json = dir.path().join(format!("{tag}.json"));
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_flightid"));
-        cmd.arg("diagnose")
-            .arg("--data")
-            .arg(dir.path().join("case_000_train.csv"))
-            .arg("--validate")
-            .arg(dir.path().join("case_000_valid.csv"))
-            .arg("--json")
-            .arg(&json);
-        for p in settings {
-            cmd.args(["--property", p]);
-        }
-        let out = cmd.output().expect("running flightid diagnose");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
-    };
-    let loading_warning = |d: &serde_json::Value| {
-        d["warnings"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|w| w.as_str().unwrap().contains("--property"))
-    };
-    let unloaded = diagnose_with(&[], "model_loading");
-    assert!(loading_warning(&unloaded), "{}", unloaded["warnings"]);
-    let loaded = diagnose_with(&loading, "record_loading");
+    ];
+    args.extend(loading);
+    let dir = generated(&args);
+    let unloaded = diagnose_cli(dir.path(), 0, &[], "model_loading");
+    assert!(warns_of_the_trim(&unloaded), "{}", unloaded["warnings"]);
+    let loaded = diagnose_cli(dir.path(), 0, &loading, "record_loading");
     assert_eq!(
         loaded["named_cause"],
         serde_json::json!([]),
         "{}",
         loaded["named_cause"]
     );
-    assert!(!loading_warning(&loaded), "{}", loaded["warnings"]);
+    assert!(!warns_of_the_trim(&loaded), "{}", loaded["warnings"]);
+}
+
+/// A clean record flown on a day 15 K warmer than the standard atmosphere, with the data system's air density
+/// logged (the generator's `--air-data`): the replay flies in the atmosphere that density gives and names nothing.
+/// Without the density column the replay flies the standard day, trims 0.13° off in elevator, and the search
+/// named `Cm_0` ×0.34 for the thinner air.
+#[test]
+fn a_record_flown_on_a_warm_day_is_replayed_in_its_own_air() {
+    let args = [
+        "--first",
+        "1",
+        "--cases",
+        "1",
+        "--seed",
+        "33",
+        "--effects",
+        "[]",
+        "--duration",
+        "40",
+        "--property",
+        "atmosphere/delta-T=27",
+        "--air-data",
+    ];
+    let dir = generated(&args);
+    let d = diagnose_cli(dir.path(), 1, &[], "own_air");
+    assert_eq!(
+        d["named_cause"],
+        serde_json::json!([]),
+        "{}",
+        d["named_cause"]
+    );
+    assert!(!warns_of_the_trim(&d), "{}", d["warnings"]);
+    let note = d["warnings"].as_array().unwrap().iter().find_map(|w| {
+        let w = w.as_str().unwrap();
+        w.contains("air density makes the day")
+            .then(|| w.to_string())
+    });
+    assert!(
+        note.as_deref().is_some_and(|w| w.contains("+15.0 K")),
+        "{}",
+        d["warnings"]
+    );
+    // The same records without their density column: the standard day, and the trim warning.
+    for part in ["train", "valid"] {
+        let path = dir.path().join(format!("case_001_{part}.csv"));
+        let mut rec = read_csv(&path).unwrap();
+        rec.columns.retain(|(name, _)| name != "density_kg_m3");
+        flightid::data::write_csv_atomic(&path, &rec).unwrap();
+    }
+    let standard = diagnose_cli(dir.path(), 1, &[], "standard_day");
+    assert!(warns_of_the_trim(&standard), "{}", standard["warnings"]);
 }

@@ -77,9 +77,10 @@ impl Baseline {
             });
         Some(format!(
             "the record trims at elevator {:.2}°{measured_alpha}, the model at {:.2}°{model_alpha} (same speed and \
-             altitude): a weight or CG other than the simulation's moves the trim as a change of Cm_0 or of the lift \
-             does, and the search names such a change in its place. If the record was flown with another loading, \
-             give it with --property (docs/diagnose.md, \"Loading\")",
+             altitude): a weight or CG other than the simulation's, or air of another density (a record without \
+             density_kg_m3 or qbar_pa is flown in the standard atmosphere), moves the trim as a change of Cm_0 or of \
+             the lift does, and the search names such a change in its place. If the record was flown with another \
+             loading, give it with --property (docs/diagnose.md, \"Loading\")",
             e.measured.to_degrees(),
             e.model.to_degrees(),
         ))

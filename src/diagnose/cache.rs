@@ -90,6 +90,7 @@ pub fn fingerprint(case: &ReplayCase, sim_rate_hz: Option<f64>) -> u64 {
         p.heading_deg,
         p.gamma_deg,
         p.latitude_deg,
+        p.temperature_offset_k,
     ] {
         v.to_bits().hash(&mut h);
     }

@@ -183,6 +183,13 @@ pub fn prepare(
         })
         .collect();
     warnings.extend(rate_note);
+    if case.point.temperature_offset_k != 0.0 {
+        warnings.push(format!(
+            "the record's air density makes the day {:+.1} K off the standard atmosphere at its altitude: the model \
+             flies in that atmosphere",
+            case.point.temperature_offset_k
+        ));
+    }
     warnings.extend(
         case.sampling_notes
             .iter()

@@ -290,6 +290,7 @@ impl ReplayCase {
             latitude_deg: initial
                 .get(Channel::Latitude.name())
                 .map_or(0.0, |l| l.to_degrees()),
+            temperature_offset_k: temperature_offset_k(&initial)?,
         };
         if !(point.speed_kts > 1.0 && point.altitude_ft.is_finite()) {
             return Err(DiagnoseError::BadData(format!(
@@ -383,6 +384,27 @@ impl ReplayCase {
         push("beta_rad", trim.beta_rad);
         out
     }
+}
+
+/// The day's temperature offset from the standard atmosphere, K, from the record's air density at its quiet start
+/// (`density_kg_m3`, else ρ = 2 q̄/V² from `qbar_pa` and `airspeed_m_s`) at its altitude; 0 (the standard day)
+/// without either. A density no day between ±80 K gives at that altitude is bad data, named.
+fn temperature_offset_k(initial: &BTreeMap<String, f64>) -> Result<f64, DiagnoseError> {
+    let get = |c: Channel| initial.get(c.name()).copied();
+    let density = get(Channel::Density).or_else(|| {
+        let (q, v) = (get(Channel::Qbar)?, get(Channel::Airspeed)?);
+        (v > 1.0).then(|| 2.0 * q / (v * v))
+    });
+    let (Some(rho), Some(h)) = (density, get(Channel::Altitude)) else {
+        return Ok(0.0);
+    };
+    crate::sim::atmosphere::offset_for_density_k(h, rho).ok_or_else(|| {
+        DiagnoseError::BadData(format!(
+            "the air density {rho:.4} kg/m³ at {h:.0} m (from {}) is no day's between 80 K colder and 80 K warmer than \
+             the standard atmosphere: check its unit (kg/m³, or q̄ in Pa)",
+            if get(Channel::Density).is_some() { "density_kg_m3" } else { "qbar_pa and airspeed_m_s" }
+        ))
+    })
 }
 
 /// Mean direction of angles, atan2(Σ sin θ, Σ cos θ) (Mardia & Jupp, Directional Statistics, §2.2.1), rad.

@@ -293,6 +293,19 @@ impl JsbsimSim {
         }
     }
 
+    /// The properties a trim at `point` sets after the model reset: the knobs, and the day's temperature where the
+    /// point has one (in °R, JSBSim's unit; it replaces a `--property atmosphere/delta-T`).
+    fn trim_knobs(&self, point: &TrimPoint) -> BTreeMap<String, f64> {
+        let mut knobs = self.knob_values.clone();
+        if point.temperature_offset_k != 0.0 {
+            knobs.insert(
+                "atmosphere/delta-T".into(),
+                1.8 * point.temperature_offset_k,
+            );
+        }
+        knobs
+    }
+
     /// Reads arbitrary JSBSim properties (current state).
     pub fn get_properties(&mut self, names: &[&str]) -> Result<BTreeMap<String, f64>, SimError> {
         let req = Request::Get {
@@ -330,7 +343,7 @@ impl Simulator for JsbsimSim {
             heading_deg: point.heading_deg,
             gamma_deg: point.gamma_deg,
             latitude_deg: point.latitude_deg,
-            knobs: self.knob_values.clone(),
+            knobs: self.trim_knobs(point),
             report,
             reuse: self.reuse_trims,
         };

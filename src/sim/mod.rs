@@ -4,6 +4,7 @@
 //! Units: SI and radians inside flightid; feet and knots only at this edge (JSBSim's own units).
 
 pub mod aero_truth;
+pub mod atmosphere;
 pub mod bridge;
 pub mod env;
 pub mod jsbsim;
@@ -76,6 +77,10 @@ pub struct TrimPoint {
     pub gamma_deg: f64,
     /// Geodetic latitude, deg (gravity grows by 0.5 % from the equator to the poles).
     pub latitude_deg: f64,
+    /// How much warmer the day is than the standard atmosphere's, K (JSBSim's `atmosphere/delta-T`): at the same
+    /// altitude and true airspeed a warmer day's air is thinner, and the aircraft trims at a higher α.
+    #[serde(default)]
+    pub temperature_offset_k: f64,
 }
 
 impl TrimPoint {
@@ -87,6 +92,7 @@ impl TrimPoint {
             heading_deg: 0.0,
             gamma_deg: 0.0,
             latitude_deg: 0.0,
+            temperature_offset_k: 0.0,
         }
     }
 }

@@ -1,0 +1,85 @@
+//! JSBSim's standard atmosphere with a temperature offset (`atmosphere/delta-T`), below the tropopause: what
+//! density a record's altitude and an outside temperature give, and the offset that gives a measured density.
+//!
+//! JSBSim (`FGStandardAtmosphere`) shifts the whole temperature profile by the offset and keeps the sea-level
+//! pressure, so the pressure at an altitude changes with the offset too (the hydrostatic equation integrated
+//! through warmer air). At 5 000 ft and +15 K JSBSim gives 85 094.8 Pa and 1.01090 kg/m³; these formulas
+//! 85 099 Pa and 1.0109 kg/m³.
+
+/// Sea-level pressure, Pa.
+const P0_PA: f64 = 101_325.0;
+/// Sea-level temperature of the standard day, K.
+const T0_K: f64 = 288.15;
+/// Tropospheric lapse rate, K per geopotential metre.
+const LAPSE_K_M: f64 = 0.0065;
+/// Specific gas constant of air, J/(kg K).
+const R_J_KG_K: f64 = 287.052_87;
+/// Standard gravity, m/s².
+const G0_M_S2: f64 = 9.806_65;
+/// Earth radius for geopotential altitude, m (JSBSim's 20 855 531.5 ft).
+const EARTH_RADIUS_M: f64 = 6_356_766.0;
+/// Top of the troposphere, geopotential m.
+const TROPOPAUSE_M: f64 = 11_000.0;
+
+/// Air density at geometric altitude `altitude_m` on a day `offset_k` warmer than the standard one, kg/m³; `None`
+/// above the tropopause or where the temperature would not be positive.
+pub fn density_kg_m3(altitude_m: f64, offset_k: f64) -> Option<f64> {
+    let h = EARTH_RADIUS_M * altitude_m / (EARTH_RADIUS_M + altitude_m);
+    let t_sl = T0_K + offset_k;
+    let t = t_sl - LAPSE_K_M * h;
+    if !(h <= TROPOPAUSE_M && t > 0.0 && t_sl > 0.0) {
+        return None;
+    }
+    let p = P0_PA * (t / t_sl).powf(G0_M_S2 / (R_J_KG_K * LAPSE_K_M));
+    Some(p / (R_J_KG_K * t))
+}
+
+/// The temperature offset from the standard day, K, at which the atmosphere has `density_kg_m3` at
+/// `altitude_m` (bisection on ±80 K; the density falls monotonically as the day warms). `None` where no offset in
+/// that range gives it: a density in other units, or an altitude above the tropopause.
+pub fn offset_for_density_k(altitude_m: f64, density_kg_m3: f64) -> Option<f64> {
+    let f = |dt: f64| density_kg_m3_or_nan(altitude_m, dt) - density_kg_m3;
+    let (mut lo, mut hi) = (-80.0, 80.0);
+    if !(f(lo) >= 0.0 && f(hi) <= 0.0) {
+        return None;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+fn density_kg_m3_or_nan(altitude_m: f64, offset_k: f64) -> f64 {
+    density_kg_m3(altitude_m, offset_k).unwrap_or(f64::NAN)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_standard_day_and_a_warm_one_match_jsbsim() {
+        // JSBSim 1.3.3, c172x at 5 000 ft: 1.05559 kg/m³ on the standard day, 1.01090 at delta-T = 27 °R.
+        let h = 5000.0 * 0.3048;
+        assert!((density_kg_m3(h, 0.0).unwrap() - 1.05559).abs() < 2e-4);
+        assert!((density_kg_m3(h, 15.0).unwrap() - 1.01090).abs() < 2e-4);
+    }
+
+    #[test]
+    fn the_offset_is_recovered_from_the_density() {
+        for (h, dt) in [(0.0, -20.0), (1500.0, 15.0), (8000.0, 30.0)] {
+            let rho = density_kg_m3(h, dt).unwrap();
+            assert!(
+                (offset_for_density_k(h, rho).unwrap() - dt).abs() < 1e-6,
+                "{h} {dt}"
+            );
+        }
+        // A density in slug/ft³ (515 times smaller) is no day's.
+        assert_eq!(offset_for_density_k(1500.0, 1.05 / 515.4), None);
+    }
+}
