@@ -61,9 +61,10 @@ pub struct Baseline {
 const LOADING_ELEVATOR_RAD: f64 = 0.0015;
 
 impl Baseline {
-    /// A warning when the record trims at another elevator than the unextended model: a weight or CG other than
-    /// the simulation's moves the trim elevator and α as a change of `Cm_0` or of the lift does, and the search
-    /// names such a change in its place (200 lb less fuel in the c172x: `Cm_0` ×2.4 on clean records).
+    /// A warning when the record trims at another elevator than the unextended model: a weight, CG, flap setting
+    /// or air density other than the simulation's moves the trim elevator and α as a change of `Cm_0` or of the
+    /// lift does, and the search names such a change in its place (200 lb less fuel in the c172x: `Cm_0` ×2.4 on
+    /// clean records).
     pub fn loading_warning(&self) -> Option<String> {
         let get = |q: &str| self.trim_mismatch.iter().find(|m| m.quantity == q);
         let e = get("elevator_rad")?;
@@ -77,10 +78,10 @@ impl Baseline {
             });
         Some(format!(
             "the record trims at elevator {:.2}°{measured_alpha}, the model at {:.2}°{model_alpha} (same speed and \
-             altitude): a weight or CG other than the simulation's, or air of another density (a record without \
-             density_kg_m3 or qbar_pa is flown in the standard atmosphere), moves the trim as a change of Cm_0 or of \
-             the lift does, and the search names such a change in its place. If the record was flown with another \
-             loading, give it with --property (docs/diagnose.md, \"Loading\")",
+             altitude): a weight, CG or flap setting other than the simulation's, or air of another density (a record \
+             without density_kg_m3 or qbar_pa is flown in the standard atmosphere), moves the trim as a change of \
+             Cm_0 or of the lift does, and the search names such a change in its place. If the aircraft flew loaded \
+             or configured otherwise, give that with --property (docs/diagnose.md, \"Loading\")",
             e.measured.to_degrees(),
             e.model.to_degrees(),
         ))
