@@ -736,3 +736,24 @@ fn a_record_flown_on_a_warm_day_is_replayed_in_its_own_air() {
     let standard = diagnose_cli(dir.path(), 1, &[], "standard_day");
     assert!(warns_of_the_trim(&standard), "{}", standard["warnings"]);
 }
+
+/// A record flown from a trimmed 3° descent (the generator's `--property ic/gamma-deg=-3`) with `Cm_q` ×1.6
+/// hidden: the replay trims at the flight path of the record's still start (its climb rate, with θ − α agreeing),
+/// and names `Cm_q` alone. Trimmed level, as before, it named an a_x bias of −0.51 m/s² beside it.
+#[test]
+fn a_record_starting_in_a_descent_is_trimmed_in_it() {
+    let effects = r#"[{"effect": "aero_derivative", "target": "Cm_q", "value": 1.6}]"#;
+    let args = [
+        "--cases",
+        "1",
+        "--seed",
+        "37",
+        "--effects",
+        effects,
+        "--duration",
+        "30",
+        "--property",
+        "ic/gamma-deg=-3",
+    ];
+    check_generated(&args, 0);
+}
