@@ -8,7 +8,8 @@ timestamps, so they are written here explicitly.
 Per CSV row (system 1, component 1), all stamped with the row's time:
   ATTITUDE          phi/theta/psi, p/q/r                      (float32; v1 on odd rows, v2 on even)
   SCALED_IMU        ax/ay/az in milli-g                        (int16;   v1 every third row)
-  VFR_HUD           airspeed, altitude, throttle percent       (float32 / uint16)
+  VFR_HUD           equivalent airspeed (the standard atmosphere at the row's altitude), ground speed = the true
+                    airspeed, altitude, throttle percent       (float32 / uint16)
   AOA_SSA           alpha, beta in degrees                     (float32; v2 only, id 11020 > 255)
   SERVO_OUTPUT_RAW  surfaces and throttle in PWM microseconds  (uint16; mapping from --servo-map)
 Unrelated traffic: HEARTBEAT and SYS_STATUS from system 1 once per second, and a second system
@@ -35,6 +36,22 @@ from pymavlink.dialects.v10 import ardupilotmega as mav1
 from pymavlink.dialects.v20 import ardupilotmega as mav2
 
 G0 = 9.80665  # standard gravity, m/s^2
+
+
+def standard_density(altitude_m):
+    """Air density of the standard atmosphere in the troposphere at geometric altitude (geopotential with
+    JSBSim's Earth radius), kg/m^3."""
+    radius, t0, lapse, r_air = 6_356_766.0, 288.15, 0.0065, 287.05287
+    h = radius * altitude_m / (radius + altitude_m)
+    t = t0 - lapse * h
+    p = 101_325.0 * (t / t0) ** (G0 / (r_air * lapse))
+    return p / (r_air * t)
+
+
+def equivalent_per_true(altitude_m):
+    """Equivalent over true airspeed at an altitude of the standard atmosphere, sqrt(rho / rho0)."""
+    h = min(max(altitude_m, -500.0), 10_900.0)
+    return math.sqrt(standard_density(h) / standard_density(0.0))
 
 
 def read_flight_csv(path):
@@ -116,7 +133,9 @@ def main():
         if "airspeed_m_s" in cols:
             thr = int(round(100.0 * col("throttle", i)))
             heading = int(math.degrees(col("psi_rad", i))) % 360
-            emit(stamp, v2, v2.vfr_hud_encode(col("airspeed_m_s", i), col("airspeed_m_s", i),
+            # an autopilot's VFR_HUD carries equivalent airspeed (ArduPilot, PX4) and ground speed
+            eas = col("airspeed_m_s", i) * equivalent_per_true(col("altitude_m", i))
+            emit(stamp, v2, v2.vfr_hud_encode(eas, col("airspeed_m_s", i),
                                              heading, thr, col("altitude_m", i), 0.0), "VFR_HUD")
         if "alpha_rad" in cols:
             emit(stamp, v2, v2.aoa_ssa_encode(stamp, math.degrees(col("alpha_rad", i)),

@@ -6,7 +6,7 @@ use std::process::Command;
 
 use flightid::data::tlog::{StretchChoice, TlogOptions};
 use flightid::data::{
-    parse_tlog_bytes, read_tlog, write_csv_atomic, DataError, FlightRecord, ServoMap,
+    parse_tlog_bytes, read_tlog, write_csv_atomic, AirspeedKind, DataError, FlightRecord, ServoMap,
 };
 use mavlink::dialects::ardupilotmega::{MavMessage, ATTITUDE_DATA, HEARTBEAT_DATA};
 use mavlink::{MavHeader, MavlinkVersion};
@@ -580,4 +580,38 @@ fn jsbsim_csv_to_pymavlink_tlog_and_back_agrees_to_field_quantisation() {
         a.fit_sim_percent > 80.0,
         "the 2-pole model follows the doublet response"
     );
+}
+
+/// VFR_HUD carries an autopilot's equivalent airspeed (the committed fixture, as ArduPilot and PX4 send it): by
+/// default it is made true with the standard atmosphere at the logged altitude, about ×1.06 at the fixture's
+/// 1 200 m; `AirspeedKind::True` takes it as it is. Trimmed at the equivalent airspeed, the replay would fly 6 %
+/// slow and 11 % short of the dynamic pressure.
+#[test]
+fn the_equivalent_airspeed_of_vfr_hud_is_made_true() {
+    let fixture = repo_root().join("tests/fixtures/flight.tlog");
+    let read = |airspeed| {
+        let opts = TlogOptions {
+            airspeed,
+            ..TlogOptions::default()
+        };
+        read_tlog(&fixture, Some(&c172x()), &opts).unwrap().record
+    };
+    let (made_true, as_sent) = (read(AirspeedKind::Equivalent), read(AirspeedKind::True));
+    let (v, eas, h) = (
+        made_true.column("airspeed_m_s").unwrap(),
+        as_sent.column("airspeed_m_s").unwrap(),
+        made_true.column("altitude_m").unwrap(),
+    );
+    for k in 0..v.len() {
+        let ratio = v[k] / eas[k];
+        // ρ/ρ₀ = (1 − 2.25577·10⁻⁵ h)^4.25588 in the troposphere of the 1976 standard atmosphere (h in m)
+        let expected = (1.0 - 2.25577e-5 * h[k]).powf(-4.25588 / 2.0);
+        assert!(
+            (ratio - expected).abs() < 2e-4,
+            "{k}: {ratio} against {expected} at {} m",
+            h[k]
+        );
+        assert!((1.05..1.07).contains(&ratio), "{ratio}");
+    }
+    assert!(made_true.metadata.iter().any(|m| m.contains("made true")));
 }

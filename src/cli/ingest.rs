@@ -34,6 +34,11 @@ pub struct IngestArgs {
     /// Nothing is ever interpolated across a break; without this such a log is refused with the list.
     #[arg(long, value_name = "K|longest")]
     pub stretch: Option<data::StretchChoice>,
+    /// What the log's VFR_HUD airspeed is: `equivalent` (ArduPilot and PX4 send equivalent or indicated
+    /// airspeed; it is made true with the standard atmosphere at the logged altitude, ×1.06 at 1 200 m) or `true`
+    /// (taken as it is). The CSV's `airspeed_m_s` is true airspeed, which the replay trims at.
+    #[arg(long, value_enum, default_value = "equivalent")]
+    pub airspeed: data::AirspeedKind,
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     pub json: bool,
@@ -50,6 +55,7 @@ pub fn run(args: &IngestArgs) -> anyhow::Result<()> {
         sysid: args.sysid,
         rate_hz: args.resample_hz,
         stretch: args.stretch,
+        airspeed: args.airspeed,
     };
     let report = data::read_tlog(&args.tlog, servo_map.as_ref(), &options)?;
     let unit_warnings = report.record.warnings();

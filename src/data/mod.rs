@@ -28,7 +28,9 @@ pub mod servo_map;
 pub mod tlog;
 
 pub use servo_map::ServoMap;
-pub use tlog::{parse_tlog_bytes, read_tlog, Stretch, StretchChoice, TlogOptions, TlogReport};
+pub use tlog::{
+    parse_tlog_bytes, read_tlog, AirspeedKind, Stretch, StretchChoice, TlogOptions, TlogReport,
+};
 pub mod segments;
 pub use segments::{
     find_segments, scan_segments, segment_window, ManeuverKind, Rejected, Segment, SegmentOptions,

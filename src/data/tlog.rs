@@ -9,7 +9,8 @@
 //! - ATTITUDE → `phi_rad theta_rad psi_rad` (yaw unwrapped), `p_rad_s q_rad_s r_rad_s`;
 //! - HIGHRES_IMU (m/s²) or else SCALED_IMU / RAW_IMU (milli-g) → `ax_m_s2 ay_m_s2 az_m_s2`
 //!   (body FRD specific force, 1-g level flight gives az ≈ −9.81);
-//! - VFR_HUD → `airspeed_m_s` (the autopilot's airspeed: usually indicated, not true), `altitude_m`
+//! - VFR_HUD → `airspeed_m_s` (the autopilot's equivalent airspeed made true with the standard atmosphere at the
+//!   logged altitude, or taken as true with [`AirspeedKind::True`]), `altitude_m`
 //!   (MSL), and `throttle` (percent/100) when the servo mapping maps no throttle servo;
 //! - AOA_SSA (degrees) → `alpha_rad beta_rad`;
 //! - SERVO_OUTPUT_RAW (port 0) → `elevator_rad aileron_rad rudder_rad throttle` via [`ServoMap`].
@@ -74,6 +75,27 @@ pub struct TlogOptions {
     /// The stretch to read when the time base breaks (a gap or a jump back); without it such a log is
     /// refused with the list of its stretches.
     pub stretch: Option<StretchChoice>,
+    /// What VFR_HUD's airspeed is.
+    pub airspeed: AirspeedKind,
+}
+
+/// What an autopilot sends as VFR_HUD's airspeed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum AirspeedKind {
+    /// Equivalent (or indicated) airspeed, as ArduPilot and PX4 send it: converted to true airspeed with the
+    /// standard atmosphere at the logged altitude, V_true = V_eq √(ρ₀/ρ(h)).
+    #[default]
+    Equivalent,
+    /// True airspeed: taken as it is.
+    True,
+}
+
+/// True airspeed from equivalent airspeed `eas` at altitude `altitude_m`, in the standard atmosphere (clamped
+/// to the troposphere).
+pub fn true_from_equivalent(eas: f64, altitude_m: f64) -> f64 {
+    use crate::sim::atmosphere::density_kg_m3;
+    let rho = |h: f64| density_kg_m3(h.clamp(-500.0, 10_900.0), 0.0).unwrap_or(f64::NAN);
+    eas * (rho(0.0) / rho(altitude_m)).sqrt()
 }
 
 /// A stretch of a log over which its time base is continuous (no gap longer than a few ATTITUDE intervals, no
@@ -354,7 +376,7 @@ pub fn parse_tlog_bytes(
     };
     let (run_index, from_us, to_us) = windows[chosen];
     let mut series = runs[run_index].1.window(from_us, to_us);
-    let mut record = build_record(&mut series, servo_map, options.rate_hz)
+    let mut record = build_record(&mut series, servo_map, options.rate_hz, options.airspeed)
         .map_err(|m| err(format!("system id {sysid}: {m}")))?;
     if stretches.len() > 1 {
         record.metadata.push(format!(
@@ -673,6 +695,7 @@ fn build_record(
     series: &mut Series,
     servo_map: Option<&ServoMap>,
     rate_hz: Option<f64>,
+    airspeed: AirspeedKind,
 ) -> Result<FlightRecord, String> {
     series.tidy();
     let att = &mut series.attitude;
@@ -749,8 +772,22 @@ fn build_record(
         rec.push_column(Channel::Beta, interp(&series.aoa_ssa, 1, &grid_us));
     }
     if !series.vfr_hud.is_empty() {
-        rec.push_column(Channel::Airspeed, interp(&series.vfr_hud, 0, &grid_us));
-        rec.push_column(Channel::Altitude, interp(&series.vfr_hud, 1, &grid_us));
+        let mut v = interp(&series.vfr_hud, 0, &grid_us);
+        let h = interp(&series.vfr_hud, 1, &grid_us);
+        if airspeed == AirspeedKind::Equivalent {
+            for (v, h) in v.iter_mut().zip(&h) {
+                *v = true_from_equivalent(*v, *h);
+            }
+            let ratio = h
+                .first()
+                .map_or(f64::NAN, |h| true_from_equivalent(1.0, *h));
+            rec.metadata.push(format!(
+                " airspeed_m_s: VFR_HUD's equivalent airspeed made true with the standard atmosphere at the logged \
+                 altitude (x{ratio:.4} at the start; --airspeed true if the autopilot sends true airspeed)"
+            ));
+        }
+        rec.push_column(Channel::Airspeed, v);
+        rec.push_column(Channel::Altitude, h);
     }
     let imu = [
         (&series.highres_imu, "HIGHRES_IMU"),
