@@ -103,7 +103,7 @@ impl Channel {
 
     /// The `N` schema columns from `first` on, in schema order (a const fn, so that a group of adjacent columns
     /// is a constant taken from [`Channel::ALL`] rather than a second copy of its order).
-    const fn run_from<const N: usize>(first: Channel) -> [Channel; N] {
+    pub(crate) const fn run_from<const N: usize>(first: Channel) -> [Channel; N] {
         let mut out = [first; N];
         let mut i = 0;
         while i < N {

@@ -374,21 +374,8 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
 /// The flight-state sensors that move in any record of flight: attitude, body rates, air data, altitude and
 /// specific forces. Not the inputs (a surface or the throttle the maneuver leaves alone is constant), nor thrust,
 /// dynamic pressure, density, latitude or the angular accelerations, which a record may hold constant or derive.
-pub(crate) const MOVING_SENSORS: [Channel; 13] = [
-    Channel::Phi,
-    Channel::Theta,
-    Channel::Psi,
-    Channel::P,
-    Channel::Q,
-    Channel::R,
-    Channel::Alpha,
-    Channel::Beta,
-    Channel::Airspeed,
-    Channel::Altitude,
-    Channel::Ax,
-    Channel::Ay,
-    Channel::Az,
-];
+/// (The thirteen schema columns from `phi_rad` to `az_m_s2`.)
+pub(crate) const MOVING_SENSORS: [Channel; 13] = Channel::run_from(Channel::Phi);
 
 /// How little a stuck sensor's samples spread, as a fraction of the width of its plausible range
 /// ([`Channel::plausible_range`]): 2·10⁻⁸ rad/s for a gyro, 10⁻⁷ m for an altimeter, 3·10⁻⁹ m/s for an
