@@ -1,4 +1,4 @@
-//! JSBSim's standard atmosphere with a temperature offset (`atmosphere/delta-T`), below the tropopause: what
+//! JSBSim's standard atmosphere with a temperature offset (`atmosphere/delta-T`), to 20 km: what
 //! density a record's altitude and an outside temperature give, and the offset that gives a measured density.
 //!
 //! JSBSim (`FGStandardAtmosphere`) shifts the whole temperature profile by the offset and keeps the sea-level
@@ -20,38 +20,70 @@ const G0_M_S2: f64 = 9.806_65;
 const EARTH_RADIUS_M: f64 = 6_356_766.0;
 /// Top of the troposphere, geopotential m.
 const TROPOPAUSE_M: f64 = 11_000.0;
+/// Top of the isothermal lower stratosphere, geopotential m.
+const STRATOSPHERE_TOP_M: f64 = 20_000.0;
 
-/// Air density at geometric altitude `altitude_m` on a day `offset_k` warmer than the standard one, kg/m³; `None`
-/// above the tropopause or where the temperature would not be positive.
+/// Air density at geometric altitude `altitude_m` on a day `offset_k` warmer than the standard one, kg/m³ (the
+/// troposphere and the isothermal layer above it, to 20 km geopotential); `None` above, or where the temperature
+/// would not be positive.
 pub fn density_kg_m3(altitude_m: f64, offset_k: f64) -> Option<f64> {
     let h = EARTH_RADIUS_M * altitude_m / (EARTH_RADIUS_M + altitude_m);
     let t_sl = T0_K + offset_k;
-    let t = t_sl - LAPSE_K_M * h;
-    if !(h <= TROPOPAUSE_M && t > 0.0 && t_sl > 0.0) {
+    let t = t_sl - LAPSE_K_M * h.min(TROPOPAUSE_M);
+    if !(h <= STRATOSPHERE_TOP_M && t > 0.0 && t_sl > 0.0) {
         return None;
     }
-    let p = P0_PA * (t / t_sl).powf(G0_M_S2 / (R_J_KG_K * LAPSE_K_M));
+    let mut p = P0_PA * (t / t_sl).powf(G0_M_S2 / (R_J_KG_K * LAPSE_K_M));
+    if h > TROPOPAUSE_M {
+        p *= (-G0_M_S2 * (h - TROPOPAUSE_M) / (R_J_KG_K * t)).exp();
+    }
     Some(p / (R_J_KG_K * t))
 }
 
 /// The temperature offset from the standard day, K, at which the atmosphere has `density_kg_m3` at
-/// `altitude_m` (bisection on ±80 K; the density falls monotonically as the day warms). `None` where no offset in
-/// that range gives it: a density in other units, or an altitude above the tropopause.
+/// `altitude_m`: of the offsets within ±80 K that give it, the one nearest the standard day (a scan in steps of
+/// 0.5 K, each sign change refined by bisection). Low down the density falls as the day warms, one offset per
+/// density; from about 7 km up the pressure that a warmer day holds aloft makes up for most of the temperature
+/// (JSBSim keeps the sea-level pressure), the density barely depends on the offset and two offsets can give it.
+/// Where none gives it exactly, the offset whose density comes nearest, if within 3 % of it. `None` otherwise: a
+/// density in other units, or an altitude above 20 km.
 pub fn offset_for_density_k(altitude_m: f64, density_kg_m3: f64) -> Option<f64> {
     let f = |dt: f64| density_kg_m3_or_nan(altitude_m, dt) - density_kg_m3;
-    let (mut lo, mut hi) = (-80.0, 80.0);
-    if !(f(lo) >= 0.0 && f(hi) <= 0.0) {
+    let grid: Vec<f64> = (0..=320).map(|i| -80.0 + 0.5 * i as f64).collect();
+    let values: Vec<f64> = grid.iter().map(|&dt| f(dt)).collect();
+    if values.iter().any(|v| !v.is_finite()) {
         return None;
     }
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if f(mid) > 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
+    let mut best: Option<f64> = None;
+    for k in 0..grid.len() - 1 {
+        let (mut lo, mut hi) = (grid[k], grid[k + 1]);
+        let (f_lo, f_hi) = (values[k], values[k + 1]);
+        if f_lo == 0.0 || f_lo.signum() != f_hi.signum() {
+            for _ in 0..50 {
+                let mid = 0.5 * (lo + hi);
+                if f(mid).signum() == f_lo.signum() && f_lo != 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let root = if f_lo == 0.0 {
+                grid[k]
+            } else {
+                0.5 * (lo + hi)
+            };
+            if best.is_none_or(|b| root.abs() < b.abs()) {
+                best = Some(root);
+            }
         }
     }
-    Some(0.5 * (lo + hi))
+    best.or_else(|| {
+        let (k, v) = values
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
+        (v.abs() <= 0.03 * density_kg_m3).then_some(grid[k])
+    })
 }
 
 fn density_kg_m3_or_nan(altitude_m: f64, offset_k: f64) -> f64 {
@@ -72,7 +104,12 @@ mod tests {
 
     #[test]
     fn the_offset_is_recovered_from_the_density() {
-        for (h, dt) in [(0.0, -20.0), (1500.0, 15.0), (8000.0, 30.0)] {
+        for (h, dt) in [
+            (0.0, -20.0),
+            (1500.0, 15.0),
+            (5000.0, -10.0),
+            (8000.0, 30.0),
+        ] {
             let rho = density_kg_m3(h, dt).unwrap();
             assert!(
                 (offset_for_density_k(h, rho).unwrap() - dt).abs() < 1e-6,
@@ -81,5 +118,9 @@ mod tests {
         }
         // A density in slug/ft³ (515 times smaller) is no day's.
         assert_eq!(offset_for_density_k(1500.0, 1.05 / 515.4), None);
+        // The 1976 standard atmosphere at 11 km and 15 km geopotential: 0.36392 and 0.19367 kg/m³.
+        let geometric = |h: f64| EARTH_RADIUS_M * h / (EARTH_RADIUS_M - h);
+        assert!((density_kg_m3(geometric(11_000.0), 0.0).unwrap() - 0.36392).abs() < 2e-4);
+        assert!((density_kg_m3(geometric(15_000.0), 0.0).unwrap() - 0.19367).abs() < 2e-4);
     }
 }
