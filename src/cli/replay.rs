@@ -99,5 +99,8 @@ pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
             m.quantity, m.measured, m.model
         );
     }
+    if let Some(w) = crate::diagnose::baseline::loading_warning(&trim) {
+        eprintln!("warning: {w}");
+    }
     Ok(())
 }

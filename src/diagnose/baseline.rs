@@ -66,26 +66,31 @@ impl Baseline {
     /// lift does, and the search names such a change in its place (200 lb less fuel in the c172x: `Cm_0` ×2.4 on
     /// clean records).
     pub fn loading_warning(&self) -> Option<String> {
-        let get = |q: &str| self.trim_mismatch.iter().find(|m| m.quantity == q);
-        let e = get("elevator_rad")?;
-        if (e.measured - e.model).abs() <= LOADING_ELEVATOR_RAD {
-            return None;
-        }
-        let (measured_alpha, model_alpha) =
-            get("alpha_rad").map_or((String::new(), String::new()), |a| {
-                let deg = |x: f64| format!(" and α {:.2}°", x.to_degrees());
-                (deg(a.measured), deg(a.model))
-            });
-        Some(format!(
-            "the record trims at elevator {:.2}°{measured_alpha}, the model at {:.2}°{model_alpha} (same speed and \
-             altitude): a weight, CG or flap setting other than the simulation's, or air of another density (a record \
-             without density_kg_m3 or qbar_pa is flown in the standard atmosphere), moves the trim as a change of \
-             Cm_0 or of the lift does, and the search names such a change in its place. If the aircraft flew loaded \
-             or configured otherwise, give that with --property (docs/diagnose.md, \"Loading\")",
-            e.measured.to_degrees(),
-            e.model.to_degrees(),
-        ))
+        loading_warning(&self.trim_mismatch)
     }
+}
+
+/// [`Baseline::loading_warning`] from a replay's trim comparison.
+pub fn loading_warning(trim_mismatch: &[TrimMismatch]) -> Option<String> {
+    let get = |q: &str| trim_mismatch.iter().find(|m| m.quantity == q);
+    let e = get("elevator_rad")?;
+    if (e.measured - e.model).abs() <= LOADING_ELEVATOR_RAD {
+        return None;
+    }
+    let (measured_alpha, model_alpha) =
+        get("alpha_rad").map_or((String::new(), String::new()), |a| {
+            let deg = |x: f64| format!(" and α {:.2}°", x.to_degrees());
+            (deg(a.measured), deg(a.model))
+        });
+    Some(format!(
+        "the record trims at elevator {:.2}°{measured_alpha}, the model at {:.2}°{model_alpha} (same speed and \
+         altitude): a weight, CG or flap setting other than the simulation's, or air of another density (a record \
+         without density_kg_m3 or qbar_pa is flown in the standard atmosphere), moves the trim as a change of \
+         Cm_0 or of the lift does, and the search names such a change in its place. If the aircraft flew loaded \
+         or configured otherwise, give that with --property (docs/diagnose.md, \"Loading\")",
+        e.measured.to_degrees(),
+        e.model.to_degrees(),
+    ))
 }
 
 /// Replays the unextended model on the training (and validation) record.
