@@ -110,18 +110,7 @@ fn check_generated_opts(
     opts: DiagnoseOptions,
     values: Values,
 ) -> Diagnosis {
-    let dir = tempfile::tempdir().unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/gen_diagnose_records.py");
-    let st = Command::new(flightid::sim::env::python().expect("the provisioned Python"))
-        .arg(script)
-        .arg("--out")
-        .arg(dir.path())
-        .args(args)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status()
-        .expect("running the generator");
-    assert!(st.success(), "the generator failed");
+    let dir = generated(args);
     let file = |what: &str| dir.path().join(format!("case_{case:03}_{what}"));
     let train = log(read_csv(&file("train.csv")).unwrap());
     let valid = log(read_csv(&file("valid.csv")).unwrap());
