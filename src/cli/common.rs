@@ -11,10 +11,11 @@ use std::path::{Path, PathBuf};
 /// The loading an aircraft flies with, where it is not the model's own.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct LoadingArg {
-    /// JSBSim property set before every trim, NAME=VALUE (repeatable): the loading flown where it is not the
-    /// model's own, e.g. `--property 'propulsion/tank[0]/contents-lbs=30'` or a point mass's weight
-    /// (`inertia/pointmass-weight-lbs[N]`). Another weight or CG trims at another α and elevator, which a replay
-    /// with the model's loading takes for an aerodynamic error (docs/diagnose.md, "Loading").
+    /// JSBSim property set before every trim, NAME=VALUE (repeatable): the loading or configuration flown where
+    /// it is not the model's own, e.g. `--property 'propulsion/tank[0]/contents-lbs=30'`, a point mass's weight
+    /// (`inertia/pointmass-weight-lbs[N]`), a flap setting (`fcs/flap-cmd-norm`), the day's temperature offset
+    /// (`atmosphere/delta-T`, °R). Another weight, CG or flap setting trims at another α and elevator, which a
+    /// replay with the model's own takes for an aerodynamic error (docs/diagnose.md, "Loading").
     #[arg(long = "property", value_name = "NAME=VALUE")]
     pub properties: Vec<String>,
 }
