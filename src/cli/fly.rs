@@ -261,7 +261,9 @@ fn fly_model(
     use crate::diagnose::model::{apply_to_plan, apply_to_record, ExtendedModel};
     use anyhow::Context as _;
     let model = ExtendedModel::read(dir).map_err(|e| UsageError(e.to_string()))?;
-    let cfg = crate::aircraft::load(&model.extension.aircraft)?;
+    let cfg = model
+        .config(&sim_args.loading.properties)
+        .map_err(|e| UsageError(e.to_string()))?;
     let point = sim_args.point(&cfg)?;
     let mut sim = model
         .start(&cfg, sim_args.rate_hz)

@@ -93,6 +93,17 @@ impl ExtendedModel {
         })
     }
 
+    /// The configuration of the model's aircraft with the loading it was fitted with, then `settings`
+    /// (`--property NAME=VALUE`) over it.
+    pub fn config(
+        &self,
+        settings: &[String],
+    ) -> Result<AircraftConfig, crate::aircraft::AircraftError> {
+        let mut cfg = crate::aircraft::load(&self.extension.aircraft)?;
+        cfg.properties.extend(self.extension.properties.clone());
+        cfg.with_properties(settings)
+    }
+
     /// Starts JSBSim on the exported aircraft.
     pub fn start(&self, config: &AircraftConfig, rate_hz: f64) -> Result<JsbsimSim, SimError> {
         JsbsimSim::start_with_model(config, rate_hz, Some(&self.dir))

@@ -55,9 +55,7 @@ fn start_worker(source: &SimSource, rate_hz: f64) -> Result<Worker, DiagnoseErro
             Worker::new(Box::new(sim))
         }
         SimSource::Model(m, loading) => {
-            let mut cfg = aircraft::load(&m.extension.aircraft)?;
-            cfg.properties.extend(m.extension.properties.clone());
-            let cfg = cfg.with_properties(loading)?;
+            let cfg = m.config(loading)?;
             let sim = m.start(&cfg, rate_hz).map_err(starting(format!(
                 "starting JSBSim on the model in {}",
                 m.dir.display()
