@@ -418,24 +418,10 @@ fn flight_path_deg(rec: &FlightRecord, inputs: &[(&str, &str)], airspeed_m_s: f6
     if !(end as f64 * dt >= CLIMB_WINDOW_MIN_S && airspeed_m_s > 1.0) {
         return 0.0;
     }
-    // least-squares line through (t, h) over the still start, with the slope's standard error
-    let t = &rec.time_s[..end];
-    let h = &h[..end];
+    // least-squares line through (t, h) over the still start; its t statistic r √(m − 2) / √(1 − r²)
+    let (slope, r) = crate::signal::slope_and_correlation(&rec.time_s[..end], &h[..end]);
     let m = end as f64;
-    let (tm, hm) = (t.iter().sum::<f64>() / m, h.iter().sum::<f64>() / m);
-    let stt: f64 = t.iter().map(|x| (x - tm).powi(2)).sum();
-    let slope = t
-        .iter()
-        .zip(h)
-        .map(|(x, y)| (x - tm) * (y - hm))
-        .sum::<f64>()
-        / stt;
-    let sse: f64 = t
-        .iter()
-        .zip(h)
-        .map(|(x, y)| (y - hm - slope * (x - tm)).powi(2))
-        .sum();
-    let se = (sse / (m - 2.0).max(1.0) / stt).sqrt();
+    let t_stat = r.abs() * ((m - 2.0).max(1.0) / (1.0 - r * r).max(f64::MIN_POSITIVE)).sqrt();
     let gamma = (slope / airspeed_m_s).clamp(-1.0, 1.0).asin().to_degrees();
     // The air-relative path θ − α (wings level) must agree: a record in sinking or rising air descends or climbs
     // against the ground while it flies level through the air, and is trimmed level (in gusts a validation record
@@ -454,7 +440,7 @@ fn flight_path_deg(rec: &FlightRecord, inputs: &[(&str, &str)], airspeed_m_s: f6
     };
     let agrees =
         air_path.is_none_or(|g| (g - gamma).abs() <= (0.25 * gamma.abs()).max(CLIMB_MIN_DEG));
-    if gamma.abs() < CLIMB_MIN_DEG || slope.abs() < 4.0 * se || !agrees {
+    if gamma.abs() < CLIMB_MIN_DEG || t_stat < 4.0 || !agrees {
         return 0.0;
     }
     gamma

@@ -12,7 +12,7 @@ pub use maneuver::{
 };
 pub use ops::{
     add_white_noise, difference_noise_std, heading_from_zero_rad, mean, median_in_place, noise_std,
-    on_uniform_step, resample_linear, std_dev, sum_sq, unwrap_rad,
+    on_uniform_step, resample_linear, slope_and_correlation, std_dev, sum_sq, unwrap_rad,
 };
 
 /// What can be wrong with a maneuver definition.

@@ -20,6 +20,23 @@ pub fn std_dev(x: &[f64]) -> f64 {
     (x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt()
 }
 
+/// Least-squares slope of `y` on `x` with an intercept, and their correlation (0, 0 where
+/// either does not vary).
+pub fn slope_and_correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxx += (a - mx) * (a - mx);
+        syy += (b - my) * (b - my);
+        sxy += (a - mx) * (b - my);
+    }
+    if sxx <= 0.0 || syy <= 0.0 {
+        return (0.0, 0.0);
+    }
+    (sxy / sxx, sxy / (sxx * syy).sqrt())
+}
+
 /// `x` plus zero-mean Gaussian white noise of standard deviation `std`, reproducible from `seed`.
 ///
 /// A non-positive or non-finite `std` returns `x` unchanged.

@@ -56,25 +56,25 @@ pub fn offset_for_density_k(altitude_m: f64, density_kg_m3: f64) -> Option<f64> 
     }
     let mut best: Option<f64> = None;
     for k in 0..grid.len() - 1 {
-        let (mut lo, mut hi) = (grid[k], grid[k + 1]);
         let (f_lo, f_hi) = (values[k], values[k + 1]);
-        if f_lo == 0.0 || f_lo.signum() != f_hi.signum() {
+        let root = if f_lo == 0.0 {
+            grid[k]
+        } else if f_lo.signum() != f_hi.signum() {
+            let (mut lo, mut hi) = (grid[k], grid[k + 1]);
             for _ in 0..50 {
                 let mid = 0.5 * (lo + hi);
-                if f(mid).signum() == f_lo.signum() && f_lo != 0.0 {
+                if f(mid).signum() == f_lo.signum() {
                     lo = mid;
                 } else {
                     hi = mid;
                 }
             }
-            let root = if f_lo == 0.0 {
-                grid[k]
-            } else {
-                0.5 * (lo + hi)
-            };
-            if best.is_none_or(|b| root.abs() < b.abs()) {
-                best = Some(root);
-            }
+            0.5 * (lo + hi)
+        } else {
+            continue;
+        };
+        if best.is_none_or(|b| root.abs() < b.abs()) {
+            best = Some(root);
         }
     }
     best.or_else(|| {

@@ -4,22 +4,7 @@
 use super::{FlightRecord, G0_M_S2};
 use crate::data::channel::Channel;
 use crate::data::error::{Warning, WarningKind};
-
-/// Least-squares slope of `y` on `x` with an intercept, and their correlation.
-fn slope_and_correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
-    let n = x.len() as f64;
-    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-    for (a, b) in x.iter().zip(y) {
-        sxx += (a - mx) * (a - mx);
-        syy += (b - my) * (b - my);
-        sxy += (a - mx) * (b - my);
-    }
-    if sxx <= 0.0 || syy <= 0.0 {
-        return (0.0, 0.0);
-    }
-    (sxy / sxx, sxy / (sxx * syy).sqrt())
-}
+use crate::signal::slope_and_correlation;
 
 /// Slope and correlation of an angle's change over half-second windows against its rate's integral over the
 /// same windows (trapezoids). A differentiated angle is too noisy: on a 50 Hz record with 0.05° of attitude
