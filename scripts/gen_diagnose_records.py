@@ -501,6 +501,9 @@ def main():
                     help="also log density_kg_m3, the air density a data system computes from static pressure and "
                          "outside air temperature (with --property atmosphere/delta-T=R: a day R deg Rankine warmer "
                          "than the standard atmosphere)")
+    ap.add_argument("--log-from", type=float, default=0.0, metavar="S",
+                    help="the log begins S seconds into the flight, as a log cut from a longer flight does (inside "
+                         "a maneuver or a transient), its clock starting at 0 there; the truth gets \"log_from_s\"")
     args = ap.parse_args()
     loading = {}
     for setting in args.property:
@@ -569,9 +572,16 @@ def main():
                      "seed": args.seed, "case": i, "plan": plan or "full", "aircraft": args.aircraft}
             if loading:
                 truth["properties"] = loading
+            if args.log_from > 0.0:
+                truth["log_from_s"] = args.log_from
             for part, validation in (("train", False), ("valid", True)):
                 rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation,
                            PLANS[plan] if plan else None)
+                if args.log_from > 0.0:
+                    rows = [r for r in rows if r["time_s"] >= args.log_from - 1e-9]
+                    t0 = rows[0]["time_s"]
+                    for r in rows:
+                        r["time_s"] -= t0
                 cols, data = sensors(rows, effects, noise_level, rng)
                 cols = [c for c in cols if c not in unlogged]
                 write_csv(os.path.join(args.out, f"case_{i:03d}_{part}.csv"), cols, data,

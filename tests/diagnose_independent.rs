@@ -746,3 +746,76 @@ fn a_record_starting_in_a_descent_is_trimmed_in_it() {
     ];
     check_generated(&args, 0);
 }
+
+/// Whether a diagnosis warns that the record does not start in steady flight, at an equilibrium within 0.3 kts
+/// of `kts`.
+fn settles_at(d: &serde_json::Value, kts: f64) -> bool {
+    d["warnings"].as_array().unwrap().iter().any(|w| {
+        let w = w.as_str().unwrap();
+        w.strip_prefix("the record does not start in steady flight: its inputs hold the model at ")
+            .and_then(|rest| rest.split(' ').next()?.parse::<f64>().ok())
+            .is_some_and(|v| (v - kts).abs() <= 0.3)
+    })
+}
+
+/// Logs cut from a longer flight (the generator's `--log-from`), as a data system that starts recording mid-flight
+/// writes them; the generator trims its flight at 109.8 kts. Logged from 14 s on, the record begins in the phugoid
+/// the elevator 3-2-1-1 left, 2 kts fast and climbing at 2°: replayed from a trim at its start, it named an a_x and
+/// a θ bias. Logged from 2.5 s on, it begins inside the 3-2-1-1's step, 1.8° of elevator off its usual value: the
+/// replay flew the rest with that offset and named an a_x and an α bias. Now the replay starts after the
+/// maneuver, trims at the equilibrium its inputs hold, and names nothing; a hidden pitch-rate gyro bias on the
+/// record logged from 14 s is named alone.
+#[test]
+fn a_log_cut_from_a_longer_flight_is_replayed_from_the_equilibrium_of_its_inputs() {
+    for (log_from, effects, named) in [
+        ("14", "[]", serde_json::json!([])),
+        ("2.5", "[]", serde_json::json!([])),
+        (
+            "14",
+            r#"[{"effect": "sensor_bias", "target": "q_rad_s", "value": 0.0105}]"#,
+            serde_json::json!(["sensor_bias/q_rad_s"]),
+        ),
+    ] {
+        let args = [
+            "--cases",
+            "1",
+            "--seed",
+            "41",
+            "--effects",
+            effects,
+            "--duration",
+            "40",
+            "--log-from",
+            log_from,
+        ];
+        let dir = generated(&args);
+        let d = diagnose_cli(dir.path(), 0, &[], "cut");
+        let got: Vec<String> = d["named_cause"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| {
+                format!(
+                    "{}/{}",
+                    n["effect"].as_str().unwrap(),
+                    n["target"].as_str().unwrap()
+                )
+            })
+            .collect();
+        assert_eq!(
+            serde_json::json!(got),
+            named,
+            "logged from {log_from} s: {}",
+            d["named_cause"]
+        );
+        assert!(
+            settles_at(&d, 109.8),
+            "logged from {log_from} s: {}",
+            d["warnings"]
+        );
+        if let Some(bias) = d["named_cause"].as_array().unwrap().first() {
+            let v = bias["value"].as_f64().unwrap();
+            assert!((v - 0.0105).abs() <= 0.15 * 0.0105, "q bias {v}");
+        }
+    }
+}

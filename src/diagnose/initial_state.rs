@@ -63,6 +63,13 @@ pub fn initial_state_columns(
         .collect())
 }
 
+/// How many of [`initial_state_columns`]' columns each segment has: the nine states, and the heading where it is
+/// compared. Nuisance columns appended after them (the equilibrium's airspeed, `equilibrium`) are not a segment's.
+pub fn columns_per_segment(case: &ReplayCase) -> usize {
+    state_perturbations().len()
+        + usize::from(case.outputs.iter().any(|o| o == super::replay::HEADING))
+}
+
 /// Size of the heading step of [`heading_columns`], rad (the roll angle's step).
 const HEADING_STEP_RAD: f64 = 0.01;
 

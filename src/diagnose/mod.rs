@@ -9,6 +9,7 @@
 
 pub mod baseline;
 pub mod cache;
+pub mod equilibrium;
 pub mod export;
 pub mod extension;
 pub mod initial_state;
@@ -28,6 +29,7 @@ pub mod residual_filter;
 pub mod search;
 pub mod select;
 pub mod simulator;
+pub mod start;
 pub mod validate;
 pub mod workers;
 
@@ -377,8 +379,15 @@ fn nuisance(
     progress: &progress::Progress,
 ) -> Result<Nuisance, DiagnoseError> {
     progress.stage("segment initial states", 0);
-    let columns = initial_state::initial_state_columns(workers, &p.case, &p.sigma)
+    let mut columns = initial_state::initial_state_columns(workers, &p.case, &p.sigma)
         .map_err(sim_err("replay"))?;
+    if let Some(settled) = equilibrium::settle(workers, p, &columns, progress)? {
+        p.warnings.push(settled.note);
+        progress.stage("segment initial states", 0);
+        columns = initial_state::initial_state_columns(workers, &p.case, &p.sigma)
+            .map_err(sim_err("replay"))?;
+        columns.push(settled.column);
+    }
     let (columns, relaxed) = relax::relax(&mut workers[0], p, columns, opts.relax_weights)?;
     let rate = rate::choose(workers, p, &columns, opts, progress)?;
     Ok((columns, relaxed, rate))

@@ -162,6 +162,12 @@ pub fn prepare(
         None => None,
     };
     let mut vcase = valid.as_ref().map(ReplayCase::new).transpose()?;
+    // what preparing the validation case did beyond the dropouts (a start inside a maneuver)
+    for n in vcase.iter().flat_map(|v| &v.sampling_notes) {
+        if !valid_notes.contains(n) {
+            valid_notes.push(n.clone());
+        }
+    }
     // Heading is compared only where each segment's initial heading is estimated (a simulation that can set
     // its state mid-flight, the training record): elsewhere it drifts from the record's without bound.
     if let Some(v) = vcase.as_mut() {

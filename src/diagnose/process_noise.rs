@@ -67,8 +67,10 @@ pub struct ProcessNoise {
 /// singular.
 fn error_dynamics(case: &ReplayCase, columns: &[Vec<f64>]) -> Option<(Mat<f64>, Mat<f64>)> {
     let horizon = (MODEL_HORIZON_S / case.dt_s()).round() as usize;
+    // the segments' own columns, without the nuisance columns appended after them
+    let states = super::initial_state::columns_per_segment(case) * case.segments.len();
     fit_error_dynamics(
-        columns,
+        columns.get(..states)?,
         &case.segments,
         case.len(),
         case.outputs.len(),

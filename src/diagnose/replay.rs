@@ -236,6 +236,24 @@ impl ReplayCase {
                     .into(),
             ));
         }
+        let mut sampling_notes = sampling_notes;
+        let (first, start_note) = super::start::maneuver_free_start(&rec, &present_inputs);
+        sampling_notes.extend(start_note);
+        let rec = if first > 0 {
+            let mut cut = rec.slice(first, rec.len());
+            let t0 = cut.time_s[0];
+            cut.time_s.iter_mut().for_each(|t| *t -= t0);
+            cut
+        } else {
+            rec
+        };
+        let n = rec.len();
+        if n < 50 {
+            return Err(DiagnoseError::TooShort(format!(
+                "{n} samples after the maneuver the record begins in; replay and identification need at least 50 ({})",
+                sampling_notes.join("; ")
+            )));
+        }
         // Quiet start: until any input moves by more than 1 mrad (0.001 throttle) or 0.5 s pass.
         let mut quiet = 1;
         while quiet < n && quiet as f64 * dt < 0.5 {
@@ -286,11 +304,15 @@ impl ReplayCase {
             altitude_ft: initial["altitude_m"] / FT_TO_M,
             speed_kts: initial["airspeed_m_s"] / KTS_TO_M_S,
             heading_deg: heading_deg.rem_euclid(360.0),
-            gamma_deg: flight_path_deg(&rec, &present_inputs, initial["airspeed_m_s"]),
+            gamma_deg: super::start::flight_path_deg(
+                &rec,
+                &present_inputs,
+                initial["airspeed_m_s"],
+            ),
             latitude_deg: initial
                 .get(Channel::Latitude.name())
                 .map_or(0.0, |l| l.to_degrees()),
-            temperature_offset_k: temperature_offset_k(&initial)?,
+            temperature_offset_k: super::start::temperature_offset_k(&initial)?,
         };
         if !(point.speed_kts > 1.0 && point.altitude_ft.is_finite()) {
             return Err(DiagnoseError::BadData(format!(
@@ -384,87 +406,6 @@ impl ReplayCase {
         push("beta_rad", trim.beta_rad);
         out
     }
-}
-
-/// Longest window over which the start's climb rate is fitted, s.
-const CLIMB_WINDOW_MAX_S: f64 = 10.0;
-/// Shortest still start from which a climb rate is taken, s.
-const CLIMB_WINDOW_MIN_S: f64 = 1.0;
-/// Smallest flight-path angle the replay trims at, deg: below it the record is taken as level (a slope of the
-/// altimeter's noise does not move the trim, and the segment initial states absorb a small climb).
-const CLIMB_MIN_DEG: f64 = 0.5;
-
-/// The record's flight-path angle at its start, deg: γ = asin(ḣ/V) with ḣ the least-squares slope of
-/// `altitude_m` over the still start (until an input leaves its initial value by more than 1 mrad or five times its
-/// sample-to-sample noise, at most 10 s), V the initial airspeed. 0 (level) where the still start is shorter than
-/// 1 s, the angle is below 0.5° or within four standard errors of the slope, or θ − α over the same start differs
-/// from it by more than 0.5° or a quarter of it. A record that starts in a steady
-/// climb or descent replayed from a level trim departs from it at once (a clean c172x record climbing at 3°: an
-/// a_x bias of 0.50 m/s² and a θ bias of 1° named).
-fn flight_path_deg(rec: &FlightRecord, inputs: &[(&str, &str)], airspeed_m_s: f64) -> f64 {
-    let (Some(h), n) = (rec.column("altitude_m"), rec.len()) else {
-        return 0.0;
-    };
-    let dt = rec.time_s.get(1).map_or(f64::NAN, |t1| t1 - rec.time_s[0]);
-    let limit = ((CLIMB_WINDOW_MAX_S / dt) as usize).min(n);
-    let mut end = limit;
-    for (_, c) in inputs {
-        let x = rec.column(c).unwrap_or(&[]);
-        let tol = (5.0 * crate::signal::difference_noise_std(&x[..limit])).max(1e-3);
-        if let Some(k) = x[..limit].iter().position(|v| (v - x[0]).abs() > tol) {
-            end = end.min(k);
-        }
-    }
-    if !(end as f64 * dt >= CLIMB_WINDOW_MIN_S && airspeed_m_s > 1.0) {
-        return 0.0;
-    }
-    // least-squares line through (t, h) over the still start; its t statistic r √(m − 2) / √(1 − r²)
-    let (slope, r) = crate::signal::slope_and_correlation(&rec.time_s[..end], &h[..end]);
-    let m = end as f64;
-    let t_stat = r.abs() * ((m - 2.0).max(1.0) / (1.0 - r * r).max(f64::MIN_POSITIVE)).sqrt();
-    let gamma = (slope / airspeed_m_s).clamp(-1.0, 1.0).asin().to_degrees();
-    // The air-relative path θ − α (wings level) must agree: a record in sinking or rising air descends or climbs
-    // against the ground while it flies level through the air, and is trimmed level (in gusts a validation record
-    // descended at 0.73° over its 3.9 s still start with θ − α at +0.47°).
-    let air_path = match (rec.column("theta_rad"), rec.column("alpha_rad")) {
-        (Some(th), Some(al)) => {
-            let mean = th[..end]
-                .iter()
-                .zip(&al[..end])
-                .map(|(t, a)| t - a)
-                .sum::<f64>()
-                / m;
-            Some(mean.to_degrees())
-        }
-        _ => None,
-    };
-    let agrees =
-        air_path.is_none_or(|g| (g - gamma).abs() <= (0.25 * gamma.abs()).max(CLIMB_MIN_DEG));
-    if gamma.abs() < CLIMB_MIN_DEG || t_stat < 4.0 || !agrees {
-        return 0.0;
-    }
-    gamma
-}
-
-/// The day's temperature offset from the standard atmosphere, K, from the record's air density at its quiet start
-/// (`density_kg_m3`, else ρ = 2 q̄/V² from `qbar_pa` and `airspeed_m_s`) at its altitude; 0 (the standard day)
-/// without either. A density no day between ±80 K gives at that altitude is bad data, named.
-fn temperature_offset_k(initial: &BTreeMap<String, f64>) -> Result<f64, DiagnoseError> {
-    let get = |c: Channel| initial.get(c.name()).copied();
-    let density = get(Channel::Density).or_else(|| {
-        let (q, v) = (get(Channel::Qbar)?, get(Channel::Airspeed)?);
-        (v > 1.0).then(|| 2.0 * q / (v * v))
-    });
-    let (Some(rho), Some(h)) = (density, get(Channel::Altitude)) else {
-        return Ok(0.0);
-    };
-    crate::sim::atmosphere::offset_for_density_k(h, rho).ok_or_else(|| {
-        DiagnoseError::BadData(format!(
-            "the air density {rho:.4} kg/m³ at {h:.0} m (from {}) is no day's between 80 K colder and 80 K warmer than \
-             the standard atmosphere: check its unit (kg/m³, or q̄ in Pa)",
-            if get(Channel::Density).is_some() { "density_kg_m3" } else { "qbar_pa and airspeed_m_s" }
-        ))
-    })
 }
 
 /// Mean direction of angles, atan2(Σ sin θ, Σ cos θ) (Mardia & Jupp, Directional Statistics, §2.2.1), rad.
