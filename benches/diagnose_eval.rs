@@ -6,7 +6,7 @@
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
 //! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--backward-elimination] [--estimate-rate]
-//! [--without COLUMNS] [--aircraft c172x|737] [--out DIR]`
+//! [--without COLUMNS] [--log-from S] [--aircraft c172x|737] [--out DIR]`
 //! - `--aircraft 737`: records of JSBSim's 737 in cruise, diagnosed with flightid's `737` configuration.
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
@@ -17,6 +17,8 @@
 //!   --estimate-rate`).
 //! - `--without alpha_rad,beta_rad,ax_m_s2,ay_m_s2,az_m_s2`: records that leave those sensor columns out (a log
 //!   without vanes or accelerometers); no effect is hidden on them.
+//! - `--log-from 14`: records logged from that many seconds into their flight, as a data system that starts
+//!   recording mid-flight writes them (inside a maneuver or the transient after one).
 //! - the mix is stratified by case index (i mod 4 = 0 clean, 3 two or three effects, else one: 40 cases give
 //!   10 clean, 20 single, 10 multiple); `--random-mix` draws it by chance (a quarter clean, a quarter multiple).
 //! - `--clean`: every case clean (the acceptance's maneuver sequence, lengths 30–90 s).
@@ -49,6 +51,7 @@ struct Args {
     out: PathBuf,
     first: usize,
     without: String,
+    log_from: String,
     aircraft: String,
 }
 
@@ -67,6 +70,7 @@ fn args() -> Args {
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
         without: String::new(),
+        log_from: String::new(),
         aircraft: "c172x".to_string(),
     };
     let v: Vec<String> = std::env::args().skip(1).collect();
@@ -79,6 +83,7 @@ fn args() -> Args {
             "--first" => a.first = next(i).parse().unwrap_or(0),
             "--out" => a.out = PathBuf::from(next(i)),
             "--without" => a.without = next(i),
+            "--log-from" => a.log_from = next(i),
             "--aircraft" => a.aircraft = next(i),
             "--turbulence" => {
                 a.turbulence = true;
@@ -216,6 +221,9 @@ fn generate(a: &Args) {
     }
     if !a.without.is_empty() {
         cmd.args(["--without", &a.without]);
+    }
+    if !a.log_from.is_empty() {
+        cmd.args(["--log-from", &a.log_from]);
     }
     if !a.random_mix {
         cmd.arg("--stratified");
