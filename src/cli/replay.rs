@@ -48,6 +48,10 @@ pub fn run(args: &ReplayCmd) -> anyhow::Result<()> {
     super::common::check_outputs(&[super::common::json_path(&args.json)], &[])?;
     let rec = args.columns.read(&args.data)?;
     let case = ReplayCase::new(&rec)?;
+    // what preparing the record did to it (a dropout cut, a start inside a maneuver)
+    for note in &case.sampling_notes {
+        eprintln!("warning: {note}");
+    }
     let model = args.model.as_deref().map(ExtendedModel::read).transpose()?;
     // read (and range-checked) before any simulation starts
     let extension = match (&model, &args.extension) {
