@@ -819,3 +819,46 @@ fn a_log_cut_from_a_longer_flight_is_replayed_from_the_equilibrium_of_its_inputs
         }
     }
 }
+
+/// A clean record whose sensor channels the data system logged two samples (40 ms) later than its surface
+/// channels. The search names an input delay of 40 ms on each of the three surfaces; they are one finding about the
+/// record's timing, reported in `record_timing` and a warning, and no cause is named.
+#[test]
+fn a_time_skew_common_to_every_surface_is_the_records_timing_not_a_cause() {
+    let args = [
+        "--cases",
+        "1",
+        "--seed",
+        "41",
+        "--effects",
+        "[]",
+        "--duration",
+        "40",
+    ];
+    let inputs = ["elevator_rad", "aileron_rad", "rudder_rad", "throttle"];
+    let sensors_late = |mut rec: FlightRecord| {
+        for (name, col) in rec.columns.iter_mut() {
+            if !inputs.contains(&name.as_str()) {
+                let first = col[0];
+                col.rotate_right(2);
+                col[..2].fill(first);
+            }
+        }
+        rec
+    };
+    let d = check_generated_with(&args, 0, sensors_late);
+    let timing: Vec<(String, f64)> = d
+        .record_timing
+        .iter()
+        .map(|n| (n.target.clone(), n.value))
+        .collect();
+    assert_eq!(timing.len(), 3, "{timing:?}");
+    for (surface, v) in &timing {
+        assert!((v - 0.040).abs() < 0.003, "{surface}: {v}");
+    }
+    assert!(
+        d.warnings.iter().any(|w| w.contains("same 40 ms")),
+        "{:?}",
+        d.warnings
+    );
+}

@@ -7,13 +7,14 @@ use super::extension::{ExtensionFile, FittedEffect};
 use super::Diagnosis;
 
 impl Diagnosis {
-    /// The extension file of the named effects.
+    /// The extension file of the named effects and the record's timing.
     pub fn extension_file(&self, aircraft: &str) -> ExtensionFile {
         ExtensionFile {
             aircraft: aircraft.to_string(),
             effects: self
                 .named_cause
                 .iter()
+                .chain(&self.record_timing)
                 .map(|c| FittedEffect {
                     effect: c.effect.clone(),
                     target: c.target.clone(),

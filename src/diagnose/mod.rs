@@ -29,6 +29,7 @@ pub mod residual_filter;
 pub mod search;
 pub mod select;
 pub mod simulator;
+pub mod skew;
 pub mod start;
 pub mod validate;
 pub mod workers;
@@ -237,6 +238,9 @@ pub struct Diagnosis {
     /// Residual statistics with the named effects.
     pub residuals_after: BTreeMap<String, ChannelResidual>,
     /// Model trim vs measured initial condition.
+    /// Input delays alike on every surface that moves, taken as the record's timing (a skew between its surface
+    /// and sensor channels) instead of as causes (`skew`); the validation and the extension file carry them.
+    pub record_timing: Vec<NamedCause>,
     pub trim_mismatch: Vec<TrimMismatch>,
     /// Catalogue entries not evaluated.
     pub skipped: Vec<Skipped>,
@@ -330,6 +334,7 @@ pub fn diagnose(
     };
     progress.stage("kinematic findings", 0);
     kinematic::kinematic_findings(&mut workers[0], train, reconstruction, &p, &mut sel, opts)?;
+    let (skew_note, record_timing) = skew::common_skew(&p, &mut sel.named).unzip();
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
     progress.finish();
@@ -347,7 +352,13 @@ pub fn diagnose(
             .cloned()
             .chain(sel.unidentifiable)
             .collect(),
-        warnings: p.warnings.into_iter().chain(refit_note).collect(),
+        warnings: p
+            .warnings
+            .into_iter()
+            .chain(refit_note)
+            .chain(skew_note)
+            .collect(),
+        record_timing: record_timing.unwrap_or_default(),
         process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.noise_sigma).collect(),
         relaxed_weights,

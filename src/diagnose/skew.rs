@@ -1,0 +1,74 @@
+//! A time skew common to every surface: the record's convention, not a cause.
+//!
+//! A data system that stamps its sensor channels later than its surface channels (a logging skew, a sensor's
+//! latency), or an aircraft whose every surface lags its command alike, gives a record in which the response
+//! follows every surface by the same time. The search names that as an input delay on each surface that moves, with
+//! one value: on clean c172x records of the independent generator with the sensor channels logged one and two
+//! samples late (20–50 ms), delays of 0.028/0.027/0.030 s and 0.040/0.040/0.041 s on the elevator, aileron and
+//! rudder. One hidden delay on one surface, as the catalogue draws them, leaves the other surfaces without one.
+//!
+//! So where every surface that moves (at least two) is named with an input delay, and the delays agree within
+//! three of their standard errors or 15 % of their mean, they are one finding about the record's timing: the
+//! delays stay in the fitted model (the validation, the extension file and the model carry them), and they are
+//! reported as a warning instead of as named causes.
+
+use super::prepare::Prepared;
+use super::NamedCause;
+
+/// The share of the delays' mean within which delays on every surface are one skew.
+const AGREE_SHARE: f64 = 0.15;
+
+/// Takes input delays that [`super`]'s selection named on every surface that moves, alike (module doc), out of
+/// `named`, and returns the warning that reports them as the record's timing, with the delays; `None` (and
+/// `named` unchanged) otherwise.
+pub fn common_skew(p: &Prepared, named: &mut Vec<NamedCause>) -> Option<(String, Vec<NamedCause>)> {
+    let moving: Vec<&str> = p
+        .case
+        .inputs
+        .iter()
+        .filter(|(s, d)| s != "throttle" && d.iter().any(|v| v.abs() > 1e-3))
+        .map(|(s, _)| s.as_str())
+        .collect();
+    let delays: Vec<&NamedCause> = moving
+        .iter()
+        .filter_map(|s| {
+            named
+                .iter()
+                .find(|n| n.effect == "input_delay" && n.target == *s)
+        })
+        .collect();
+    if moving.len() < 2 || delays.len() != moving.len() {
+        return None;
+    }
+    let values: Vec<f64> = delays.iter().map(|n| n.value).collect();
+    let mean = values.iter().sum::<f64>() / values.len() as f64;
+    let spread = values.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v))
+        - values.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+    let sigma = delays
+        .iter()
+        .map(|n| {
+            if n.std_error.is_finite() {
+                n.std_error
+            } else {
+                0.0
+            }
+        })
+        .fold(0.0, f64::max);
+    if spread > (3.0 * sigma).max(AGREE_SHARE * mean) {
+        return None;
+    }
+    let each: Vec<String> = delays
+        .iter()
+        .map(|n| format!("{} {:.4} s", n.target, n.value))
+        .collect();
+    let timing: Vec<NamedCause> = delays.into_iter().cloned().collect();
+    named.retain(|n| !(n.effect == "input_delay" && moving.contains(&n.target.as_str())));
+    let note = format!(
+        "the response follows every surface that moves by the same {:.0} ms ({}): a time skew between the record's \
+         surface and sensor channels (its data system's timing), or a delay common to every surface. It is taken \
+         as the record's timing, not named as a cause; the validation and the extension carry it",
+        1000.0 * mean,
+        each.join(", ")
+    );
+    Some((note, timing))
+}
