@@ -243,7 +243,7 @@ mod tests {
         let rec = record(10.0, |t| {
             if t < 1.0 {
                 0.12
-            } else if (t * 2.0) as usize % 2 == 0 {
+            } else if ((t * 2.0) as usize).is_multiple_of(2) {
                 0.09
             } else {
                 0.06
