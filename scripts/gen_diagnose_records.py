@@ -579,6 +579,8 @@ def main():
                            PLANS[plan] if plan else None)
                 if args.log_from > 0.0:
                     rows = [r for r in rows if r["time_s"] >= args.log_from - 1e-9]
+                    if len(rows) < 2:
+                        sys.exit(f"case {i}: --log-from {args.log_from} s leaves nothing of its {duration:.1f} s record")
                     t0 = rows[0]["time_s"]
                     for r in rows:
                         r["time_s"] -= t0

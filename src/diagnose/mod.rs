@@ -237,10 +237,10 @@ pub struct Diagnosis {
     pub residuals: BTreeMap<String, ChannelResidual>,
     /// Residual statistics with the named effects.
     pub residuals_after: BTreeMap<String, ChannelResidual>,
-    /// Model trim vs measured initial condition.
     /// Input delays alike on every surface that moves, taken as the record's timing (a skew between its surface
     /// and sensor channels) instead of as causes (`skew`); the validation and the extension file carry them.
     pub record_timing: Vec<NamedCause>,
+    /// Model trim vs measured initial condition.
     pub trim_mismatch: Vec<TrimMismatch>,
     /// Catalogue entries not evaluated.
     pub skipped: Vec<Skipped>,
