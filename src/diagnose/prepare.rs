@@ -244,12 +244,7 @@ pub fn prepare(
         .collect();
     // An effect that no moving input excites cannot be told from the gusts and the initial states: a
     // signal-path effect needs its surface to move, a derivative an input of its axis (`Extension::excited_by`).
-    let moving: Vec<&str> = case
-        .inputs
-        .iter()
-        .filter(|(_, d)| d.iter().any(|v| v.abs() >= 1e-6))
-        .map(|(s, _)| s.as_str())
-        .collect();
+    let moving = case.moving_inputs(1e-6);
     let mut catalogue = Vec::new();
     for e in all {
         let needs = e.excited_by();

@@ -346,6 +346,15 @@ impl ReplayCase {
         1.0 / self.rate_hz
     }
 
+    /// The surfaces whose deviation from their starting value reaches `threshold` somewhere in the record.
+    pub fn moving_inputs(&self, threshold: f64) -> Vec<&str> {
+        self.inputs
+            .iter()
+            .filter(|(_, d)| d.iter().any(|v| v.abs() >= threshold))
+            .map(|(s, _)| s.as_str())
+            .collect()
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.record.len()

@@ -22,13 +22,8 @@ const AGREE_SHARE: f64 = 0.15;
 /// `named`, and returns the warning that reports them as the record's timing, with the delays; `None` (and
 /// `named` unchanged) otherwise.
 pub fn common_skew(p: &Prepared, named: &mut Vec<NamedCause>) -> Option<(String, Vec<NamedCause>)> {
-    let moving: Vec<&str> = p
-        .case
-        .inputs
-        .iter()
-        .filter(|(s, d)| s != "throttle" && d.iter().any(|v| v.abs() > 1e-3))
-        .map(|(s, _)| s.as_str())
-        .collect();
+    let mut moving = p.case.moving_inputs(1e-3);
+    moving.retain(|s| *s != "throttle");
     let delays: Vec<&NamedCause> = moving
         .iter()
         .filter_map(|s| {

@@ -34,7 +34,7 @@ pub(super) fn flight_path_deg(
     let mut end = limit;
     for (_, c) in inputs {
         let x = rec.column(c).unwrap_or(&[]);
-        let tol = (5.0 * crate::signal::difference_noise_std(&x[..limit])).max(1e-3);
+        let tol = rest_tolerance(&x[..limit]);
         if let Some(k) = x[..limit].iter().position(|v| (v - x[0]).abs() > tol) {
             end = end.min(k);
         }
@@ -100,6 +100,11 @@ pub(super) fn temperature_offset_k(initial: &BTreeMap<String, f64>) -> Result<f6
     })
 }
 
+/// How far an input may wander and still be at rest: five times its sample-to-sample noise, at least 1 mrad.
+fn rest_tolerance(x: &[f64]) -> f64 {
+    (5.0 * crate::signal::difference_noise_std(x)).max(1e-3)
+}
+
 /// How long the inputs must rest at their usual values for a record that begins inside a maneuver to be taken up
 /// there, s; the replay starts halfway through, when the short period has died out.
 const STILL_STRETCH_S: f64 = 2.0;
@@ -134,9 +139,7 @@ pub(super) fn maneuver_free_start(
             let x = rec.column(c)?;
             let usual = crate::signal::median_in_place(&mut x.to_vec());
             let excursion = x.iter().fold(0.0_f64, |m, v| m.max((v - usual).abs()));
-            let tol = (5.0 * crate::signal::difference_noise_std(x))
-                .max(0.1 * excursion)
-                .max(1e-3);
+            let tol = rest_tolerance(x).max(0.1 * excursion);
             Some((*c, usual, tol, x))
         })
         .collect();
