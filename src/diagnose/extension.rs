@@ -73,6 +73,9 @@ pub trait Extension: Send + Sync {
     /// axis: without one, that axis moves only by the gusts and the segments' initial states, which an
     /// open-loop replay follows no better with the derivative changed than without.
     fn excited_by(&self) -> Vec<String> {
+        if self.target() == ALL_SURFACES {
+            return ["elevator", "aileron", "rudder"].map(String::from).to_vec();
+        }
         if self.stage() == Stage::Input {
             return vec![self.target().to_string()];
         }
@@ -85,6 +88,15 @@ pub trait Extension: Send + Sync {
             _ => &[],
         };
         axis.iter().map(|s| s.to_string()).collect()
+    }
+    /// How many of [`Extension::excited_by`]'s inputs must move: one, except for an effect common to every
+    /// surface, which a record can tell from a delay on one surface only where two or more move.
+    fn excited_count(&self) -> usize {
+        if self.target() == ALL_SURFACES {
+            2
+        } else {
+            1
+        }
     }
 }
 
@@ -255,6 +267,8 @@ pub const SENSOR_COLUMNS: [Channel; 10] = [
 pub enum Targets {
     /// The surfaces of the schema (elevator, aileron, rudder, throttle).
     Surfaces,
+    /// Every surface at once: one target, [`ALL_SURFACES`].
+    AllSurfaces,
     /// The columns that may carry a sensor error ([`SENSOR_COLUMNS`]).
     SensorColumns,
     /// The derivatives of [`DERIVATIVE_KNOBS`] whose coefficient the simulation can scale.
@@ -273,7 +287,7 @@ impl Targets {
                 .into_iter()
                 .collect(),
             Targets::SensorColumns => vec![target.to_string()],
-            Targets::Derivatives | Targets::AddedTerms => Vec::new(),
+            Targets::AllSurfaces | Targets::Derivatives | Targets::AddedTerms => Vec::new(),
         }
     }
 }
@@ -295,12 +309,36 @@ pub struct EffectKind {
     pub build: fn(&str, &str) -> Box<dyn Effect>,
 }
 
+/// The target of an effect on every surface at once ([`Targets::AllSurfaces`]).
+pub const ALL_SURFACES: &str = "surfaces";
+
+/// The effect name of a time skew common to every surface: the response follows every surface by the same time
+/// (a data system stamping its sensor channels late, or sensor filters that lag every channel alike). It is the
+/// record's timing, not a cause (`super::skew`).
+pub const TIME_SKEW: &str = "time_skew";
+
 /// The catalogue: a new effect is one type implementing [`Effect`] and one row here.
-pub const REGISTRY: [EffectKind; 7] = [
+pub const REGISTRY: [EffectKind; 8] = [
     EffectKind {
         effect: "input_delay",
         stage: Stage::Input,
         targets: Targets::Surfaces,
+        param: |_| ParamSpec {
+            null: 0.0,
+            min: 0.0,
+            max: 1.0,
+            fd_step: 0.005,
+            resolution: 0.02,
+        },
+        refines: |_| None,
+        build: |_, _| Box::new(InputDelay),
+    },
+    // The same delay on every surface: one parameter where `input_delay` would need one per surface. A skew of
+    // the record's timing costs every surface that moves alike, so it is told from a delay on one surface.
+    EffectKind {
+        effect: TIME_SKEW,
+        stage: Stage::Input,
+        targets: Targets::AllSurfaces,
         param: |_| ParamSpec {
             null: 0.0,
             min: 0.0,
@@ -440,7 +478,7 @@ impl Extension for Entry {
         self.effect.apply_model(p, sim)
     }
     fn apply_input(&self, p: &[f64], surface: &str, dev: &mut [f64], dt_s: f64) {
-        if surface == self.target {
+        if surface == self.target || self.kind.targets == Targets::AllSurfaces {
             self.effect.apply_input(p, dev, dt_s);
         }
     }
@@ -488,6 +526,9 @@ pub fn make(
                 "{effect} needs a surface target (elevator, aileron, rudder, throttle), got '{target}'"
             )))
         }
+        Targets::AllSurfaces if target != ALL_SURFACES => Err(DiagnoseError::UnknownExtension(format!(
+            "{effect} acts on every surface at once: its target is '{ALL_SURFACES}', got '{target}'"
+        ))),
         Targets::Derivatives => match knob_of(target, coefficient_names) {
             Ok(knob) => Ok(Box::new(Entry::new(kind, target, &knob))),
             Err(looked_for) => Err(DiagnoseError::UnknownExtension(format!(
@@ -517,6 +558,7 @@ pub fn catalogue(
                 .filter_map(|c| c.surface())
                 .map(|s| (s.to_string(), String::new()))
                 .collect(),
+            Targets::AllSurfaces => vec![(ALL_SURFACES.to_string(), String::new())],
             Targets::SensorColumns => SENSOR_COLUMNS
                 .iter()
                 .map(|c| (c.to_string(), String::new()))

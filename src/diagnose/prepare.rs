@@ -248,11 +248,21 @@ pub fn prepare(
     let mut catalogue = Vec::new();
     for e in all {
         let needs = e.excited_by();
-        if needs.is_empty() || needs.iter().any(|n| moving.contains(&n.as_str())) {
+        let excited = needs
+            .iter()
+            .filter(|n| moving.contains(&n.as_str()))
+            .count();
+        if needs.is_empty() || excited >= e.excited_count() {
             catalogue.push(e);
             continue;
         }
-        let reason = if e.stage() == Stage::Input {
+        let reason = if e.excited_count() > 1 {
+            format!(
+                "fewer than {} of {} move in the record",
+                e.excited_count(),
+                needs.join(", ")
+            )
+        } else if e.stage() == Stage::Input {
             "the input does not move in the record".to_string()
         } else {
             format!(
