@@ -554,8 +554,8 @@ pub(crate) fn irregular_sampling(time_s: &[f64]) -> Option<String> {
     let min = steps.iter().copied().fold(f64::INFINITY, f64::min);
     let max = steps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     Some(format!(
-        "irregular sampling: {} of {} steps differ from the median step {median} s by more than 10 % \
-         (steps range {min} .. {max} s; first at t = {} s)",
+        "irregular sampling: {} of {} steps differ from the median step {median:.6} s by more than 10 % \
+         (steps range {min:.6} .. {max:.6} s; first at t = {:.4} s)",
         off.len(),
         steps.len(),
         time_s[off[0]]

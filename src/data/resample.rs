@@ -136,7 +136,7 @@ pub fn uniform_pieces(rec: &FlightRecord) -> Result<UniformPieces, DataError> {
         let span = piece.time_s[piece.len() - 1] - piece.time_s[0];
         if span < MIN_PIECE_S {
             notes.push(format!(
-                "the piece from t = {} s to {} s is shorter than {MIN_PIECE_S} s and is left out",
+                "the piece from t = {:.3} s to {:.3} s is shorter than {MIN_PIECE_S} s and is left out",
                 piece.time_s[0],
                 piece.time_s[piece.len() - 1]
             ));
@@ -145,7 +145,7 @@ pub fn uniform_pieces(rec: &FlightRecord) -> Result<UniformPieces, DataError> {
         if let Some(message) = super::record::irregular_sampling(&piece.time_s) {
             let rate_hz = 1.0 / nominal_step_s(&piece.time_s, median);
             notes.push(format!(
-                "t = {} s to {} s: {message}; resampled onto a uniform {rate_hz:.4} Hz grid by {RESAMPLE_METHOD}",
+                "t = {:.3} s to {:.3} s: {message}; resampled onto a uniform {rate_hz:.4} Hz grid by {RESAMPLE_METHOD}",
                 piece.time_s[0],
                 piece.time_s[piece.len() - 1]
             ));
