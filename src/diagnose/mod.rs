@@ -14,6 +14,7 @@ pub mod export;
 pub mod extension;
 pub mod initial_state;
 pub mod kinematic;
+pub mod lever_arm;
 pub mod model;
 pub mod prepare;
 pub mod process_noise;
@@ -399,6 +400,7 @@ fn nuisance(
             .map_err(sim_err("replay"))?;
         columns.push(settled.column);
     }
+    columns.extend(lever_arm::columns(&p.case, &p.sigma));
     let (columns, relaxed) = relax::relax(&mut workers[0], p, columns, opts.relax_weights)?;
     let rate = rate::choose(workers, p, &columns, opts, progress)?;
     Ok((columns, relaxed, rate))

@@ -11,7 +11,7 @@ pub use maneuver::{
     generate, multisine_design, peak_factor, time_grid, Maneuver, MultisineDesign, Sweep,
 };
 pub use ops::{
-    add_white_noise, difference_noise_std, heading_from_zero_rad, mean, median_in_place, noise_std,
+    add_white_noise, cross, lever_arm_acceleration, difference_noise_std, heading_from_zero_rad, mean, median_in_place, noise_std,
     on_uniform_step, resample_linear, slope_and_correlation, std_dev, sum_sq, unwrap_rad,
 };
 

@@ -3,6 +3,25 @@
 use rand::{rngs::StdRng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
+/// The cross product a × b of two 3-vectors.
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// What an accelerometer at `r` from the CG (body axes, m) reads beyond the CG's acceleration, with the body
+/// rates `w` (rad/s) and their derivatives `w_dot` (rad/s²): ω̇ × r + ω × (ω × r), the tangential and
+/// centripetal terms of a rigid body (Klein & Morelli, *Aircraft System Identification*, ch. 10, the
+/// instrument position corrections).
+pub fn lever_arm_acceleration(w: [f64; 3], w_dot: [f64; 3], r: [f64; 3]) -> [f64; 3] {
+    let t = cross(w_dot, r);
+    let c = cross(w, cross(w, r));
+    [t[0] + c[0], t[1] + c[1], t[2] + c[2]]
+}
+
 /// Σ xᵢ², summed in order (the cost `eᵀe` of a residual, the energy of a signal).
 pub fn sum_sq(x: &[f64]) -> f64 {
     x.iter().map(|v| v * v).sum()

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use super::jsbsim::{probe_steps, JsbsimSim};
 use super::protocol::{ProbeReply, Request};
 use super::{SimError, FT_TO_M};
+use crate::signal::cross;
 
 /// Slug to kilogram.
 const SLUG_TO_KG: f64 = 14.593_902_937;
@@ -434,11 +435,3 @@ pub(crate) fn wind_to_body(alpha_rad: f64, beta_rad: f64, v: [f64; 3]) -> [f64; 
     ]
 }
 
-/// Cross product r × f.
-pub(crate) fn cross(r: [f64; 3], f: [f64; 3]) -> [f64; 3] {
-    [
-        r[1] * f[2] - r[2] * f[1],
-        r[2] * f[0] - r[0] * f[2],
-        r[0] * f[1] - r[1] * f[0],
-    ]
-}

@@ -4,6 +4,7 @@
 
 use super::*;
 use crate::estimate::covariance;
+use crate::signal::lever_arm_acceleration;
 
 /// Air density of the 1976 US / ICAO standard atmosphere below 11 km: ρ = ρ0 (1 − L h/T0)^(g/(R L) − 1).
 pub fn standard_density_kg_m3(altitude_m: f64) -> f64 {
@@ -60,14 +61,6 @@ pub fn air_data(rec: &data::FlightRecord, airframe: &Airframe) -> Result<AirData
     })
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
 /// The record with α, β and the accelerations moved from their sensors to the CG (module doc). Rates not
 /// in the record count as zero; angular accelerations are Savitzky–Golay derivatives of the rates.
 pub fn moved_to_cg(
@@ -89,12 +82,10 @@ pub fn moved_to_cg(
             .map(|c| rec.column(c).map(|v| v.to_vec()))
             .collect();
         for i in 0..n {
-            let w = [p[i], q[i], r[i]];
-            let tangential = cross([pd[i], qd[i], rd[i]], imu);
-            let centripetal = cross(w, cross(w, imu));
+            let extra = lever_arm_acceleration([p[i], q[i], r[i]], [pd[i], qd[i], rd[i]], imu);
             for (k, a) in acc.iter_mut().enumerate() {
                 if let Some(a) = a {
-                    a[i] -= tangential[k] + centripetal[k];
+                    a[i] -= extra[k];
                 }
             }
         }
