@@ -364,6 +364,13 @@ def fly(ac, cond, effects, duration_s, log_hz, rng, turbulence, validation, plan
         row["throttle"] = fdm["fcs/throttle-cmd-norm[0]"]
         for col, prop, f in LOGGED:
             row[col] = fdm[prop] * f
+        imu = ac.spec.get("imu_offset_m")
+        if imu:  # accelerometers away from the point JSBSim reads them at: w_dot x r + w x (w x r), JSBSim's own w_dot
+            w = [fdm[f"velocities/{a}-rad_sec"] for a in "pqr"]
+            w_dot = [fdm[f"accelerations/{a}dot-rad_sec2"] for a in "pqr"]
+            extra = np.cross(w_dot, imu) + np.cross(w, np.cross(w, imu))
+            for col, a in zip(("ax_m_s2", "ay_m_s2", "az_m_s2"), extra):
+                row[col] += float(a)
         if ac.spec.get("air_data"):  # a data system's density from static pressure and outside air temperature
             row["density_kg_m3"] = fdm["atmosphere/rho-slugs_ft3"] * SLUG_FT3
         rows.append(row)
@@ -501,6 +508,10 @@ def main():
                     help="also log density_kg_m3, the air density a data system computes from static pressure and "
                          "outside air temperature (with --property atmosphere/delta-T=R: a day R deg Rankine warmer "
                          "than the standard atmosphere)")
+    ap.add_argument("--imu-offset", default=None, metavar="X,Y,Z",
+                    help="the accelerometers sit X,Y,Z metres (body axes: forward, right, down) from the point JSBSim "
+                         "reads its accelerations at (the aircraft's eyepoint), as a data system's IMU seldom sits "
+                         "where the model reads them; the truth gets \"imu_offset_m\"")
     ap.add_argument("--log-from", type=float, default=0.0, metavar="S",
                     help="the log begins S seconds into the flight, as a log cut from a longer flight does (inside "
                          "a maneuver or a transient), its clock starting at 0 there; the truth gets \"log_from_s\"")
@@ -521,6 +532,10 @@ def main():
     spec = dict(AIRCRAFT[args.aircraft])
     spec["pre_ic"] = {**spec["pre_ic"], **loading}
     spec["air_data"] = args.air_data
+    if args.imu_offset:
+        spec["imu_offset_m"] = [float(v) for v in args.imu_offset.split(",")]
+        if len(spec["imu_offset_m"]) != 3:
+            sys.exit(f"--imu-offset {args.imu_offset}: three numbers X,Y,Z (m)")
     cat = catalogue(spec)
     if args.effects is not None:
         lacks = [e["target"] for e in json.loads(args.effects)
@@ -574,6 +589,8 @@ def main():
                 truth["properties"] = loading
             if args.log_from > 0.0:
                 truth["log_from_s"] = args.log_from
+            if args.imu_offset:
+                truth["imu_offset_m"] = spec["imu_offset_m"]
             for part, validation in (("train", False), ("valid", True)):
                 rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation,
                            PLANS[plan] if plan else None)

@@ -909,3 +909,40 @@ fn a_sensor_filter_on_every_channel_is_the_records_timing_not_an_elevator_delay(
     // A first-order lag τ acts as a delay of about τ at low frequency and less above 1/τ: 23 ms measured.
     assert_one_skew(&d, 0.018..0.032);
 }
+
+/// Accelerometers away from where the model reads its accelerations (the generator's `--imu-offset`: 0.8 m ahead
+/// and 0.2 m below the eyepoint, with JSBSim's own angular accelerations; up to 1.1 m/s² on a_z): the lever arm is
+/// the catalogue's `accelerometer_position` (`diagnose::lever_arm`), reported as the record's installation. Before
+/// it, the clean record had an a_y scale ×0.45 named; now nothing, and the position 0.80 m forward, 0.20 m down.
+/// Effects on the accelerometers' own channels are still found: an a_z bias and a `CY_beta` change (which moves
+/// a_y).
+#[test]
+fn accelerometers_away_from_where_the_model_reads_them_are_no_cause() {
+    let common = [
+        "--cases",
+        "1",
+        "--seed",
+        "41",
+        "--duration",
+        "40",
+        "--imu-offset",
+        "0.8,0,0.2",
+        "--effects",
+    ];
+    let hidden = r#"[{"effect":"sensor_bias","target":"az_m_s2","value":0.3},
+        {"effect":"aero_derivative","target":"CY_beta","value":0.6}]"#;
+    for effects in ["[]", hidden] {
+        let args: Vec<&str> = common.iter().copied().chain([effects]).collect();
+        let d = check_generated_with(&args, 0, |rec| rec);
+        let x = d
+            .sensor_position
+            .iter()
+            .find(|n| n.target == "x")
+            .map(|n| n.value);
+        assert!(
+            x.is_some_and(|x| (x - 0.8).abs() < 0.1),
+            "{:?}",
+            d.sensor_position
+        );
+    }
+}

@@ -15,6 +15,7 @@ impl Diagnosis {
                 .named_cause
                 .iter()
                 .chain(&self.record_timing)
+                .chain(&self.sensor_position)
                 .map(|c| FittedEffect {
                     effect: c.effect.clone(),
                     target: c.target.clone(),

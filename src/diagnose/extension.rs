@@ -110,8 +110,8 @@ pub trait Effect: Send + Sync {
     /// Changes the deviation sequence of the target surface, sampled at `dt_s` (sample 0 = initial
     /// condition, value 0) (Stage::Input).
     fn apply_input(&self, _p: &[f64], _dev: &mut [f64], _dt_s: f64) {}
-    /// Changes the simulated target column (Stage::Output).
-    fn apply_output(&self, _p: &[f64], _column: &mut [f64]) {}
+    /// Changes the simulated record: its `target` column, or the columns the effect acts on (Stage::Output).
+    fn apply_output(&self, _p: &[f64], _target: &str, _rec: &mut FlightRecord) {}
 }
 
 /// Pure time delay of a surface deflection: the aircraft responds to δ(t − τ). Value: τ, s.
@@ -184,15 +184,27 @@ impl Effect for ControlEffectiveness {
     }
 }
 
+/// The column `name` of `rec`, to change in place.
+fn column_mut<'a>(rec: &'a mut FlightRecord, name: &str) -> Option<&'a mut Vec<f64>> {
+    rec.columns
+        .iter_mut()
+        .find(|(n, _)| n == name)
+        .map(|(_, c)| c)
+}
+
 impl Effect for SensorBias {
-    fn apply_output(&self, p: &[f64], column: &mut [f64]) {
-        column.iter_mut().for_each(|v| *v += p[0]);
+    fn apply_output(&self, p: &[f64], target: &str, rec: &mut FlightRecord) {
+        if let Some(column) = column_mut(rec, target) {
+            column.iter_mut().for_each(|v| *v += p[0]);
+        }
     }
 }
 
 impl Effect for SensorScale {
-    fn apply_output(&self, p: &[f64], column: &mut [f64]) {
-        column.iter_mut().for_each(|v| *v *= p[0]);
+    fn apply_output(&self, p: &[f64], target: &str, rec: &mut FlightRecord) {
+        if let Some(column) = column_mut(rec, target) {
+            column.iter_mut().for_each(|v| *v *= p[0]);
+        }
     }
 }
 
@@ -269,6 +281,8 @@ pub enum Targets {
     Surfaces,
     /// Every surface at once: one target, [`ALL_SURFACES`].
     AllSurfaces,
+    /// The body axes `x`, `y`, `z` (forward, right, down).
+    BodyAxes,
     /// The columns that may carry a sensor error ([`SENSOR_COLUMNS`]).
     SensorColumns,
     /// The derivatives of [`DERIVATIVE_KNOBS`] whose coefficient the simulation can scale.
@@ -287,6 +301,10 @@ impl Targets {
                 .into_iter()
                 .collect(),
             Targets::SensorColumns => vec![target.to_string()],
+            Targets::BodyAxes => super::lever_arm::REQUIRED
+                .iter()
+                .map(|c| c.to_string())
+                .collect(),
             Targets::AllSurfaces | Targets::Derivatives | Targets::AddedTerms => Vec::new(),
         }
     }
@@ -317,8 +335,11 @@ pub const ALL_SURFACES: &str = "surfaces";
 /// record's timing, not a cause (`super::skew`).
 pub const TIME_SKEW: &str = "time_skew";
 
+/// The targets of an effect along a body axis ([`Targets::BodyAxes`]).
+pub const BODY_AXES: [&str; 3] = ["x", "y", "z"];
+
 /// The catalogue: a new effect is one type implementing [`Effect`] and one row here.
-pub const REGISTRY: [EffectKind; 8] = [
+pub const REGISTRY: [EffectKind; 9] = [
     EffectKind {
         effect: "input_delay",
         stage: Stage::Input,
@@ -405,6 +426,22 @@ pub const REGISTRY: [EffectKind; 8] = [
         refines: |_| None,
         build: |_, _| Box::new(SensorScale),
     },
+    // Where the accelerometers sit, along one body axis, from the point the model reads its accelerations at: a
+    // finding about the record's installation, reported apart from the causes (`super::lever_arm`).
+    EffectKind {
+        effect: super::lever_arm::ACCELEROMETER_POSITION,
+        stage: Stage::Output,
+        targets: Targets::BodyAxes,
+        param: |_| ParamSpec {
+            null: 0.0,
+            min: -50.0,
+            max: 50.0,
+            fd_step: 0.05,
+            resolution: 0.1,
+        },
+        refines: |_| None,
+        build: |axis, _| Box::new(super::lever_arm::AccelerometerPosition::along(axis)),
+    },
     EffectKind {
         effect: "aero_derivative",
         stage: Stage::Model,
@@ -483,9 +520,7 @@ impl Extension for Entry {
         }
     }
     fn apply_output(&self, p: &[f64], rec: &mut FlightRecord) {
-        if let Some((_, column)) = rec.columns.iter_mut().find(|(n, _)| *n == self.target) {
-            self.effect.apply_output(p, column);
-        }
+        self.effect.apply_output(p, &self.target, rec);
     }
     fn refines(&self) -> Option<(&'static str, String)> {
         (self.kind.refines)(&self.target)
@@ -526,6 +561,10 @@ pub fn make(
                 "{effect} needs a surface target (elevator, aileron, rudder, throttle), got '{target}'"
             )))
         }
+        Targets::BodyAxes if !BODY_AXES.contains(&target) => Err(DiagnoseError::UnknownExtension(format!(
+            "{effect} needs a body axis target ({}), got '{target}'",
+            BODY_AXES.join(", ")
+        ))),
         Targets::AllSurfaces if target != ALL_SURFACES => Err(DiagnoseError::UnknownExtension(format!(
             "{effect} acts on every surface at once: its target is '{ALL_SURFACES}', got '{target}'"
         ))),
@@ -559,6 +598,10 @@ pub fn catalogue(
                 .map(|s| (s.to_string(), String::new()))
                 .collect(),
             Targets::AllSurfaces => vec![(ALL_SURFACES.to_string(), String::new())],
+            Targets::BodyAxes => BODY_AXES
+                .iter()
+                .map(|a| (a.to_string(), String::new()))
+                .collect(),
             Targets::SensorColumns => SENSOR_COLUMNS
                 .iter()
                 .map(|c| (c.to_string(), String::new()))

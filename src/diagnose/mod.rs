@@ -241,6 +241,9 @@ pub struct Diagnosis {
     /// Input delays alike on every surface that moves, taken as the record's timing (a skew between its surface
     /// and sensor channels) instead of as causes (`skew`); the validation and the extension file carry them.
     pub record_timing: Vec<NamedCause>,
+    /// The accelerometers' position along the body axes the selection found, taken as the record's installation
+    /// instead of as causes (`lever_arm`); the validation and the extension file carry it.
+    pub sensor_position: Vec<NamedCause>,
     /// Model trim vs measured initial condition.
     pub trim_mismatch: Vec<TrimMismatch>,
     /// Catalogue entries not evaluated.
@@ -335,7 +338,7 @@ pub fn diagnose(
     };
     progress.stage("kinematic findings", 0);
     kinematic::kinematic_findings(&mut workers[0], train, reconstruction, &p, &mut sel, opts)?;
-    let (skew_note, record_timing) = skew::common_skew(&p, &mut sel.named).unzip();
+    let conventions = skew::record_conventions(&p, &mut sel.named);
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
     progress.finish();
@@ -347,19 +350,15 @@ pub fn diagnose(
         residuals: base.residuals,
         residuals_after: v.residuals_after,
         trim_mismatch: base.trim_mismatch,
-        skipped: p
-            .skipped
-            .iter()
-            .cloned()
-            .chain(sel.unidentifiable)
-            .collect(),
+        skipped: [p.skipped.clone(), sel.unidentifiable].concat(),
         warnings: p
             .warnings
             .into_iter()
             .chain(refit_note)
-            .chain(skew_note)
+            .chain(conventions.notes)
             .collect(),
-        record_timing: record_timing.unwrap_or_default(),
+        record_timing: conventions.timing,
+        sensor_position: conventions.position,
         process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.noise_sigma).collect(),
         relaxed_weights,
@@ -400,7 +399,6 @@ fn nuisance(
             .map_err(sim_err("replay"))?;
         columns.push(settled.column);
     }
-    columns.extend(lever_arm::columns(&p.case, &p.sigma));
     let (columns, relaxed) = relax::relax(&mut workers[0], p, columns, opts.relax_weights)?;
     let rate = rate::choose(workers, p, &columns, opts, progress)?;
     Ok((columns, relaxed, rate))

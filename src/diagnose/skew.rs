@@ -19,6 +19,7 @@
 //! them), and they are reported as a warning instead of as named causes.
 
 use super::extension::TIME_SKEW;
+use super::lever_arm;
 use super::prepare::Prepared;
 use super::NamedCause;
 
@@ -86,4 +87,26 @@ fn warning(mean_s: f64, detail: &str) -> String {
          validation and the extension carry it",
         1000.0 * mean_s
     )
+}
+
+/// What the selection named about the record's conventions rather than about the aircraft, taken out of the
+/// causes: the record's timing ([`common_skew`]) and the accelerometers' position ([`lever_arm::take_positions`]).
+pub struct Conventions {
+    /// The warnings that report them.
+    pub notes: Vec<String>,
+    /// The delays taken as the record's timing.
+    pub timing: Vec<NamedCause>,
+    /// The accelerometers' position.
+    pub position: Vec<NamedCause>,
+}
+
+/// Takes the record's conventions out of `named` ([`Conventions`]).
+pub fn record_conventions(p: &Prepared, named: &mut Vec<NamedCause>) -> Conventions {
+    let (timing_note, timing) = common_skew(p, named).unzip();
+    let (position_note, position) = lever_arm::take_positions(named).unzip();
+    Conventions {
+        notes: timing_note.into_iter().chain(position_note).collect(),
+        timing: timing.unwrap_or_default(),
+        position: position.unwrap_or_default(),
+    }
 }

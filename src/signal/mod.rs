@@ -11,8 +11,9 @@ pub use maneuver::{
     generate, multisine_design, peak_factor, time_grid, Maneuver, MultisineDesign, Sweep,
 };
 pub use ops::{
-    add_white_noise, cross, lever_arm_acceleration, difference_noise_std, heading_from_zero_rad, mean, median_in_place, noise_std,
-    on_uniform_step, resample_linear, slope_and_correlation, std_dev, sum_sq, unwrap_rad,
+    add_white_noise, cross, difference_noise_std, heading_from_zero_rad, lever_arm_acceleration,
+    mean, median_in_place, noise_std, on_uniform_step, resample_linear, slope_and_correlation,
+    std_dev, sum_sq, unwrap_rad,
 };
 
 /// What can be wrong with a maneuver definition.

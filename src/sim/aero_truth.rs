@@ -434,4 +434,3 @@ pub(crate) fn wind_to_body(alpha_rad: f64, beta_rad: f64, v: [f64; 3]) -> [f64; 
         sa * cb * v[0] - sa * sb * v[1] + ca * v[2],
     ]
 }
-

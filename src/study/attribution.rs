@@ -24,10 +24,10 @@ use crate::aero::regression::{
 };
 use crate::aero::AeroError;
 use crate::data;
+use crate::signal::cross;
 use crate::sim::aero_truth::{
     coefficient_property, reference_arm_ft, wind_to_body, ARM_PROPERTIES,
 };
-use crate::signal::cross;
 use crate::sim::JsbsimSim;
 use crate::study::score::{Scorecard, TermShare, CMQ_SUM};
 use crate::study::spec::full_assumptions;
