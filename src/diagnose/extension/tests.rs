@@ -11,6 +11,7 @@ fn every_registry_row_builds_an_extension_with_its_metadata() {
         let target = match kind.targets {
             Targets::Surfaces => "elevator",
             Targets::AllSurfaces => ALL_SURFACES,
+            Targets::BodyAxes => "x",
             Targets::SensorColumns => "q_rad_s",
             Targets::Derivatives => "Cm_alpha",
             Targets::AddedTerms => "Cm_alpha2",
@@ -35,6 +36,7 @@ fn every_registry_row_builds_an_extension_with_its_metadata() {
         match kind.targets {
             Targets::Surfaces => assert_eq!(columns, ["elevator_rad"]),
             Targets::SensorColumns => assert_eq!(columns, ["q_rad_s"]),
+            Targets::BodyAxes => assert_eq!(columns, ["p_rad_s", "q_rad_s", "r_rad_s"]),
             _ => assert!(columns.is_empty()),
         }
     }
@@ -147,4 +149,42 @@ fn a_time_skew_delays_every_surface_alike() {
         .err()
         .expect("one target only");
     assert!(e.to_string().contains("'surfaces'"), "{e}");
+}
+
+/// The accelerometers 1 m ahead of the reading point, in a steady pull-up (q̇ = 0.5 rad/s², q = 0.2 rad/s): a_x
+/// reads −q² x more and a_z −q̇ x more (ω̇ × r + ω × (ω × r) with r = (1, 0, 0)); at its null value nothing
+/// changes, and a record without accelerometers is left as it was.
+#[test]
+fn an_accelerometer_ahead_of_the_reading_point_reads_the_pitch_acceleration() {
+    let n = 11;
+    let dt = 0.02;
+    let mut rec = FlightRecord::new((0..n).map(|k| k as f64 * dt).collect());
+    let q: Vec<f64> = (0..n).map(|k| 0.2 + 0.5 * (k as f64 * dt - 0.1)).collect();
+    rec.columns = vec![
+        ("p_rad_s".into(), vec![0.0; n]),
+        ("q_rad_s".into(), q.clone()),
+        ("r_rad_s".into(), vec![0.0; n]),
+        ("ax_m_s2".into(), vec![0.0; n]),
+        ("ay_m_s2".into(), vec![0.0; n]),
+        ("az_m_s2".into(), vec![-9.8; n]),
+    ];
+    let e = make(super::super::lever_arm::ACCELEROMETER_POSITION, "x", &[]).unwrap();
+    let before = rec.columns.clone();
+    e.apply_output(&[0.0], &mut rec);
+    assert_eq!(rec.columns, before);
+    e.apply_output(&[1.0], &mut rec);
+    let col = |name: &str| rec.column(name).unwrap().to_vec();
+    let mid = n / 2;
+    assert!(
+        (col("ax_m_s2")[mid] + q[mid] * q[mid]).abs() < 1e-12,
+        "{:?}",
+        col("ax_m_s2")
+    );
+    assert!(
+        (col("az_m_s2")[mid] + 9.8 + 0.5).abs() < 1e-9,
+        "{:?}",
+        col("az_m_s2")
+    );
+    assert_eq!(col("ay_m_s2"), vec![0.0; n]);
+    assert!(make(super::super::lever_arm::ACCELEROMETER_POSITION, "w", &[]).is_err());
 }
