@@ -93,7 +93,7 @@ pub fn take_positions(named: &mut Vec<NamedCause>) -> Option<(String, Vec<NamedC
     }
     let each: Vec<String> = positions
         .iter()
-        .map(|n| format!("{} {:+.2} ± {:.2} m", n.target, n.value, n.std_error))
+        .map(|n| format!("{} {:+.3} ± {:.3} m", n.target, n.value, n.std_error))
         .collect();
     let note = format!(
         "the accelerometers read as if away from where the model reads its accelerations ({}; body axes: x \
