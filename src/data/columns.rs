@@ -18,6 +18,12 @@
 //! aileron_rad = { from = { DAL = 0.5, DAR = -0.5 }, unit = "deg" }   # ½(left − right), then deg → rad
 //! ```
 //!
+//! A log whose airspeed is equivalent (or calibrated, or indicated) airspeed, as most autopilots and air-data
+//! computers record it, says so with `airspeed = "equivalent"` above the tables: the reader makes it true airspeed,
+//! the schema's, with the logged `density_kg_m3` where there is one and the standard atmosphere at `altitude_m`
+//! otherwise, V_true = V_eq √(ρ₀/ρ). Read as true, such a record at 2 800 ft replays 4 % slow, and the trim's
+//! α and elevator differ from the model's as a `Cm_0` error would (one was named, ×2.09, by `diagnose`).
+//!
 //! Units: rad, deg, m, ft, m/s, ft/s, kts, g, m/s2, deg/s, rad/s, deg/s2, rad/s2, N, lbf, Pa, psf, kg/m3,
 //! slug/ft3, s, ms,
 //! percent, and the spellings of autopilot logs: us, cdeg, mrad/s, mg, cm, cm/s, kt, km/h, mph, hPa, mbar.
@@ -28,7 +34,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use super::error::DataError;
-use super::record::{G0_M_S2, SCHEMA_COLUMNS};
+use super::record::{FlightRecord, G0_M_S2, SCHEMA_COLUMNS};
 
 /// What a column measures; a unit converts only into columns of its own dimension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -175,6 +181,8 @@ pub struct ColumnMap {
     pub columns: Vec<ColumnMapping>,
     /// Schema columns formed as weighted sums of foreign columns (`[derived]`).
     pub derived: Vec<DerivedColumn>,
+    /// The file's airspeed is equivalent airspeed, made true on reading (`airspeed = "equivalent"`).
+    pub airspeed_equivalent: bool,
 }
 
 /// A schema column that is a weighted sum of foreign columns, converted to SI after summing.
@@ -213,6 +221,7 @@ pub struct PlacedDerivedColumn {
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MapFile {
+    airspeed: Option<String>,
     #[serde(default)]
     columns: BTreeMap<String, MapEntry>,
     #[serde(default)]
@@ -316,6 +325,17 @@ impl ColumnMap {
                 errors.push(format!("`{}` and `{}` both map to `{}`", b.0, a.0, a.1));
             }
         }
+        let airspeed_equivalent = match raw.airspeed.as_deref() {
+            None | Some("true") => false,
+            Some("equivalent" | "calibrated" | "indicated") => true,
+            Some(other) => {
+                errors.push(format!(
+                    "airspeed = \"{other}\": expected \"true\" (the default) or \"equivalent\" (also \"calibrated\", \
+                     \"indicated\")"
+                ));
+                false
+            }
+        };
         if !errors.is_empty() {
             return Err(bad(errors.join("; ")));
         }
@@ -323,7 +343,49 @@ impl ColumnMap {
             file: path.to_path_buf(),
             columns,
             derived,
+            airspeed_equivalent,
         })
+    }
+
+    /// What the map does to a whole record once its columns are read: an equivalent airspeed made true (module
+    /// documentation), with a note in the record's metadata. A record without the columns that needs fails,
+    /// naming them.
+    pub fn finish(&self, rec: &mut FlightRecord, file: &str) -> Result<(), DataError> {
+        if !self.airspeed_equivalent {
+            return Ok(());
+        }
+        let bad = |message: String| DataError::ColumnMap {
+            map: self.file.clone(),
+            message: format!("{file}: {message}"),
+        };
+        let v = rec.column("airspeed_m_s").ok_or_else(|| {
+            bad("airspeed = \"equivalent\" but the record has no airspeed_m_s".into())
+        })?;
+        let (ratio, source): (Vec<f64>, &str) = if let Some(rho) = rec.column("density_kg_m3") {
+            let rho0 = crate::sim::atmosphere::density_kg_m3(0.0, 0.0).unwrap_or(1.225);
+            (
+                rho.iter().map(|r| (rho0 / r).sqrt()).collect(),
+                "the logged density_kg_m3",
+            )
+        } else if let Some(h) = rec.column("altitude_m") {
+            let ratio = h
+                .iter()
+                .map(|h| super::tlog::true_from_equivalent(1.0, *h))
+                .collect();
+            (ratio, "the standard atmosphere at the logged altitude_m")
+        } else {
+            return Err(bad(
+                "airspeed = \"equivalent\" needs density_kg_m3 or altitude_m to make it true airspeed".into(),
+            ));
+        };
+        let true_airspeed: Vec<f64> = v.iter().zip(&ratio).map(|(v, k)| v * k).collect();
+        rec.push_column("airspeed_m_s", true_airspeed);
+        rec.metadata.push(format!(
+            " airspeed_m_s: equivalent airspeed made true with {source} (x{:.4} at the start; the column map's \
+             airspeed = \"equivalent\")",
+            ratio.first().copied().unwrap_or(f64::NAN)
+        ));
+        Ok(())
     }
 
     /// Applies the map to a header: the renamed header, each column's factor to SI, and the derived
@@ -624,6 +686,41 @@ mod tests {
         let placed = m.apply_to_header(&names, "f.csv").unwrap().derived;
         let deg = std::f64::consts::PI / 180.0;
         assert_eq!(placed[0].terms, vec![(1, -0.5 * deg), (2, 0.5 * deg)]);
+    }
+
+    /// Equivalent airspeed is made true with the logged density where there is one (ρ = ρ₀/4 doubles it) and the
+    /// standard atmosphere at the altitude otherwise (×1.0601 at 1 200 m: ρ/ρ₀ = 0.8898, `true_from_equivalent`); a record
+    /// without either, an unknown kind, and a map without the key (true airspeed, left alone) are checked too.
+    #[test]
+    fn an_equivalent_airspeed_is_made_true_airspeed() {
+        let m = parse("airspeed = \"equivalent\"\n[columns]\n").unwrap();
+        let record = |extra: (&str, f64)| {
+            let mut rec = FlightRecord::new(vec![0.0, 0.1]);
+            rec.columns = vec![
+                ("airspeed_m_s".into(), vec![50.0, 60.0]),
+                (extra.0.into(), vec![extra.1; 2]),
+            ];
+            rec
+        };
+        let mut rec = record(("density_kg_m3", 1.225 / 4.0));
+        m.finish(&mut rec, "f.csv").unwrap();
+        let v = rec.column("airspeed_m_s").unwrap();
+        assert!(
+            (v[0] - 100.0).abs() < 0.1 && (v[1] - 120.0).abs() < 0.1,
+            "{v:?}"
+        );
+        let mut rec = record(("altitude_m", 1200.0));
+        m.finish(&mut rec, "f.csv").unwrap();
+        let v = rec.column("airspeed_m_s").unwrap()[0];
+        assert!((v / 50.0 - 1.0601).abs() < 5e-4, "{v}");
+        let mut rec = record(("q_rad_s", 0.0));
+        let e = m.finish(&mut rec, "f.csv").unwrap_err().to_string();
+        assert!(e.contains("needs density_kg_m3 or altitude_m"), "{e}");
+        assert!(refusal("airspeed = \"fast\"\n").contains("airspeed = \"fast\""));
+        let plain = parse("[columns]\n").unwrap();
+        let mut rec = record(("altitude_m", 1200.0));
+        plain.finish(&mut rec, "f.csv").unwrap();
+        assert_eq!(rec.column("airspeed_m_s").unwrap(), [50.0, 60.0]);
     }
 
     #[test]

@@ -43,6 +43,15 @@ pub fn read_csv(path: &Path) -> Result<FlightRecord, DataError> {
 /// Reads a flight-data CSV whose foreign columns and units `map` renames and converts to the
 /// schema's SI columns while reading (see [`ColumnMap`]); without a map this is [`read_csv`].
 pub fn read_csv_mapped(path: &Path, map: Option<&ColumnMap>) -> Result<FlightRecord, DataError> {
+    let mut rec = read_columns_mapped(path, map)?;
+    if let Some(map) = map {
+        map.finish(&mut rec, &path.display().to_string())?;
+    }
+    Ok(rec)
+}
+
+/// [`read_csv_mapped`]'s columns, renamed and converted, before the map's record-wide step.
+fn read_columns_mapped(path: &Path, map: Option<&ColumnMap>) -> Result<FlightRecord, DataError> {
     let io_err = |action: &'static str| DataError::io(path, action);
     if mat::is_mat_file(path) {
         let (text, note) = mat::matrix_as_text(path)?;

@@ -86,8 +86,10 @@ pub fn loading_warning(trim_mismatch: &[TrimMismatch]) -> Option<String> {
         "the record trims at elevator {:.2}°{measured_alpha}, the model at {:.2}°{model_alpha} (same speed and \
          altitude): a weight, CG or flap setting other than the simulation's, or air of another density (a record \
          without density_kg_m3 or qbar_pa is flown in the standard atmosphere), moves the trim as a change of \
-         Cm_0 or of the lift does, and the search names such a change in its place. If the aircraft flew loaded \
-         or configured otherwise, give that with --property (docs/diagnose.md, \"Loading\")",
+         Cm_0 or of the lift does, and the search names such a change in its place; so does an airspeed column \
+         that holds equivalent, calibrated or indicated airspeed instead of true airspeed (declare it with \
+         `airspeed = \"equivalent\"` in the --columns map). If the aircraft flew loaded or configured otherwise, \
+         give that with --property (docs/diagnose.md, \"Loading\")",
         e.measured.to_degrees(),
         e.model.to_degrees(),
     ))
