@@ -53,10 +53,7 @@ impl Effect for AccelerometerPosition {
         }
         let rates: Vec<Vec<f64>> = REQUIRED
             .iter()
-            .map(|c| {
-                rec.column(&c.to_string())
-                    .map_or_else(|| vec![0.0; n], <[f64]>::to_vec)
-            })
+            .map(|c| rec.column(c).map_or_else(|| vec![0.0; n], <[f64]>::to_vec))
             .collect();
         // The simulated rates are smooth: ω̇ by central differences (one-sided at the ends).
         let derivative = |x: &[f64], k: usize| {
