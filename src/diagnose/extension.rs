@@ -6,13 +6,10 @@
 //! [`REGISTRY`]; how it changes the replay is one type implementing [`Effect`]. The search in
 //! [`super::search`] sees a row on one target through the [`Extension`] trait.
 
-use std::collections::BTreeMap;
-
-use serde::{Deserialize, Serialize};
-
 use super::simulator::ReplaySim;
 use super::DiagnoseError;
 use crate::data::{Channel, FlightRecord};
+use crate::signal::lever_arm_acceleration;
 use crate::sim::SimError;
 
 /// Where in the replay an extension acts.
@@ -220,6 +217,67 @@ impl Effect for AeroNonlinearity {
     }
 }
 
+/// The effect name of the accelerometers' position along one body axis.
+pub const ACCELEROMETER_POSITION: &str = "accelerometer_position";
+
+/// The columns the position needs in the record: the body rates.
+pub const REQUIRED: [Channel; 3] = [Channel::P, Channel::Q, Channel::R];
+
+/// The accelerometer channels, in the order of the components of [`lever_arm_acceleration`].
+const ACCELEROMETERS: [Channel; 3] = [Channel::Ax, Channel::Ay, Channel::Az];
+
+/// The accelerometers `value` metres along one body axis from where the model reads its accelerations. Value: m.
+pub struct AccelerometerPosition {
+    /// 0, 1, 2 for x (forward), y (right), z (down).
+    axis: usize,
+}
+
+impl AccelerometerPosition {
+    /// The position along `axis` (`x`, `y` or `z`; another name is taken as `x`, which `extension::make` never
+    /// passes).
+    pub fn along(axis: &str) -> Self {
+        AccelerometerPosition {
+            axis: ["x", "y", "z"].iter().position(|a| *a == axis).unwrap_or(0),
+        }
+    }
+}
+
+impl Effect for AccelerometerPosition {
+    fn apply_output(&self, p: &[f64], _target: &str, rec: &mut FlightRecord) {
+        let n = rec.len();
+        let Some(dt) = rec.dt_s() else {
+            return;
+        };
+        if p[0] == 0.0 || n < 3 {
+            return;
+        }
+        let rates: Vec<Vec<f64>> = REQUIRED
+            .iter()
+            .map(|c| rec.column(c).map_or_else(|| vec![0.0; n], <[f64]>::to_vec))
+            .collect();
+        // The simulated rates are smooth: ω̇ by central differences (one-sided at the ends).
+        let derivative = |x: &[f64], k: usize| {
+            let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
+            (x[b] - x[a]) / ((b - a) as f64 * dt)
+        };
+        let mut r = [0.0; 3];
+        r[self.axis] = p[0];
+        let extra: Vec<[f64; 3]> = (0..n)
+            .map(|k| {
+                let w = [rates[0][k], rates[1][k], rates[2][k]];
+                let w_dot = [0, 1, 2].map(|i| derivative(&rates[i], k));
+                lever_arm_acceleration(w, w_dot, r)
+            })
+            .collect();
+        for (i, channel) in ACCELEROMETERS.iter().enumerate() {
+            let name = channel.to_string();
+            if let Some((_, column)) = rec.columns.iter_mut().find(|(c, _)| *c == name) {
+                column.iter_mut().zip(&extra).for_each(|(v, e)| *v += e[i]);
+            }
+        }
+    }
+}
+
 /// Smallest sensor bias worth naming, by the column's unit: 0.3° for an angle, 0.17°/s for a rate,
 /// 0.05 m/s² for an acceleration.
 fn bias_resolution(column: &str) -> f64 {
@@ -301,10 +359,7 @@ impl Targets {
                 .into_iter()
                 .collect(),
             Targets::SensorColumns => vec![target.to_string()],
-            Targets::BodyAxes => super::lever_arm::REQUIRED
-                .iter()
-                .map(|c| c.to_string())
-                .collect(),
+            Targets::BodyAxes => REQUIRED.iter().map(|c| c.to_string()).collect(),
             Targets::AllSurfaces | Targets::Derivatives | Targets::AddedTerms => Vec::new(),
         }
     }
@@ -429,7 +484,7 @@ pub const REGISTRY: [EffectKind; 9] = [
     // Where the accelerometers sit, along one body axis, from the point the model reads its accelerations at: a
     // finding about the record's installation, reported apart from the causes (`super::lever_arm`).
     EffectKind {
-        effect: super::lever_arm::ACCELEROMETER_POSITION,
+        effect: ACCELEROMETER_POSITION,
         stage: Stage::Output,
         targets: Targets::BodyAxes,
         param: |_| ParamSpec {
@@ -440,7 +495,7 @@ pub const REGISTRY: [EffectKind; 9] = [
             resolution: 0.1,
         },
         refines: |_| None,
-        build: |axis, _| Box::new(super::lever_arm::AccelerometerPosition::along(axis)),
+        build: |axis, _| Box::new(AccelerometerPosition::along(axis)),
     },
     EffectKind {
         effect: "aero_derivative",
@@ -651,96 +706,8 @@ pub fn catalogue(
     (usable, skipped)
 }
 
-/// Extensions built from a file, each with its parameter values.
-pub type BuiltEffects = Vec<(Box<dyn Extension>, Vec<f64>)>;
-
-/// A fitted effect as written to and read from an extension file.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct FittedEffect {
-    /// Effect name.
-    pub effect: String,
-    /// Target name.
-    pub target: String,
-    /// Fitted value (first parameter).
-    pub value: f64,
-    /// Cramér–Rao standard error of the value.
-    #[serde(default)]
-    pub std_error: f64,
-}
-
-/// The extended model: fitted signal-path, sensor and coefficient-scale effects on top of an aircraft.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct ExtensionFile {
-    /// Aircraft the effects were fitted for.
-    pub aircraft: String,
-    /// The effects, applied in this order.
-    pub effects: Vec<FittedEffect>,
-    /// Effects already written into an exported aircraft's XML (documentation only: never applied again).
-    #[serde(default)]
-    pub model_effects: Vec<FittedEffect>,
-    /// Free-form provenance (data file, date).
-    #[serde(default)]
-    pub notes: BTreeMap<String, String>,
-    /// The loading the effects were fitted with, where it was not the model's own (JSBSim properties set before
-    /// every trim, as `--property` gave them).
-    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
-    pub properties: BTreeMap<String, f64>,
-}
-
-impl ExtensionFile {
-    /// Reads an extension file (JSON). A value outside its catalogue entry's range ([`ParamSpec`] `min..max`)
-    /// is refused, naming the effect, the value and the range: the search never fits one, so it was not written
-    /// by flightid or was edited.
-    pub fn read(path: &std::path::Path) -> Result<Self, DiagnoseError> {
-        let err = |message: String| DiagnoseError::ExtensionFile {
-            path: path.display().to_string(),
-            message,
-        };
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-        let file: Self = serde_json::from_str(&text).map_err(|e| err(e.to_string()))?;
-        file.check_ranges().map_err(err)?;
-        Ok(file)
-    }
-
-    /// Every effect of a known kind has its value within its catalogue entry's range (unknown effects are
-    /// refused by [`ExtensionFile::build`], naming the ones known).
-    pub fn check_ranges(&self) -> Result<(), String> {
-        for f in self.effects.iter().chain(&self.model_effects) {
-            let Some(kind) = REGISTRY.iter().find(|k| k.effect == f.effect) else {
-                continue;
-            };
-            let spec = (kind.param)(&f.target);
-            if !(f.value >= spec.min && f.value <= spec.max) {
-                let value = if f.value.abs() >= 1e6 {
-                    format!("{:e}", f.value)
-                } else {
-                    f.value.to_string()
-                };
-                return Err(format!(
-                    "{} on {}: value {value} is outside the effect's range [{}, {}]",
-                    f.effect,
-                    crate::text::escape_control(&f.target),
-                    spec.min,
-                    spec.max
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// Builds the extensions with their values.
-    pub fn build(&self, coefficient_names: &[String]) -> Result<BuiltEffects, DiagnoseError> {
-        self.effects
-            .iter()
-            .map(|f| {
-                Ok((
-                    make(&f.effect, &f.target, coefficient_names)?,
-                    vec![f.value],
-                ))
-            })
-            .collect()
-    }
-}
+mod file;
+pub use file::{BuiltEffects, ExtensionFile, FittedEffect};
 
 #[cfg(test)]
 mod tests;

@@ -168,7 +168,7 @@ fn an_accelerometer_ahead_of_the_reading_point_reads_the_pitch_acceleration() {
         ("ay_m_s2".into(), vec![0.0; n]),
         ("az_m_s2".into(), vec![-9.8; n]),
     ];
-    let e = make(super::super::lever_arm::ACCELEROMETER_POSITION, "x", &[]).unwrap();
+    let e = make(ACCELEROMETER_POSITION, "x", &[]).unwrap();
     let before = rec.columns.clone();
     e.apply_output(&[0.0], &mut rec);
     assert_eq!(rec.columns, before);
@@ -186,5 +186,5 @@ fn an_accelerometer_ahead_of_the_reading_point_reads_the_pitch_acceleration() {
         col("az_m_s2")
     );
     assert_eq!(col("ay_m_s2"), vec![0.0; n]);
-    assert!(make(super::super::lever_arm::ACCELEROMETER_POSITION, "w", &[]).is_err());
+    assert!(make(ACCELEROMETER_POSITION, "w", &[]).is_err());
 }
