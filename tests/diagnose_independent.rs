@@ -566,6 +566,18 @@ fn an_elevator_effectiveness_output_error_named_as_cm_de_in_gusts_is_named_on_th
     );
 }
 
+/// A clean 40 s c172x record of seed 41 (still air), which the probes of a record's conventions start from.
+const CLEAN_SEED_41: [&str; 8] = [
+    "--cases",
+    "1",
+    "--seed",
+    "41",
+    "--effects",
+    "[]",
+    "--duration",
+    "40",
+];
+
 /// JSBSim's 737 in cruise (the generator's `--aircraft 737`: 27 300 ft, 416 kts, 40 s at 20 Hz) with its lift curve
 /// ×0.7 and its roll damping ×1.5. The 737 calls its lift `CLalpha` (the c172x `CLwbh`), which `diagnose` finds
 /// among each derivative's JSBSim names; before, `CL_alpha` was skipped as "no coefficient knob 'CLwbh'" and the
@@ -825,16 +837,7 @@ fn a_log_cut_from_a_longer_flight_is_replayed_from_the_equilibrium_of_its_inputs
 /// record's timing, reported in `record_timing` and a warning, and no cause is named.
 #[test]
 fn a_time_skew_common_to_every_surface_is_the_records_timing_not_a_cause() {
-    let args = [
-        "--cases",
-        "1",
-        "--seed",
-        "41",
-        "--effects",
-        "[]",
-        "--duration",
-        "40",
-    ];
+    let args = CLEAN_SEED_41;
     let inputs = ["elevator_rad", "aileron_rad", "rudder_rad", "throttle"];
     let sensors_late = |mut rec: FlightRecord| {
         for (name, col) in rec.columns.iter_mut() {
@@ -876,16 +879,7 @@ fn assert_one_skew(d: &Diagnosis, range: std::ops::Range<f64>) {
 /// catalogue had `time_skew`, the same flight named an elevator delay of 22 ms alone.
 #[test]
 fn a_sensor_filter_on_every_channel_is_the_records_timing_not_an_elevator_delay() {
-    let args = [
-        "--cases",
-        "1",
-        "--seed",
-        "41",
-        "--effects",
-        "[]",
-        "--duration",
-        "40",
-    ];
+    let args = CLEAN_SEED_41;
     let inputs = [
         "time_s",
         "elevator_rad",

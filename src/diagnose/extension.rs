@@ -393,19 +393,24 @@ pub const TIME_SKEW: &str = "time_skew";
 /// The targets of an effect along a body axis ([`Targets::BodyAxes`]).
 pub const BODY_AXES: [&str; 3] = ["x", "y", "z"];
 
+/// A pure delay's parameter, s: up to 1 s, named from 20 ms on.
+fn delay_param(_: &str) -> ParamSpec {
+    ParamSpec {
+        null: 0.0,
+        min: 0.0,
+        max: 1.0,
+        fd_step: 0.005,
+        resolution: 0.02,
+    }
+}
+
 /// The catalogue: a new effect is one type implementing [`Effect`] and one row here.
 pub const REGISTRY: [EffectKind; 9] = [
     EffectKind {
         effect: "input_delay",
         stage: Stage::Input,
         targets: Targets::Surfaces,
-        param: |_| ParamSpec {
-            null: 0.0,
-            min: 0.0,
-            max: 1.0,
-            fd_step: 0.005,
-            resolution: 0.02,
-        },
+        param: delay_param,
         refines: |_| None,
         build: |_, _| Box::new(InputDelay),
     },
@@ -415,13 +420,7 @@ pub const REGISTRY: [EffectKind; 9] = [
         effect: TIME_SKEW,
         stage: Stage::Input,
         targets: Targets::AllSurfaces,
-        param: |_| ParamSpec {
-            null: 0.0,
-            min: 0.0,
-            max: 1.0,
-            fd_step: 0.005,
-            resolution: 0.02,
-        },
+        param: delay_param,
         refines: |_| None,
         build: |_, _| Box::new(InputDelay),
     },
