@@ -237,7 +237,7 @@ impl AccelerometerPosition {
     /// passes).
     pub fn along(axis: &str) -> Self {
         AccelerometerPosition {
-            axis: ["x", "y", "z"].iter().position(|a| *a == axis).unwrap_or(0),
+            axis: BODY_AXES.iter().position(|a| *a == axis).unwrap_or(0),
         }
     }
 }
@@ -270,8 +270,7 @@ impl Effect for AccelerometerPosition {
             })
             .collect();
         for (i, channel) in ACCELEROMETERS.iter().enumerate() {
-            let name = channel.to_string();
-            if let Some((_, column)) = rec.columns.iter_mut().find(|(c, _)| *c == name) {
+            if let Some(column) = column_mut(rec, channel.as_ref()) {
                 column.iter_mut().zip(&extra).for_each(|(v, e)| *v += e[i]);
             }
         }
