@@ -14,7 +14,7 @@ use std::path::Path;
 use std::process::Command;
 
 use flightid::aircraft;
-use flightid::data::{read_csv, FlightRecord};
+use flightid::data::{read_csv, Channel, FlightRecord};
 use flightid::diagnose::replay::ReplayCase;
 use flightid::diagnose::search::Worker;
 use flightid::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
@@ -326,6 +326,54 @@ fn delay_and_roll_damping_pair_is_named() {
         105,
         r#"[{"effect": "input_delay", "target": "elevator", "value": 0.08},
             {"effect": "aero_derivative", "target": "Cl_p", "value": 0.6}]"#,
+    );
+}
+
+/// A record whose elevator and aileron columns have the other sign convention (a servo output, an aileron logged
+/// as right minus left) drove the replay the wrong way round: on the clean seed-41 record an elevator
+/// effectiveness of 0.10 was named, with the aileron reversed an aileron delay of 0.99 s. The control moment of
+/// each surface (equation error on the rates' increments) on the record against the replay's now reverses such
+/// a column and says so, and the pair of the test above is named as it is on the record as generated (measured:
+/// `Cl_p` 0.5887, delay 0.0809 s; the elevator's moment +12.1 ± 0.6 rad/s² per rad on the record, −20.6 on the
+/// replay, the aileron's −23.2 and +20.1).
+#[test]
+fn surfaces_logged_with_the_other_sign_are_reversed_not_causes() {
+    let args = [
+        "--cases",
+        "1",
+        "--effects",
+        r#"[{"effect": "input_delay", "target": "elevator", "value": 0.08},
+            {"effect": "aero_derivative", "target": "Cl_p", "value": 0.6}]"#,
+        "--duration",
+        "30",
+        "--seed",
+        "105",
+    ];
+    let d = check_generated_with(&args, 0, |mut rec| {
+        for c in [Channel::Elevator, Channel::Aileron] {
+            rec.column_mut(c).unwrap().iter_mut().for_each(|v| *v = -*v);
+        }
+        rec
+    });
+    let reversed: Vec<&str> = d
+        .reversed_inputs
+        .iter()
+        .map(|r| r.column.as_str())
+        .collect();
+    assert_eq!(
+        reversed,
+        ["elevator_rad", "aileron_rad"],
+        "{:?}",
+        d.reversed_inputs
+    );
+    assert!(
+        d.warnings
+            .iter()
+            .filter(|w| w.contains("the replay reverses it"))
+            .count()
+            == 2,
+        "{:?}",
+        d.warnings
     );
 }
 

@@ -26,7 +26,7 @@ use faer::prelude::Solve;
 use faer::Mat;
 
 use crate::estimate::covariance;
-use crate::signal::sum_sq;
+use crate::signal::{sum_sq, LeastSquares, LeastSquaresError};
 
 use super::params::{Derivative, Geometry, MassProperties};
 use super::AeroError;
@@ -391,47 +391,25 @@ pub(crate) fn lesq(
 ) -> Result<RegressionResult, AeroError> {
     let n = z.len();
     let p = columns.len();
-    if n <= p {
-        return Err(AeroError::BadRecord(format!(
+    let ls = LeastSquares::fit(columns, z).map_err(|e| match e {
+        LeastSquaresError::TooFewSamples { .. } => AeroError::BadRecord(format!(
             "{coefficient}: {n} samples cannot determine {p} parameters"
-        )));
-    }
-    let x = Mat::from_fn(n, p, |i, j| columns[j][i]);
-    let svd = x
-        .thin_svd()
-        .map_err(|_| AeroError::Numerical("SVD of the regressor matrix"))?;
-    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-    if s[p - 1] <= 1e-12 * s[0] {
-        return Err(AeroError::BadRecord(format!(
-            "{coefficient}: regressors are collinear (condition {:.1e}); the manoeuvre does not excite them \
-             independently",
-            s[0] / s[p - 1].max(f64::MIN_POSITIVE)
-        )));
-    }
-    let (u, v) = (svd.U(), svd.V());
-    let uz: Vec<f64> = (0..p)
-        .map(|k| (0..n).map(|i| u[(i, k)] * z[i]).sum())
-        .collect();
-    let theta: Vec<f64> = (0..p)
-        .map(|a| (0..p).map(|k| v[(a, k)] * uz[k] / s[k]).sum())
-        .collect();
-    let resid: Vec<f64> = (0..n)
-        .map(|i| z[i] - (0..p).map(|j| columns[j][i] * theta[j]).sum::<f64>())
-        .collect();
-    let sse = sum_sq(&resid);
-    let s2 = sse / (n - p) as f64;
+        )),
+        LeastSquaresError::Collinear { condition } => AeroError::BadRecord(format!(
+            "{coefficient}: regressors are collinear (condition {condition:.1e}); the manoeuvre does not \
+             excite them independently"
+        )),
+        LeastSquaresError::Decomposition => AeroError::Numerical("SVD of the regressor matrix"),
+    })?;
+    let (theta, resid, d) = (&ls.theta, &ls.residual, &ls.inverse_normal);
+    let sse = sum_sq(resid);
+    let s2 = ls.fit_variance();
     let mean = z.iter().sum::<f64>() / n as f64;
     let sst: f64 = z.iter().map(|v| (v - mean).powi(2)).sum();
-    // D = (XᵀX)⁻¹ = V Σ⁻² Vᵀ.
-    let d = Mat::from_fn(p, p, |a, b| {
-        (0..p)
-            .map(|k| v[(a, k)] * v[(b, k)] / (s[k] * s[k]))
-            .sum::<f64>()
-    });
     // Coloured residuals: M = Σ_i Σ_j x(i) R(|i−j|) x(j)ᵀ over the lags up to the first where the
     // residual autocorrelation is no longer positive (or `max_lag`), unweighted; summed by the
     // estimation core's FFT products.
-    let acf = covariance::autocorrelation(&resid, max_lag.map_or(n - 1, |l| l.min(n - 1)));
+    let acf = covariance::autocorrelation(resid, max_lag.map_or(n - 1, |l| l.min(n - 1)));
     let lags = match max_lag {
         Some(l) => l.min(n - 1),
         None => (1..n).find(|&k| acf[k] <= 0.0).unwrap_or(n - 1),
@@ -439,7 +417,7 @@ pub(crate) fn lesq(
     let cols: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
     let w = covariance::lag_weighted_products(&cols, &acf[..=lags]);
     let m = Mat::from_fn(p, p, |a, b| w[a * p + b]);
-    let cov_c = &d * &m * &d;
+    let cov_c = d * &m * d;
     let terms = names
         .iter()
         .enumerate()

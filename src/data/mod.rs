@@ -18,7 +18,8 @@ pub use csv_io::{
 };
 pub use error::{DataError, Warning, WarningKind, IN_MEMORY};
 pub use record::{
-    sampling_warning, time_unit_suspicion, unit_warnings, FlightRecord, G0_M_S2, SCHEMA_COLUMNS,
+    control_moments, sampling_warning, time_unit_suspicion, unit_warnings, ControlMoment,
+    FlightRecord, G0_M_S2, SCHEMA_COLUMNS, SIGN_T_RATIO,
 };
 pub use resample::{
     dropout_starts, resample_uniform, uniform_pieces, UniformPieces, RESAMPLE_METHOD,

@@ -3,7 +3,9 @@
 use super::channel::Channel;
 use super::error::{DataError, Warning, WarningKind, IN_MEMORY};
 
+mod control_sign;
 mod kinematics;
+pub use control_sign::{control_moments, ControlMoment, SIGN_T_RATIO};
 use kinematics::{aero_angle_sign_warning, angle_rate_warning, speed_kinematics_warning};
 
 /// The schema columns of docs/data.md, in their canonical order.
@@ -65,6 +67,15 @@ impl FlightRecord {
             .iter()
             .find(|(n, _)| n == name)
             .map(|(_, v)| v.as_slice())
+    }
+
+    /// The values of a data column (not `time_s`), to change in place.
+    pub fn column_mut(&mut self, name: impl AsRef<str>) -> Option<&mut Vec<f64>> {
+        let name = name.as_ref();
+        self.columns
+            .iter_mut()
+            .find(|(n, _)| n == name)
+            .map(|(_, c)| c)
     }
 
     /// The values of a column, or an error saying which tool needs it and why.
@@ -232,6 +243,8 @@ fn max_abs(values: &[f64]) -> Option<(usize, f64)> {
 ///   sign convention;
 /// - an α or β anticorrelated in the same way with the rate the flight-path kinematics give it: the vane
 ///   has the other sign convention ([`aero_angle_sign_warning`]);
+/// - a surface whose moment on its axis, by equation error on the rates' increments, has the sign opposite to
+///   flightid's convention by more than ten standard errors ([`control_moments`]);
 /// - a median `az_m_s2` of +0.5..+2 (g) or +0.5 g..+2 g: a load factor (positive up), not the body-axis
 ///   specific force (about −g in level flight);
 /// - a median airspeed above 300 m/s, or airspeed changing 1.94 (knots) or 3.28 (ft/s) times as
@@ -358,6 +371,7 @@ pub fn unit_warnings(rec: &FlightRecord) -> Vec<Warning> {
     ]
     .into_iter()
     .flatten()
+    .chain(control_sign::control_sign_warnings(rec))
     {
         let already = w
             .column

@@ -181,17 +181,9 @@ impl Effect for ControlEffectiveness {
     }
 }
 
-/// The column `name` of `rec`, to change in place.
-fn column_mut<'a>(rec: &'a mut FlightRecord, name: &str) -> Option<&'a mut Vec<f64>> {
-    rec.columns
-        .iter_mut()
-        .find(|(n, _)| n == name)
-        .map(|(_, c)| c)
-}
-
 impl Effect for SensorBias {
     fn apply_output(&self, p: &[f64], target: &str, rec: &mut FlightRecord) {
-        if let Some(column) = column_mut(rec, target) {
+        if let Some(column) = rec.column_mut(target) {
             column.iter_mut().for_each(|v| *v += p[0]);
         }
     }
@@ -199,7 +191,7 @@ impl Effect for SensorBias {
 
 impl Effect for SensorScale {
     fn apply_output(&self, p: &[f64], target: &str, rec: &mut FlightRecord) {
-        if let Some(column) = column_mut(rec, target) {
+        if let Some(column) = rec.column_mut(target) {
             column.iter_mut().for_each(|v| *v *= p[0]);
         }
     }
@@ -270,7 +262,7 @@ impl Effect for AccelerometerPosition {
             })
             .collect();
         for (i, channel) in ACCELEROMETERS.iter().enumerate() {
-            if let Some(column) = column_mut(rec, channel.as_ref()) {
+            if let Some(column) = rec.column_mut(channel) {
                 column.iter_mut().zip(&extra).for_each(|(v, e)| *v += e[i]);
             }
         }

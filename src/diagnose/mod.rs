@@ -244,6 +244,8 @@ pub struct Diagnosis {
     /// The accelerometers' position along the body axes the selection found, taken as the record's installation
     /// instead of as causes (`lever_arm`); the validation and the extension file carry it.
     pub sensor_position: Vec<NamedCause>,
+    /// Surface columns logged with the other sign convention, reversed for the replay (`prepare`).
+    pub reversed_inputs: Vec<prepare::ReversedInput>,
     /// Model trim vs measured initial condition.
     pub trim_mismatch: Vec<TrimMismatch>,
     /// Catalogue entries not evaluated.
@@ -316,7 +318,8 @@ pub fn diagnose(
     };
     progress.stage("baseline replay", 0);
     let base = baseline::baseline(&mut workers[0], &p)?;
-    p.warnings.extend(base.loading_warning());
+    let mut warnings = std::mem::take(&mut p.warnings);
+    warnings.extend(base.loading_warning());
     let mut sel = select::select(workers, &p, &base, opts, &progress)?;
     let (process_noise, refit_note) = match process_noise {
         // Output error searched (no filter, or none used): the values may still want the filter.
@@ -339,6 +342,7 @@ pub fn diagnose(
     progress.stage("kinematic findings", 0);
     kinematic::kinematic_findings(&mut workers[0], train, reconstruction, &p, &mut sel, opts)?;
     let conventions = skew::record_conventions(&p, &mut sel.named);
+    warnings.extend(refit_note.into_iter().chain(conventions.notes));
     progress.stage("validation", 0);
     let v = validate::validate(&mut workers[0], &p, &base, &sel.selected)?;
     progress.finish();
@@ -351,14 +355,10 @@ pub fn diagnose(
         residuals_after: v.residuals_after,
         trim_mismatch: base.trim_mismatch,
         skipped: [p.skipped.clone(), sel.unidentifiable].concat(),
-        warnings: p
-            .warnings
-            .into_iter()
-            .chain(refit_note)
-            .chain(conventions.notes)
-            .collect(),
+        warnings,
         record_timing: conventions.timing,
         sensor_position: conventions.position,
+        reversed_inputs: p.reversed_inputs,
         process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.noise_sigma).collect(),
         relaxed_weights,

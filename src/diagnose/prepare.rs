@@ -5,8 +5,9 @@ use super::extension::{self, Extension, Stage};
 use super::replay::{self, ReplayCase};
 use super::search::{self, Worker};
 use super::{residual, sim_err, DiagnoseError, Skipped};
-use crate::data::FlightRecord;
+use crate::data::{control_moments, Channel, ControlMoment, FlightRecord, SIGN_T_RATIO};
 use crate::sim::{SimError, TrimPoint};
+use serde::Serialize;
 
 /// Everything the later stages need about the records and the catalogue.
 pub struct Prepared {
@@ -30,6 +31,22 @@ pub struct Prepared {
     pub filter: Option<super::process_noise::ResidualFilter>,
     /// The measurement noise standard deviation per compared channel (`sigma` before any relaxation).
     pub noise_sigma: Vec<f64>,
+    /// The surface columns of the other sign convention, reversed for the replay ([`reversed_surfaces`]).
+    pub reversed_inputs: Vec<ReversedInput>,
+}
+
+/// A surface column the record logs with the other sign than the model reads it: its control moment (the body
+/// rate's acceleration per radian, [`control_moments`]) on the record and on the unextended replay.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReversedInput {
+    /// The column, e.g. `elevator_rad`.
+    pub column: String,
+    /// The moment on the record, rad/s² per rad, and its standard error.
+    pub record: f64,
+    pub record_std_error: f64,
+    /// The moment on the replay, and its standard error.
+    pub model: f64,
+    pub model_std_error: f64,
 }
 
 impl Prepared {
@@ -135,6 +152,68 @@ pub fn prepare(
     train: &FlightRecord,
     valid: Option<&FlightRecord>,
 ) -> Result<Prepared, DiagnoseError> {
+    let logged = prepare_as_logged(worker, train, valid)?;
+    if logged.reversed_inputs.is_empty() {
+        return Ok(logged);
+    }
+    let reverse = |rec: &FlightRecord| {
+        let mut rec = rec.clone();
+        for (name, column) in rec.columns.iter_mut() {
+            if logged.reversed_inputs.iter().any(|r| &r.column == name) {
+                column.iter_mut().for_each(|v| *v = -*v);
+            }
+        }
+        rec
+    };
+    let mut p = prepare_as_logged(worker, &reverse(train), valid.map(reverse).as_ref())?;
+    p.warnings.extend(logged.reversed_inputs.iter().map(|r| {
+        format!(
+            "{}: the record's body rate follows it the other way round from the model's (control moment \
+             {:+.2} ± {:.2} rad/s² per rad on the record, {:+.2} ± {:.2} on the replay): it is logged with the \
+             other sign convention, and the replay reverses it; declare it in the --columns map with scale = -1.0",
+            r.column, r.record, r.record_std_error, r.model, r.model_std_error
+        )
+    }));
+    p.reversed_inputs = logged.reversed_inputs;
+    Ok(p)
+}
+
+/// The surfaces whose control moment (the equation error of [`control_moments`]) has one sign on the record and
+/// the other on the unextended replay, each by more than [`SIGN_T_RATIO`] standard errors. The replay is given
+/// the record's surface columns, so both regressions see the same inputs.
+fn reversed_surfaces(record: &FlightRecord, replayed: &FlightRecord) -> Vec<ReversedInput> {
+    let mut model_rec = replayed.clone();
+    for c in [Channel::Elevator, Channel::Aileron, Channel::Rudder] {
+        if let (Some(logged), Some(sim)) = (record.column(c), model_rec.column_mut(c)) {
+            sim.copy_from_slice(logged);
+        }
+    }
+    let decided = |m: &ControlMoment| m.t_ratio() > SIGN_T_RATIO;
+    let model = control_moments(&model_rec);
+    control_moments(record)
+        .into_iter()
+        .filter(decided)
+        .filter_map(|m| {
+            let s = model
+                .iter()
+                .find(|s| s.surface == m.surface && decided(s))?;
+            (m.value * s.value < 0.0).then(|| ReversedInput {
+                column: m.surface.to_string(),
+                record: m.value,
+                record_std_error: m.std_error,
+                model: s.value,
+                model_std_error: s.std_error,
+            })
+        })
+        .collect()
+}
+
+/// [`prepare`] on the records as they are.
+fn prepare_as_logged(
+    worker: &mut Worker,
+    train: &FlightRecord,
+    valid: Option<&FlightRecord>,
+) -> Result<Prepared, DiagnoseError> {
     let mut case = ReplayCase::new(train)?;
     // The simulation steps at a whole multiple of the training record's rate; a validation record sampled at
     // another rate is interpolated onto the training rate (linearly, no filtering) and the warning says so.
@@ -231,6 +310,7 @@ pub fn prepare(
             c.outputs.retain(|o| !missing.contains(o));
         }
     }
+    let reversed_inputs = reversed_surfaces(&case.record, &probe);
     let coeffs = worker.sim.coefficient_names();
     let added = worker.sim.added_term_names();
     let (all, skipped_raw) = extension::catalogue(&case.record, &coeffs, &added);
@@ -291,5 +371,6 @@ pub fn prepare(
         warnings,
         nuisance: Vec::new(),
         filter: None,
+        reversed_inputs,
     })
 }

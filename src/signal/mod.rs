@@ -4,9 +4,11 @@
 //! scales it to a surface deflection. Shapes follow Morelli & Klein, *Aircraft System Identification:
 //! Theory and Practice* (2nd ed., 2016), ch. 9 (input design).
 
+mod least_squares;
 mod maneuver;
 mod ops;
 
+pub use least_squares::{LeastSquares, LeastSquaresError};
 pub use maneuver::{
     generate, multisine_design, peak_factor, time_grid, Maneuver, MultisineDesign, Sweep,
 };
