@@ -882,28 +882,37 @@ fn a_log_cut_from_a_longer_flight_is_replayed_from_the_equilibrium_of_its_inputs
 
 /// A clean record whose sensor channels the data system logged two samples (40 ms) later than its surface
 /// channels. The search names an input delay of 40 ms on each of the three surfaces; they are one finding about the
-/// record's timing, reported in `record_timing` and a warning, and no cause is named.
+/// record's timing, reported in `record_timing` and a warning, and no cause is named. The other way round, the
+/// surfaces logged two samples late (a data system that stamps them later, or holds them), the response leads
+/// them: nothing was named and the validation ISE stayed 15 times the record's as generated (7164 against 476),
+/// for `time_skew` could not be negative; now one skew of −40 ms.
 #[test]
 fn a_time_skew_common_to_every_surface_is_the_records_timing_not_a_cause() {
     let args = CLEAN_SEED_41;
     let inputs = ["elevator_rad", "aileron_rad", "rudder_rad", "throttle"];
-    let sensors_late = |mut rec: FlightRecord| {
-        for (name, col) in rec.columns.iter_mut() {
-            if !inputs.contains(&name.as_str()) {
-                let first = col[0];
-                col.rotate_right(2);
-                col[..2].fill(first);
+    for (surfaces_late, range, verb) in [
+        (false, 0.037..0.043, "follows"),
+        (true, -0.043..-0.037, "leads"),
+    ] {
+        let late = |mut rec: FlightRecord| {
+            for (name, col) in rec.columns.iter_mut() {
+                if inputs.contains(&name.as_str()) == surfaces_late {
+                    let first = col[0];
+                    col.rotate_right(2);
+                    col[..2].fill(first);
+                }
             }
-        }
-        rec
-    };
-    let d = check_generated_with(&args, 0, sensors_late);
-    assert_one_skew(&d, 0.037..0.043);
-    assert!(
-        d.warnings.iter().any(|w| w.contains("same 40 ms")),
-        "{:?}",
-        d.warnings
-    );
+            rec
+        };
+        let d = check_generated_with(&args, 0, late);
+        assert_one_skew(&d, range);
+        let said = format!("{verb} every surface that moves by the same 40 ms");
+        assert!(
+            d.warnings.iter().any(|w| w.contains(&said)),
+            "{:?}",
+            d.warnings
+        );
+    }
 }
 
 /// The record's timing is one `time_skew` on every surface, within `range` seconds.

@@ -55,6 +55,10 @@ pub trait Extension: Send + Sync {
     fn params(&self) -> Vec<ParamSpec>;
     /// CSV columns the extension needs in the measured record.
     fn required_columns(&self) -> Vec<String>;
+    /// CSV columns of which the measured record needs at least one (empty: no such condition).
+    fn required_one_of(&self) -> Vec<String> {
+        Vec::new()
+    }
     /// Changes the model before trimming (Stage::Model).
     fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError>;
     /// Changes the deviation sequence of `surface` (sampled at `dt_s`, sample 0 = initial condition, value 0).
@@ -135,10 +139,9 @@ pub struct AeroNonlinearity {
 
 impl Effect for InputDelay {
     fn apply_input(&self, p: &[f64], dev: &mut [f64], dt_s: f64) {
-        // δ_d(t_k) = δ(t_k − τ), linear interpolation between samples, δ = 0 before the record.
-        let shift = p[0].max(0.0) / dt_s;
-        let whole = shift.floor() as usize;
-        let frac = shift - whole as f64;
+        // δ_d(t_k) = δ(t_k − τ), linear interpolation between samples, δ = 0 before the record and its last
+        // value after it. A negative τ (a `time_skew` whose surfaces are stamped later than the response) reads
+        // ahead.
         let src = dev.to_vec();
         let at = |j: isize| -> f64 {
             if j < 0 {
@@ -148,8 +151,10 @@ impl Effect for InputDelay {
             }
         };
         for (k, v) in dev.iter_mut().enumerate() {
-            let j = k as isize - whole as isize;
-            *v = (1.0 - frac) * at(j) + frac * at(j - 1);
+            let x = k as f64 - p[0] / dt_s;
+            let j = x.floor();
+            let frac = x - j;
+            *v = (1.0 - frac) * at(j as isize) + frac * at(j as isize + 1);
         }
     }
 }
@@ -406,12 +411,16 @@ pub const REGISTRY: [EffectKind; 9] = [
         build: |_, _| Box::new(InputDelay),
     },
     // The same delay on every surface: one parameter where `input_delay` would need one per surface. A skew of
-    // the record's timing costs every surface that moves alike, so it is told from a delay on one surface.
+    // the record's timing costs every surface that moves alike, so it is told from a delay on one surface. It may
+    // be negative: a data system can stamp its surfaces later than its sensors, as well as the other way round.
     EffectKind {
         effect: TIME_SKEW,
         stage: Stage::Input,
         targets: Targets::AllSurfaces,
-        param: delay_param,
+        param: |target| ParamSpec {
+            min: -0.5,
+            ..delay_param(target)
+        },
         refines: |_| None,
         build: |_, _| Box::new(InputDelay),
     },
@@ -556,6 +565,13 @@ impl Extension for Entry {
     fn required_columns(&self) -> Vec<String> {
         self.kind.targets.required_columns(&self.target)
     }
+    fn required_one_of(&self) -> Vec<String> {
+        if self.kind.targets == Targets::BodyAxes {
+            ACCELEROMETERS.iter().map(|c| c.to_string()).collect()
+        } else {
+            Vec::new()
+        }
+    }
     fn apply_model(&self, p: &[f64], sim: &mut dyn ReplaySim) -> Result<(), SimError> {
         self.effect.apply_model(p, sim)
     }
@@ -683,15 +699,16 @@ pub fn catalogue(
             .into_iter()
             .filter(|c| record.column(c).is_none())
             .collect();
-        if !missing.is_empty() {
-            skipped.push((
-                e.effect().to_string(),
-                e.target().to_string(),
-                format!("the data have no column {}", missing.join(", ")),
-            ));
+        let one_of = e.required_one_of();
+        let why = if !missing.is_empty() {
+            format!("the data have no column {}", missing.join(", "))
+        } else if !one_of.is_empty() && one_of.iter().all(|c| record.column(c).is_none()) {
+            format!("the data have none of the columns {}", one_of.join(", "))
+        } else {
+            usable.push(e);
             continue;
-        }
-        usable.push(e);
+        };
+        skipped.push((e.effect().to_string(), e.target().to_string(), why));
     }
     (usable, skipped)
 }

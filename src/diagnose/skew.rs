@@ -80,12 +80,24 @@ pub fn common_skew(p: &Prepared, named: &mut Vec<NamedCause>) -> Option<(String,
 
 /// The warning that reports a skew of `mean_s` seconds, with its `detail` (the delays as fitted).
 fn warning(mean_s: f64, detail: &str) -> String {
+    let (verb, why) = if mean_s >= 0.0 {
+        (
+            "follows",
+            "its data system's timing, or sensor filters that lag every channel alike), or a delay common to \
+             every surface",
+        )
+    } else {
+        (
+            "leads",
+            "its data system stamps the surfaces later than the sensors, or logs them at a lower rate and holds \
+             them, or filters them)",
+        )
+    };
     format!(
-        "the response follows every surface that moves by the same {:.0} ms ({detail}): a time skew between the \
-         record's surface and sensor channels (its data system's timing, or sensor filters that lag every channel \
-         alike), or a delay common to every surface. It is taken as the record's timing, not named as a cause; the \
-         validation and the extension carry it",
-        1000.0 * mean_s
+        "the response {verb} every surface that moves by the same {:.0} ms ({detail}): a time skew between the \
+         record's surface and sensor channels ({why}. It is taken as the record's timing, not named as a cause; \
+         the validation and the extension carry it",
+        1000.0 * mean_s.abs()
     )
 }
 

@@ -145,6 +145,22 @@ fn a_time_skew_delays_every_surface_alike() {
         assert_ne!(by_skew, dev, "{surface}");
     }
     assert_eq!(skew.excited_count(), 2);
+    // A negative skew reads ahead: 1.5 samples ahead is the mean of the samples 1 and 2 ahead, and the last
+    // sample is held past the record's end. Only the skew may be negative; a surface's own delay may not.
+    let mut ahead = dev.clone();
+    skew.apply_input(&[-0.03], "elevator", &mut ahead, 0.02);
+    for k in 0..47 {
+        assert!(
+            (ahead[k] - 0.5 * (dev[k + 1] + dev[k + 2])).abs() < 1e-15,
+            "sample {k}"
+        );
+    }
+    assert_eq!(ahead[48..], [dev[49], dev[49]]);
+    assert!(skew.params()[0].min < 0.0);
+    assert_eq!(
+        make("input_delay", "elevator", &[]).unwrap().params()[0].min,
+        0.0
+    );
     let e = make(TIME_SKEW, "elevator", &[])
         .err()
         .expect("one target only");
@@ -187,4 +203,38 @@ fn an_accelerometer_ahead_of_the_reading_point_reads_the_pitch_acceleration() {
     );
     assert_eq!(col("ay_m_s2"), vec![0.0; n]);
     assert!(make(ACCELEROMETER_POSITION, "w", &[]).is_err());
+}
+
+/// A record without accelerometers cannot place them: the position is skipped for the columns it lacks (it was
+/// skipped for a Cramér–Rao σ of ∞), and one accelerometer is enough to keep it.
+#[test]
+fn the_accelerometer_position_needs_an_accelerometer() {
+    let with = |names: &[&str]| FlightRecord {
+        time_s: vec![0.0, 0.1],
+        columns: names
+            .iter()
+            .map(|n| (n.to_string(), vec![0.0; 2]))
+            .collect(),
+        metadata: Vec::new(),
+    };
+    let gyros = ["p_rad_s", "q_rad_s", "r_rad_s"];
+    let (usable, skipped) = catalogue(&with(&gyros), &[], &[]);
+    assert!(usable.iter().all(|e| e.effect() != ACCELEROMETER_POSITION));
+    let reasons: Vec<&str> = skipped
+        .iter()
+        .filter(|(e, _, _)| e == ACCELEROMETER_POSITION)
+        .map(|(_, _, why)| why.as_str())
+        .collect();
+    assert_eq!(reasons.len(), 3, "{skipped:?}");
+    assert!(reasons
+        .iter()
+        .all(|w| *w == "the data have none of the columns ax_m_s2, ay_m_s2, az_m_s2"));
+    let (usable, _) = catalogue(&with(&[&gyros[..], &["az_m_s2"]].concat()), &[], &[]);
+    assert_eq!(
+        usable
+            .iter()
+            .filter(|e| e.effect() == ACCELEROMETER_POSITION)
+            .count(),
+        3
+    );
 }
