@@ -11,7 +11,9 @@
 //! every surface that moves alike, so the search names it ahead of a delay on one surface where the record has
 //! one. It also takes sensor filters that lag every channel alike: on the same records with every sensor through
 //! a 5 Hz first-order filter (32 ms of lag), the search named an elevator delay of 22 ms alone, the aileron's and
-//! rudder's (22 ms too, each at z ≈ 20) set aside as explained by an elevator lag below its resolution.
+//! rudder's (22 ms too, each at z ≈ 20) set aside as explained by an elevator lag below its resolution. The skew
+//! may be negative: a data system that stamps its surfaces later than its sensors, or logs the surfaces at a lower
+//! rate and holds them, gives a response that leads them (with the surfaces two samples late, −39.8 ms).
 //!
 //! So where `time_skew` is named, or every surface that moves (at least two) is named with an input delay and the
 //! delays agree within three of their standard errors or 15 % of their mean, that is one finding about the
