@@ -6,7 +6,7 @@
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
 //! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--backward-elimination] [--estimate-rate]
-//! [--without COLUMNS] [--log-from S] [--aircraft c172x|737] [--out DIR]`
+//! [--without COLUMNS] [--reverse COLUMNS] [--log-from S] [--aircraft c172x|737] [--out DIR]`
 //! - `--aircraft 737`: records of JSBSim's 737 in cruise, diagnosed with flightid's `737` configuration.
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
@@ -17,6 +17,8 @@
 //!   --estimate-rate`).
 //! - `--without alpha_rad,beta_rad,ax_m_s2,ay_m_s2,az_m_s2`: records that leave those sensor columns out (a log
 //!   without vanes or accelerometers); no effect is hidden on them.
+//! - `--reverse elevator_rad,aileron_rad`: records whose surface columns have the other sign convention (as a
+//!   servo output or an aileron logged right minus left has); `diagnose` must reverse them and name the same set.
 //! - `--log-from 14`: records logged from that many seconds into their flight, as a data system that starts
 //!   recording mid-flight writes them (inside a maneuver or the transient after one).
 //! - the mix is stratified by case index (i mod 4 = 0 clean, 3 two or three effects, else one: 40 cases give
@@ -51,6 +53,7 @@ struct Args {
     out: PathBuf,
     first: usize,
     without: String,
+    reverse: String,
     log_from: String,
     aircraft: String,
 }
@@ -70,6 +73,7 @@ fn args() -> Args {
         out: std::env::temp_dir().join("flightid-diagnose-eval"),
         first: 0,
         without: String::new(),
+        reverse: String::new(),
         log_from: String::new(),
         aircraft: "c172x".to_string(),
     };
@@ -83,6 +87,7 @@ fn args() -> Args {
             "--first" => a.first = next(i).parse().unwrap_or(0),
             "--out" => a.out = PathBuf::from(next(i)),
             "--without" => a.without = next(i),
+            "--reverse" => a.reverse = next(i),
             "--log-from" => a.log_from = next(i),
             "--aircraft" => a.aircraft = next(i),
             "--turbulence" => {
@@ -225,6 +230,9 @@ fn generate(a: &Args) {
     if !a.log_from.is_empty() {
         cmd.args(["--log-from", &a.log_from]);
     }
+    if !a.reverse.is_empty() {
+        cmd.args(["--reverse", &a.reverse]);
+    }
     if !a.random_mix {
         cmd.arg("--stratified");
     }
@@ -255,6 +263,7 @@ fn main() {
         (0, 0, 0, 0, 0, 0, 0);
     let mut grouped = 0;
     let mut wall = 0.0;
+    let mut signs_right = 0;
     for i in a.first..a.first + a.cases {
         let p = |part: &str| a.out.join(format!("case_{i:03}_{part}"));
         let truth: serde_json::Value =
@@ -293,6 +302,26 @@ fn main() {
             values: ok_v,
             grouped: ok_g,
         } = score(&d, &effects);
+        // The surface columns the generator logged with the other sign, against those `diagnose` reversed.
+        let sorted = |mut v: Vec<String>| {
+            v.sort();
+            v
+        };
+        let want_reversed = sorted(
+            truth["reversed_columns"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|c| c.as_str().map(String::from))
+                .collect(),
+        );
+        let got_reversed = sorted(d.reversed_inputs.iter().map(|r| r.column.clone()).collect());
+        signs_right += usize::from(want_reversed == got_reversed);
+        let signs = if want_reversed == got_reversed {
+            String::new()
+        } else {
+            format!(" REVERSED {got_reversed:?} (logged so: {want_reversed:?})")
+        };
         n += 1;
         exact += usize::from(ok);
         values += usize::from(ok_v);
@@ -342,7 +371,7 @@ fn main() {
             ""
         };
         println!(
-            "case {i:3} [{}]{filter} {:12} {:5.1} s {:3.0} Hz noise {:3.1} {:4} sims {:5.1} s, round-0 min dBIC {min_bic:8.1}: hidden [{}] named [{}]",
+            "case {i:3} [{}]{filter} {:12} {:5.1} s {:3.0} Hz noise {:3.1} {:4} sims {:5.1} s, round-0 min dBIC {min_bic:8.1}: hidden [{}] named [{}]{signs}",
             if ok_v {
                 "ok "
             } else if ok_g {
@@ -367,7 +396,8 @@ fn main() {
         "{n} cases ({}, seed {}, turbulence {}): named set exactly right {exact}/{n} ({:.0} %), with values within 15 % \
          {values}/{n} ({:.0} %), or with a hidden effect named by the ambiguity group it is in {grouped}/{n} \
          ({:.0} %); clean records with a cause named {clean_named}/{clean} ({:.0} %); \
-         cases with >= 2 effects right {multi_ok}/{multi}; mean diagnose wall {:.1} s; total {:.0} s",
+         cases with >= 2 effects right {multi_ok}/{multi}; surface sign conventions right {signs_right}/{n}; mean \
+         diagnose wall {:.1} s; total {:.0} s",
         a.aircraft,
         a.seed,
         a.turbulence,

@@ -512,6 +512,10 @@ def main():
                     help="the accelerometers sit X,Y,Z metres (body axes: forward, right, down) from the point JSBSim "
                          "reads its accelerations at (the aircraft's eyepoint), as a data system's IMU seldom sits "
                          "where the model reads them; the truth gets \"imu_offset_m\"")
+    ap.add_argument("--reverse", default="", metavar="COLUMNS",
+                    help="comma-separated surface columns logged with the other sign (a data system's convention: "
+                         "a servo output, an aileron logged right minus left, an elevator positive trailing edge "
+                         "up); the truth gets \"reversed_columns\"")
     ap.add_argument("--log-from", type=float, default=0.0, metavar="S",
                     help="the log begins S seconds into the flight, as a log cut from a longer flight does (inside "
                          "a maneuver or a transient), its clock starting at 0 there; the truth gets \"log_from_s\"")
@@ -529,6 +533,10 @@ def main():
     unknown = unlogged - {c for c, _, _ in LOGGED}
     if unknown:
         ap.error(f"--without names columns the generator does not log: {', '.join(sorted(unknown))}")
+    reversed_columns = [c for c in args.reverse.split(",") if c]
+    surfaces = {"elevator_rad", "aileron_rad", "rudder_rad"}
+    if set(reversed_columns) - surfaces:
+        ap.error(f"--reverse takes surface columns ({', '.join(sorted(surfaces))}), got {args.reverse}")
     spec = dict(AIRCRAFT[args.aircraft])
     spec["pre_ic"] = {**spec["pre_ic"], **loading}
     spec["air_data"] = args.air_data
@@ -591,6 +599,8 @@ def main():
                 truth["log_from_s"] = args.log_from
             if args.imu_offset:
                 truth["imu_offset_m"] = spec["imu_offset_m"]
+            if reversed_columns:
+                truth["reversed_columns"] = reversed_columns
             for part, validation in (("train", False), ("valid", True)):
                 rows = fly(ac, cond, effects, duration, log_hz, rng, args.turbulence, validation,
                            PLANS[plan] if plan else None)
@@ -603,6 +613,8 @@ def main():
                         r["time_s"] -= t0
                 cols, data = sensors(rows, effects, noise_level, rng)
                 cols = [c for c in cols if c not in unlogged]
+                for c in reversed_columns:
+                    data[c] = -data[c]
                 write_csv(os.path.join(args.out, f"case_{i:03d}_{part}.csv"), cols, data,
                           {"generator": f"gen_diagnose_records.py (JSBSim {spec['model']}, own API)", "case": i})
             with open(os.path.join(args.out, f"case_{i:03d}_truth.json"), "w") as f:
