@@ -56,8 +56,9 @@ const MIN_MOTION_RAD: f64 = 0.002;
 const MIN_MOTION_NOISE: f64 = 10.0;
 
 /// How many standard errors away from zero a moment must lie for its sign to be called. On the independent
-/// generator's c172x records (still air and light turbulence) and the 737's, the weakest is the 737's elevator
-/// at 17 standard errors; a surface that barely moves stays far below.
+/// generators' records (`gen_diagnose_records.py`: the c172x in still air and light turbulence, the 737;
+/// `gen_foreign_records.py`: p51d, c310, pa28, 737, T37 in light turbulence) the weakest is the 737's elevator, at
+/// 12.7 standard errors on a `gen_foreign_records.py` record; a surface that barely moves stays far below.
 pub const SIGN_T_RATIO: f64 = 10.0;
 
 /// The control moment of every moving surface whose rate is logged, by equation error on the rates' increments
