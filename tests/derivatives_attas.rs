@@ -268,3 +268,39 @@ fn mat_files_are_read_as_the_books_text_files_are() {
         }
     }
 }
+
+/// The book defines its aileron as half the difference right minus left, the other sign from flightid's (positive
+/// rolling right). A map written the book's way passes every unit check; the reader's sign check flags the mapped
+/// aileron by the roll it causes, and the shipped map draws no warning. Measured on seed 1: −5.86 ± 0.04 rad/s²
+/// per rad.
+#[test]
+fn an_aileron_mapped_the_books_way_is_flagged_by_its_sign() {
+    let tmp = generated("sign", &[]);
+    let dir = tmp.path();
+    let shipped = std::fs::read_to_string(root().join("models/attas.columns.toml")).unwrap();
+    let books = shipped.replace(
+        "aileron_rad = { from = { 28 = 0.5, 29 = -0.5 }",
+        "aileron_rad = { from = { 28 = -0.5, 29 = 0.5 }",
+    );
+    assert_ne!(books, shipped, "the shipped map derives the aileron as expected");
+    std::fs::write(dir.join("books.toml"), books).unwrap();
+    let stderr = |map: &Path| {
+        let out = common::run_ok(
+            Command::new(env!("CARGO_BIN_EXE_flightid"))
+                .arg("segments")
+                .arg(dir.join("attas_ailrud.asc"))
+                .arg("--columns")
+                .arg(map),
+        );
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let own = stderr(&root().join("models/attas.columns.toml"));
+    assert!(!own.contains("warning"), "{own}");
+    let books = stderr(&dir.join("books.toml"));
+    assert!(
+        books.contains("column `aileron_rad`: the roll acceleration follows it at -")
+            && books.contains("sign opposite to flightid's convention"),
+        "{books}"
+    );
+    assert_eq!(books.matches("warning").count(), 1, "{books}");
+}
