@@ -282,7 +282,10 @@ fn an_aileron_mapped_the_books_way_is_flagged_by_its_sign() {
         "aileron_rad = { from = { 28 = 0.5, 29 = -0.5 }",
         "aileron_rad = { from = { 28 = -0.5, 29 = 0.5 }",
     );
-    assert_ne!(books, shipped, "the shipped map derives the aileron as expected");
+    assert_ne!(
+        books, shipped,
+        "the shipped map derives the aileron as expected"
+    );
     std::fs::write(dir.join("books.toml"), books).unwrap();
     let stderr = |map: &Path| {
         let out = common::run_ok(
