@@ -375,6 +375,17 @@ fn surfaces_logged_with_the_other_sign_are_reversed_not_causes() {
         "{:?}",
         d.warnings
     );
+    // The report lists them among the record's conventions.
+    let dir = tempfile::tempdir().unwrap();
+    let train = &d.traces.train_before;
+    flightid::diagnose::report::write_report(&d, "c172x", train, None, dir.path()).unwrap();
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    for column in ["elevator_rad", "aileron_rad"] {
+        assert!(
+            md.contains(&format!("| other sign convention | {column} | moment ")),
+            "{md}"
+        );
+    }
 }
 
 /// Three effects, of which the first round cannot tell two apart: with the vane scales still unmodelled,

@@ -197,6 +197,14 @@ fn evidence_section(d: &Diagnosis) -> Section {
             })
             .collect(),
     ));
+    let conventions = record_conventions(d);
+    if !conventions.is_empty() {
+        s.tables.push(Table::new(
+            "The record's conventions, taken from it (not causes)",
+            &["finding", "target", "value", "how the replay takes it"],
+            conventions,
+        ));
+    }
     if !d.skipped.is_empty() {
         s.tables.push(Table::new(
             "Catalogue entries skipped",
@@ -208,6 +216,39 @@ fn evidence_section(d: &Diagnosis) -> Section {
         ));
     }
     s
+}
+
+/// One row per convention the diagnosis took from the record: its timing, its accelerometers' position and the
+/// surface columns it logs with the other sign.
+fn record_conventions(d: &Diagnosis) -> Vec<Vec<String>> {
+    let timing = d.record_timing.iter().map(|n| {
+        vec![
+            "time skew".into(),
+            n.target.clone(),
+            format!("{:+.1} ± {:.1} ms", 1000.0 * n.value, 1000.0 * n.std_error),
+            "the surfaces shifted in time (negative: the response leads them)".into(),
+        ]
+    });
+    let position = d.sensor_position.iter().map(|n| {
+        vec![
+            "accelerometer position".into(),
+            n.target.clone(),
+            format!("{:+.3} ± {:.3} m", n.value, n.std_error),
+            "the simulated accelerations read there".into(),
+        ]
+    });
+    let reversed = d.reversed_inputs.iter().map(|r| {
+        vec![
+            "other sign convention".into(),
+            r.column.clone(),
+            format!(
+                "moment {:+.2} ± {:.2} on the record, {:+.2} ± {:.2} on the replay (rad/s² per rad)",
+                r.record, r.record_std_error, r.model, r.model_std_error
+            ),
+            "the column reversed".into(),
+        ]
+    });
+    timing.chain(position).chain(reversed).collect()
 }
 
 /// Overlays and residual plots of one record: measured, model and extended model per channel.
