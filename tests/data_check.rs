@@ -437,6 +437,18 @@ fn in_light_turbulence_the_alpha_bias_stays_a_sensor_bias_not_a_rotated_flight_p
     }
 }
 
+/// What `flightid COMMAND DIR/REC --columns DIR/MAP` prints on stderr (its warnings), the command succeeding.
+fn mapped_stderr(command: &str, dir: &std::path::Path, rec: &str, map: &str) -> String {
+    let out = common::run_ok(
+        std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
+            .arg(command)
+            .arg(dir.join(rec))
+            .arg("--columns")
+            .arg(dir.join(map)),
+    );
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
 /// Sign conventions are checked on real records, not guessed: on c310 records from the independent generator
 /// (light turbulence) an α or β vane mapped with the other sign (`scale = -1.0` in the column map) is flagged,
 /// with its column and the fix; with the logger's own map nothing is. Measured: α's windowed change against
@@ -456,16 +468,7 @@ fn an_alpha_or_beta_vane_of_the_other_sign_is_flagged_and_the_right_one_is_not()
         );
     assert_ne!(flipped, map, "the map names the vanes as expected");
     std::fs::write(dir.path().join("flipped.toml"), flipped).unwrap();
-    let warnings = |rec: &str, map: &str| {
-        let out = common::run_ok(
-            std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
-                .arg("check")
-                .arg(dir.path().join(rec))
-                .arg("--columns")
-                .arg(dir.path().join(map)),
-        );
-        String::from_utf8_lossy(&out.stderr).to_string()
-    };
+    let warnings = |rec: &str, map: &str| mapped_stderr("check", dir.path(), rec, map);
     for (rec, column) in [
         ("c310_lon1.csv", "alpha_rad"),
         ("c310_lat1.csv", "beta_rad"),
@@ -507,16 +510,7 @@ fn a_surface_of_the_other_sign_is_flagged_and_the_right_one_is_not() {
             );
         }
         std::fs::write(dir.path().join("flipped.toml"), flipped).unwrap();
-        let warnings = |rec: &str, map: &str| {
-            let out = common::run_ok(
-                std::process::Command::new(env!("CARGO_BIN_EXE_flightid"))
-                    .arg("segments")
-                    .arg(dir.path().join(rec))
-                    .arg("--columns")
-                    .arg(dir.path().join(map)),
-            );
-            String::from_utf8_lossy(&out.stderr).to_string()
-        };
+        let warnings = |rec: &str, map: &str| mapped_stderr("segments", dir.path(), rec, map);
         for (rec, flagged) in [
             ("lon1", &[("elevator_rad", "pitch")][..]),
             (
