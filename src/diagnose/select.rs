@@ -31,7 +31,9 @@
 mod gates;
 mod identifiability;
 mod refine;
-use gates::{beaten_within_resolution, rejection, unconfirmed_in_time};
+use gates::{
+    beaten_within_resolution, beyond_resolution, rejection, unconfirmed_in_time, RESOLUTION_CONFIDENCE,
+};
 pub(super) use gates::{BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
 pub use identifiability::profiled_information;
 use identifiability::{identifiable, Identifiable};
@@ -342,14 +344,17 @@ pub(super) fn drop_below_resolution(
         let accepted = candidates.iter_mut().rev().find(|c| {
             &c.effect == effect && &c.target == target && c.full_fit && c.rejected_because.is_none()
         });
-        let Some(c) = accepted.filter(|c| (named[k].value - null).abs() < c.resolution) else {
+        let within = |c: &&mut Candidate| {
+            !beyond_resolution(named[k].value - null, named[k].std_error, c.resolution)
+        };
+        let Some(c) = accepted.filter(within) else {
             k += 1;
             continue;
         };
         c.rejected_because = Some(format!(
-            "dropped after a later joint fit with the other named effects: its value {:.4} is within the \
-             resolution {:.3} of no effect",
-            named[k].value, c.resolution
+            "dropped after a later joint fit with the other named effects: its value {:.4} ± {:.4} is within \
+             the resolution {:.3} of no effect, at {RESOLUTION_CONFIDENCE} standard errors",
+            named[k].value, named[k].std_error, c.resolution
         ));
         named.remove(k);
         selected.remove(k);

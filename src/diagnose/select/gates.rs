@@ -41,6 +41,20 @@ pub(in crate::diagnose) fn unconfirmed_in_time(
     })
 }
 
+/// How many standard errors a named change must stand beyond its resolution ([`beyond_resolution`]).
+pub(in crate::diagnose) const RESOLUTION_CONFIDENCE: f64 = 2.0;
+
+/// Whether a fitted change `change` (value − null) with standard error `std_error` exceeds the resolution, the
+/// smallest effect worth naming on the record, with confidence: |change| − 2σ ≥ resolution, the one-sided
+/// 97.7 % test of "the effect is larger than the resolution" against "it lies within it" (an interval test
+/// against a region of practical equivalence; Schuirmann, J. Pharmacokin. Biopharm. 15, 1987, the two
+/// one-sided tests turned around). A change just past the resolution whose interval reaches into it is what a
+/// gust or a small model error draws (an a_x scale ×0.963 ± 0.007 on a turbulent record whose resolution is
+/// 0.03), not an effect the record shows to be there.
+pub(in crate::diagnose) fn beyond_resolution(change: f64, std_error: f64, resolution: f64) -> bool {
+    change.abs() - RESOLUTION_CONFIDENCE * std_error >= resolution
+}
+
 /// Why a fully fitted candidate is not significant (None: it is).
 pub(in crate::diagnose) fn rejection(
     c: &Candidate,
@@ -72,9 +86,10 @@ pub(in crate::diagnose) fn rejection(
             "value at the bound of its range [{}, {}]",
             spec.min, spec.max
         ))
-    } else if (c.value - spec.null).abs() < resolution {
+    } else if !beyond_resolution(c.value - spec.null, c.std_error, resolution) {
         Some(format!(
-            "{WITHIN_RESOLUTION} {resolution:.3} of the effect on this record"
+            "{WITHIN_RESOLUTION} {resolution:.3} of the effect on this record, at {RESOLUTION_CONFIDENCE} \
+             standard errors"
         ))
     } else if 3.0 * crb > resolution {
         Some(format!(
