@@ -309,6 +309,33 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
         let Some((j, o, a)) = best else { continue };
         let replaced = format!("{}/{}", state.named[i].effect, state.named[i].target);
         let kept = catalogue[j].key();
+        // The replaced effect back beside its replacement, where the selection has room for one more.
+        let back = catalogue.iter().position(|e| e.key() == replaced);
+        let room = state.named.len() < opts.max_effects;
+        let both = match back.filter(|_| room) {
+            Some(k) => {
+                let mut trial = Refiner {
+                    workers: &mut *workers,
+                    ..*refiner
+                };
+                let ctx = RoundContext {
+                    base_cost: o.cost_after,
+                    ..ctx
+                };
+                let (c, fitted) = added_back(&mut trial, &a, k, state.selected[i].params[0], &ctx)?;
+                state.candidates.push(c);
+                fitted
+            }
+            None => None,
+        };
+        let added = both.is_some();
+        let (o, a) = both.unwrap_or((o, a));
+        if added {
+            state.named.push(NamedCause {
+                ambiguous_with: Vec::new(),
+                ..state.named[i].clone()
+            });
+        }
         // The held effects go back to their values (the settling fit below refits the others).
         let before = state.selected.clone();
         adopt(state.selected, a);
@@ -366,6 +393,37 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
         &adopted_sensitivities,
         held,
     )
+}
+
+/// The model `a` (an alternative in a named effect's place) with the replaced effect, catalogue entry `k`, added
+/// back from `value`, every effect free: its candidate entry, tested against `a`'s cost (`ctx.base_cost`) as
+/// any addition is, and the fit where it passes. A swap alone never tries the model with both, yet two causes
+/// can share a channel without sharing its shape: `CY_beta` ×1.47 moves a_y with β, an accelerometer ahead of
+/// where the model reads a_y moves it with ṙ, and in gusts the position took `CY_beta`'s place on a record
+/// where only `CY_beta` was hidden (`diagnose_eval --seed 5 --turbulence` case 15).
+fn added_back<'e>(
+    refiner: &mut Refiner<'_, 'e>,
+    a: &[Active<'e>],
+    k: usize,
+    value: f64,
+    ctx: &RoundContext,
+) -> Result<(Candidate, Option<(FitOutcome, Vec<Active<'e>>)>), DiagnoseError> {
+    let (w, e, progress) = (refiner.w, refiner.catalogue[k], refiner.progress);
+    let starts = vec![with_candidate(a, e, value, true)];
+    let mut fits = search::coarse(refiner.workers, w, a, |ws, cw| {
+        fit_starts(ws, cw, &starts, progress)
+    })
+    .map_err(sim_err("replay"))?;
+    let Some(Ok((o, fitted))) = fits.pop() else {
+        let mut c = ctx.candidate(e, &evaluated(ctx.base_cost, 0.0), false, refiner.resolution[k]);
+        c.rejected_because = Some("the fit beside the effect that replaced it failed".into());
+        return Ok((c, None));
+    };
+    let mut c = ctx.candidate(e, &o, true, refiner.resolution[k]);
+    let reason = rejection(&c, e, &o, ctx.base_cost, refiner.opts, &refiner.masks[k]);
+    c.rejected_because = reason.map(|r| format!("{r} (added back beside the effect that replaced it)"));
+    let kept = c.rejected_because.is_none().then_some((o, fitted));
+    Ok((c, kept))
 }
 
 impl<'e> Replacement<'_, 'e> {
