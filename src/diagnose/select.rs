@@ -32,7 +32,8 @@ mod gates;
 mod identifiability;
 mod refine;
 use gates::{
-    beaten_within_resolution, beyond_resolution, rejection, unconfirmed_in_time, RESOLUTION_CONFIDENCE,
+    beaten_within_resolution, beyond_resolution, rejection, unconfirmed_in_time,
+    RESOLUTION_CONFIDENCE,
 };
 pub(super) use gates::{BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
 pub use identifiability::profiled_information;

@@ -415,13 +415,19 @@ fn added_back<'e>(
     })
     .map_err(sim_err("replay"))?;
     let Some(Ok((o, fitted))) = fits.pop() else {
-        let mut c = ctx.candidate(e, &evaluated(ctx.base_cost, 0.0), false, refiner.resolution[k]);
+        let mut c = ctx.candidate(
+            e,
+            &evaluated(ctx.base_cost, 0.0),
+            false,
+            refiner.resolution[k],
+        );
         c.rejected_because = Some("the fit beside the effect that replaced it failed".into());
         return Ok((c, None));
     };
     let mut c = ctx.candidate(e, &o, true, refiner.resolution[k]);
     let reason = rejection(&c, e, &o, ctx.base_cost, refiner.opts, &refiner.masks[k]);
-    c.rejected_because = reason.map(|r| format!("{r} (added back beside the effect that replaced it)"));
+    c.rejected_because =
+        reason.map(|r| format!("{r} (added back beside the effect that replaced it)"));
     let kept = c.rejected_because.is_none().then_some((o, fitted));
     Ok((c, kept))
 }

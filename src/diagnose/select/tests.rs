@@ -1,5 +1,5 @@
 //! Unit tests of the selection's rules.
-use super::gates::WITHIN_RESOLUTION;
+use super::gates::{beyond_resolution, WITHIN_RESOLUTION};
 use super::{beaten_within_resolution, drop_below_resolution, profiled_information, score_test};
 use crate::diagnose::extension::make;
 use crate::diagnose::search::Active;
@@ -78,6 +78,35 @@ fn a_named_effect_a_later_joint_fit_moved_within_its_resolution_is_dropped() {
         &mut named,
         &mut candidates
     ));
+}
+
+#[test]
+fn a_change_must_stand_beyond_its_resolution_by_two_standard_errors() {
+    // The turbulent record's a_x scale ×0.963 ± 0.007 against the resolution 0.03: past it, not beyond it.
+    assert!(!beyond_resolution(0.963 - 1.0, 0.0066, 0.03));
+    assert!(beyond_resolution(0.963 - 1.0, 0.002, 0.03));
+    assert!(beyond_resolution(-0.1493, 0.0057, 0.03));
+    // A joint fit that leaves a named ×1.13 at σ 0.02 (resolution 0.1) drops it; at σ 0.01 it stays.
+    let no_coefficients: Vec<String> = Vec::new();
+    let gain = make("control_effectiveness", "rudder", &no_coefficients).unwrap();
+    for (std_error, kept) in [(0.02, false), (0.01, true)] {
+        let mut selected = vec![Active {
+            ext: gain.as_ref(),
+            params: vec![1.13],
+            free: false,
+        }];
+        let mut named = vec![NamedCause {
+            effect: "control_effectiveness".into(),
+            target: "rudder".into(),
+            value: 1.13,
+            std_error,
+            ambiguous_with: Vec::new(),
+        }];
+        let mut candidates = vec![accepted("control_effectiveness", "rudder", 1.2, 0.1)];
+        let dropped = drop_below_resolution(&mut selected, &mut named, &mut candidates);
+        assert_eq!(dropped, !kept, "σ {std_error}");
+        assert_eq!(named.len(), usize::from(kept), "σ {std_error}");
+    }
 }
 
 #[test]
