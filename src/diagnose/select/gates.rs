@@ -51,8 +51,11 @@ pub(in crate::diagnose) const RESOLUTION_CONFIDENCE: f64 = 2.0;
 /// one-sided tests turned around). A change just past the resolution whose interval reaches into it is what a
 /// gust or a small model error draws (an a_x scale ×0.963 ± 0.007 on a turbulent record whose resolution is
 /// 0.03), not an effect the record shows to be there.
+/// A σ that is not known (NaN: a sensor bias the filter error refit holds at its output-error value) leaves the
+/// value alone to decide, as it did before the interval test.
 pub(in crate::diagnose) fn beyond_resolution(change: f64, std_error: f64, resolution: f64) -> bool {
-    change.abs() - RESOLUTION_CONFIDENCE * std_error >= resolution
+    let sigma = if std_error.is_finite() { std_error } else { 0.0 };
+    change.abs() - RESOLUTION_CONFIDENCE * sigma >= resolution
 }
 
 /// Why a fully fitted candidate is not significant (None: it is).

@@ -86,6 +86,8 @@ fn a_change_must_stand_beyond_its_resolution_by_two_standard_errors() {
     assert!(!beyond_resolution(0.963 - 1.0, 0.0066, 0.03));
     assert!(beyond_resolution(0.963 - 1.0, 0.002, 0.03));
     assert!(beyond_resolution(-0.1493, 0.0057, 0.03));
+    // A held bias has no σ of its own: its value decides.
+    assert!(beyond_resolution(0.3598, f64::NAN, 0.05));
     // A joint fit that leaves a named ×1.13 at σ 0.02 (resolution 0.1) drops it; at σ 0.01 it stays.
     let no_coefficients: Vec<String> = Vec::new();
     let gain = make("control_effectiveness", "rudder", &no_coefficients).unwrap();
