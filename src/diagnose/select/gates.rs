@@ -54,7 +54,11 @@ pub(in crate::diagnose) const RESOLUTION_CONFIDENCE: f64 = 2.0;
 /// A σ that is not known (NaN: a sensor bias the filter error refit holds at its output-error value) leaves the
 /// value alone to decide, as it did before the interval test.
 pub(in crate::diagnose) fn beyond_resolution(change: f64, std_error: f64, resolution: f64) -> bool {
-    let sigma = if std_error.is_finite() { std_error } else { 0.0 };
+    let sigma = if std_error.is_finite() {
+        std_error
+    } else {
+        0.0
+    };
     change.abs() - RESOLUTION_CONFIDENCE * sigma >= resolution
 }
 

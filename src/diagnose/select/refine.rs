@@ -395,6 +395,9 @@ pub(in crate::diagnose) fn replace_ambiguous<'e>(
     )
 }
 
+/// A fit and the effects it fitted.
+type Fitted<'e> = (FitOutcome, Vec<Active<'e>>);
+
 /// The model `a` (an alternative in a named effect's place) with the replaced effect, catalogue entry `k`, added
 /// back from `value`, every effect free: its candidate entry, tested against `a`'s cost (`ctx.base_cost`) as
 /// any addition is, and the fit where it passes. A swap alone never tries the model with both, yet two causes
@@ -407,7 +410,7 @@ fn added_back<'e>(
     k: usize,
     value: f64,
     ctx: &RoundContext,
-) -> Result<(Candidate, Option<(FitOutcome, Vec<Active<'e>>)>), DiagnoseError> {
+) -> Result<(Candidate, Option<Fitted<'e>>), DiagnoseError> {
     let (w, e, progress) = (refiner.w, refiner.catalogue[k], refiner.progress);
     let starts = vec![with_candidate(a, e, value, true)];
     let mut fits = search::coarse(refiner.workers, w, a, |ws, cw| {
