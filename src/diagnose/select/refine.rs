@@ -418,12 +418,13 @@ fn added_back<'e>(
     })
     .map_err(sim_err("replay"))?;
     let Some(Ok((o, fitted))) = fits.pop() else {
-        let mut c = ctx.candidate(
-            e,
-            &evaluated(ctx.base_cost, 0.0),
-            false,
-            refiner.resolution[k],
-        );
+        // Listed at its start value, as a failed fit of a round is.
+        let start = FitOutcome {
+            values: vec![value],
+            std_errors: vec![f64::NAN],
+            ..evaluated(ctx.base_cost, 1.0)
+        };
+        let mut c = ctx.candidate(e, &start, false, refiner.resolution[k]);
         c.rejected_because = Some("the fit beside the effect that replaced it failed".into());
         return Ok((c, None));
     };
