@@ -509,20 +509,27 @@ fn an_attitude_error_over_part_of_the_record_is_not_named_from_the_kinematics() 
 }
 
 /// A clean record in light turbulence (case 8 of `cargo bench --bench diagnose_eval -- --seed 7 --turbulence`,
-/// 35 s at 20 Hz). The filter error refit named a θ bias of −0.0109 rad from the innovations: a bias on θ takes
-/// up the record's mean vertical gust (θ = γ + α). The flight-path reconstruction reads a θ bias as an a_x bias
-/// of −g cos θ₀ times it and finds none (+0.0016 ± 0.0011 rad in θ), so the θ bias is dropped
-/// (docs/diagnose.md, "Sensor errors from the flight-path reconstruction"). Checked: nothing named, and the θ
-/// bias's entry says the reconstruction dropped it.
+/// 35 s at 20 Hz). The filter error refit used to name a θ bias of −0.0109 rad from the innovations: a bias on θ
+/// takes up the record's mean vertical gust (θ = γ + α), and the flight-path reconstruction dropped it (it reads a
+/// θ bias as an a_x bias of −g cos θ₀ times it and finds none; docs/diagnose.md, "Sensor errors from the
+/// flight-path reconstruction"). Since a change must stand two standard errors beyond its resolution, output
+/// error's −0.0065 ± 0.0015 rad (resolution 0.005) is turned down first. Checked: nothing named, and the θ
+/// bias's entries say which of the two turned it down.
 #[test]
-fn a_pitch_attitude_bias_the_kinematics_do_not_see_is_dropped() {
+fn a_pitch_attitude_bias_in_gusts_is_not_named() {
     let d = turbulent_bench_case(7, 8, DiagnoseOptions::default());
+    let theta: Vec<&str> = d
+        .candidates
+        .iter()
+        .filter(|c| c.target == "theta_rad" && c.full_fit)
+        .filter_map(|c| c.rejected_because.as_deref())
+        .collect();
     assert!(
-        d.candidates.iter().any(|c| c.target == "theta_rad"
-            && c.rejected_because
-                .as_deref()
-                .is_some_and(|r| r.starts_with("dropped by the flight-path reconstruction"))),
-        "no θ bias dropped by the reconstruction"
+        theta.iter().any(
+            |r| r.starts_with("dropped by the flight-path reconstruction")
+                || r.starts_with("smaller than the resolution")
+        ),
+        "the θ bias's entries: {theta:?}"
     );
 }
 
