@@ -401,9 +401,9 @@ type Fitted<'e> = (FitOutcome, Vec<Active<'e>>);
 /// The model `a` (an alternative in a named effect's place) with the replaced effect, catalogue entry `k`, added
 /// back from `value`, every effect free: its candidate entry, tested against `a`'s cost (`ctx.base_cost`) as
 /// any addition is, and the fit where it passes. A swap alone never tries the model with both, yet two causes
-/// can share a channel without sharing its shape: `CY_beta` ×1.47 moves a_y with β, an accelerometer ahead of
-/// where the model reads a_y moves it with ṙ, and in gusts the position took `CY_beta`'s place on a record
-/// where only `CY_beta` was hidden (`diagnose_eval --seed 5 --turbulence` case 15).
+/// can share a channel without sharing its shape: `CY_beta` moves a_y with β, an accelerometer ahead of where
+/// the model reads a_y moves it with ṙ, and in a Dutch roll ṙ moves with β, so either can take the other's place
+/// (in gusts the position did take `CY_beta`'s, before a passenger that had let the swap be tried was turned down).
 fn added_back<'e>(
     refiner: &mut Refiner<'_, 'e>,
     a: &[Active<'e>],
