@@ -29,7 +29,7 @@
 use super::extension::Extension;
 use super::prepare::Prepared;
 use super::search::{residuals, Active, Worker};
-use super::select::Selection;
+use super::select::{beyond_resolution, Selection};
 use super::{sim_err, Candidate, DiagnoseError, DiagnoseOptions, NamedCause};
 use crate::data::{self, Channel, FlightRecord, G0_M_S2};
 
@@ -236,7 +236,8 @@ pub fn kinematic_findings<'e>(
             continue;
         };
         let null = ext.params()[0].null;
-        if *after >= before || (value - null).abs() < *resolution {
+        // Named by the same test as the replay's candidates: beyond the resolution by two standard errors.
+        if *after >= before || !beyond_resolution(value - null, *std_error, *resolution) {
             continue;
         }
         let n_eff = super::residual::effective_n(r, w.case.len());

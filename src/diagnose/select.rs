@@ -31,11 +31,8 @@
 mod gates;
 mod identifiability;
 mod refine;
-use gates::{
-    beaten_within_resolution, beyond_resolution, rejection, unconfirmed_in_time,
-    RESOLUTION_CONFIDENCE,
-};
-pub(super) use gates::{BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
+use gates::{beaten_within_resolution, rejection, unconfirmed_in_time, RESOLUTION_CONFIDENCE};
+pub(super) use gates::{beyond_resolution, BEATEN_WITHIN_RESOLUTION, NOT_SIGNIFICANT, SMALL_SHARE};
 pub use identifiability::profiled_information;
 use identifiability::{identifiable, Identifiable};
 use refine::Refiner;
