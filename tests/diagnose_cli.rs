@@ -180,6 +180,11 @@ fn missing_channel_skips_its_extensions_and_the_model_and_report_are_written() {
     let cut = dir.path().join("cut.csv");
     fly(&full);
     rewrite(&full, &cut, 401, &["rudder_rad", "beta_rad"], None);
+    // The last row logged twice, as a logger relaying a sample twice does: the reader drops it and says so, on the
+    // terminal and in the diagnosis.
+    let csv = std::fs::read_to_string(&cut).unwrap();
+    let last = csv.lines().last().unwrap().to_string();
+    std::fs::write(&cut, format!("{csv}{last}\n")).unwrap();
     let (json, model, report) = (
         dir.path().join("d.json"),
         dir.path().join("model"),
@@ -214,6 +219,13 @@ fn missing_channel_skips_its_extensions_and_the_model_and_report_are_written() {
     let d: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(d["named_cause"].as_array().unwrap().len(), 0, "{d}");
+    let from_reader = d["record_warnings"].as_array().unwrap();
+    assert!(
+        from_reader.iter().any(|w| w.as_str().is_some_and(
+            |w| w.starts_with("training record: ") && w.contains("1 repeated row(s) dropped")
+        )),
+        "{from_reader:?}"
+    );
     let skipped = d["skipped"].as_array().unwrap();
     for (effect, target) in [
         ("actuator_lag", "rudder"),

@@ -246,6 +246,9 @@ pub struct Diagnosis {
     pub sensor_position: Vec<NamedCause>,
     /// Surface columns logged with the other sign convention, reversed for the replay (`prepare`).
     pub reversed_inputs: Vec<prepare::ReversedInput>,
+    /// What the CSV readers find in the records as given (repeated rows dropped, units, a surface's sign),
+    /// printed when a command reads them and kept here for the JSON.
+    pub record_warnings: Vec<String>,
     /// Model trim vs measured initial condition.
     pub trim_mismatch: Vec<TrimMismatch>,
     /// Catalogue entries not evaluated.
@@ -359,6 +362,7 @@ pub fn diagnose(
         record_timing: conventions.timing,
         sensor_position: conventions.position,
         reversed_inputs: p.reversed_inputs,
+        record_warnings: p.record_warnings,
         process_noise,
         noise_std: p.case.outputs.iter().cloned().zip(p.noise_sigma).collect(),
         relaxed_weights,

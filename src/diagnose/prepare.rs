@@ -33,6 +33,8 @@ pub struct Prepared {
     pub noise_sigma: Vec<f64>,
     /// The surface columns of the other sign convention, reversed for the replay ([`reversed_surfaces`]).
     pub reversed_inputs: Vec<ReversedInput>,
+    /// What the CSV readers find in the records as given ([`record_warnings`]).
+    pub record_warnings: Vec<String>,
 }
 
 /// A surface column the record logs with the other sign than the model reads it: its control moment (the body
@@ -152,7 +154,8 @@ pub fn prepare(
     train: &FlightRecord,
     valid: Option<&FlightRecord>,
 ) -> Result<Prepared, DiagnoseError> {
-    let logged = prepare_as_logged(worker, train, valid)?;
+    let mut logged = prepare_as_logged(worker, train, valid)?;
+    logged.record_warnings = record_warnings(train, valid);
     if logged.reversed_inputs.is_empty() {
         return Ok(logged);
     }
@@ -175,7 +178,23 @@ pub fn prepare(
         )
     }));
     p.reversed_inputs = logged.reversed_inputs;
+    p.record_warnings = logged.record_warnings;
     Ok(p)
+}
+
+/// What the CSV readers find in the records as given (`FlightRecord::warnings`: repeated rows they dropped,
+/// units, a surface's sign, irregular sampling), each prefixed with the record it concerns. A command prints
+/// them when it reads a file; the diagnosis carries them too, so that a script reading its JSON sees them.
+fn record_warnings(train: &FlightRecord, valid: Option<&FlightRecord>) -> Vec<String> {
+    [(Some(train), "training"), (valid, "validation")]
+        .into_iter()
+        .filter_map(|(r, which)| r.map(|r| (r, which)))
+        .flat_map(|(r, which)| {
+            r.warnings()
+                .into_iter()
+                .map(move |w| format!("{which} record: {w}"))
+        })
+        .collect()
 }
 
 /// The surfaces whose control moment (the equation error of [`control_moments`]) has one sign on the record and
@@ -372,5 +391,6 @@ fn prepare_as_logged(
         nuisance: Vec::new(),
         filter: None,
         reversed_inputs,
+        record_warnings: Vec::new(),
     })
 }

@@ -149,8 +149,9 @@ fn evidence_section(d: &Diagnosis) -> Section {
     let mut s = Section {
         heading: "What the model gets wrong (training record, before extension)".into(),
         paragraphs: d
-            .warnings
+            .record_warnings
             .iter()
+            .chain(&d.warnings)
             .map(|w| format!("Warning: {w}."))
             .collect(),
         ..Default::default()
