@@ -786,9 +786,56 @@ def do_airframe(server, req, _payload):
         fdm.run_ic()
         xml = os.path.join(root, "aircraft", req["aircraft"], req["aircraft"] + ".xml")
         cg_in = [fdm[f"inertia/cg-{a}-in"] for a in "xyz"]
-        return {"values": {p: fdm[p] for p in MASS_AND_WING}, "thrust": thrust_line(xml, cg_in)}, None
+        values = {p: fdm[p] for p in MASS_AND_WING}
+        facts = model_facts(xml)
+        facts["responses"] = command_responses(fdm, facts["aero_reads"])
+        return {"values": values, "thrust": thrust_line(xml, cg_in), "model": facts}, None
     finally:
         shutil.rmtree(root, ignore_errors=True)
+
+
+# The pilot commands whose response `command_responses` measures, and the values it sets them to.
+PILOT_COMMANDS = {"elevator": "fcs/elevator-cmd-norm", "aileron": "fcs/aileron-cmd-norm",
+                  "rudder": "fcs/rudder-cmd-norm"}
+COMMAND_LEVELS = (-1.0, -0.25, 0.0, 0.25, 1.0)
+# Simulated time the FCS is given to follow each command level (actuator lags and rate limits), s.
+COMMAND_SETTLE_S = 1.5
+
+
+def model_facts(xml_path):
+    """What a configuration of the model needs from its XML: its name, the FCS properties its aerodynamics
+    read, the number of engines and whether its gear retracts."""
+    root = ET.parse(xml_path).getroot()
+    aero = root.find("aerodynamics")
+    reads = sorted({el.text.strip() for el in (aero.iter() if aero is not None else [])
+                    if el.tag in ("property", "independentVar") and el.text and el.text.strip().startswith("fcs/")})
+    contacts = list(root.iter("contact"))
+    retractable = any((c.findtext("retractable") or "0").strip() == "1" for c in contacts)
+    propulsion = root.find("propulsion")
+    engines = len(propulsion.findall("engine")) if propulsion is not None else 0
+    return {"name": root.get("name", ""), "aero_reads": reads, "engines": engines,
+            "retractable_gear": retractable, "levels": list(COMMAND_LEVELS)}
+
+
+def command_responses(fdm, reads):
+    """For each pilot command of PILOT_COMMANDS, the value of every property in `reads` once the FCS has
+    followed the command held at each of COMMAND_LEVELS (the others at 0) for COMMAND_SETTLE_S: which surface
+    each aero read belongs to, and its deflection per unit command, measured rather than read from the XML."""
+    steps = max(1, int(round(COMMAND_SETTLE_S / fdm.get_delta_t())))
+    out = {}
+    for surface, cmd in PILOT_COMMANDS.items():
+        levels = []
+        for level in COMMAND_LEVELS:
+            for other in PILOT_COMMANDS.values():
+                fdm[other] = level if other == cmd else 0.0
+            for _ in range(steps):
+                fdm.run()
+            # (a property JSBSim leaves at NaN is left out: it moves with no command)
+            levels.append({p: fdm[p] for p in reads if math.isfinite(fdm[p])})
+        out[surface] = levels
+    for other in PILOT_COMMANDS.values():
+        fdm[other] = 0.0
+    return out
 
 
 LENGTH_TO_M = {"IN": 0.0254, "FT": 0.3048, "M": 1.0}

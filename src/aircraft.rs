@@ -92,6 +92,11 @@ pub enum AircraftError {
         surface: String,
         known: String,
     },
+    /// A JSBSim model without a configuration whose configuration cannot be derived from the model
+    /// (`sim::derived`).
+    #[error("aircraft '{name}' has no configuration, and none can be derived from its JSBSim model: {why}; write \
+             one (docs/airframe.md, \"Any JSBSim model\") and give its path")]
+    NotDerived { name: String, why: String },
     /// A `--property` setting that is not `NAME=VALUE` with a finite value.
     #[error("--property {setting}: {why}")]
     BadProperty { setting: String, why: String },
@@ -135,7 +140,8 @@ fn parse(name: &str, file: &str, text: &str) -> Result<AircraftConfig, AircraftE
 
 /// The numbers of a configuration within their documented ranges ([`crate::limits`]): trim point, surface limits
 /// (`min_rad < 0 < max_rad`, within ±π), `|rad_per_norm|` within 0.001..=10 rad, 1..=16 engines.
-fn validate(cfg: &AircraftConfig) -> Result<(), crate::limits::LimitError> {
+/// Checks a configuration's numbers against their physical ranges (trim point, engines, surface limits).
+pub fn validate(cfg: &AircraftConfig) -> Result<(), crate::limits::LimitError> {
     use crate::limits::{check_order, Range, ALTITUDE_FT, SPEED_KTS, SURFACE_RAD};
     ALTITUDE_FT
         .named("trim.altitude_ft")

@@ -787,3 +787,50 @@ fn the_bridge_refuses_malformed_requests_by_name_and_keeps_serving() {
     }
     assert_eq!(replies[4], serde_json::json!({"ok": true}));
 }
+
+/// A JSBSim model flightid has no configuration for is configured from its own flight control system. The
+/// c172p's FCS (`aircraft/c172p/c172p.xml` of the jsbsim package, read by hand): elevator −28° to +23°,
+/// aileron −20° to +15° (left), rudder ±16°, each an `aerosurface_scale` whose output the aerodynamics read.
+#[test]
+fn a_jsbsim_model_without_a_configuration_is_configured_from_its_flight_control_system() {
+    let cfg = flightid::sim::derived::aircraft_config("c172p").expect("derived");
+    let deg = |d: f64| d.to_radians();
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-3;
+    let e = &cfg.surfaces["elevator"];
+    assert_eq!(e.aero_reads, vec!["fcs/elevator-pos-rad"]);
+    assert_eq!(e.aero_reads_abs, vec!["fcs/mag-elevator-pos-rad"]);
+    assert!(
+        close(e.min_rad, deg(-28.0)) && close(e.max_rad, deg(23.0)),
+        "{e:?}"
+    );
+    // ±¼ command: a quarter of each side's throw
+    assert!(close(e.rad_per_norm, deg(25.5)), "{e:?}");
+    let a = &cfg.surfaces["aileron"];
+    assert_eq!(a.aero_reads, vec!["fcs/left-aileron-pos-rad"]);
+    assert!(
+        close(a.min_rad, deg(-20.0)) && close(a.max_rad, deg(15.0)),
+        "{a:?}"
+    );
+    let r = &cfg.surfaces["rudder"];
+    assert_eq!(r.aero_reads, vec!["fcs/rudder-pos-rad"]);
+    assert!(close(r.max_rad, deg(16.0)), "{r:?}");
+    assert!(!cfg.gear_up && cfg.engine_running && cfg.engines == 1);
+    // the default point is one its trim finds
+    let mut sim = JsbsimSim::start(&cfg, 120.0).unwrap();
+    let t = sim
+        .trim(&TrimPoint::level(cfg.trim.altitude_ft, cfg.trim.speed_kts))
+        .expect("a trim at the derived default point");
+    assert!(t.alpha_rad > 0.0 && t.alpha_rad < 0.15, "{t:?}");
+}
+
+/// A model whose aerodynamics read a surface in other units cannot be driven in radians: a usage error naming
+/// the property, not a configuration that flies wrong.
+#[test]
+fn a_model_read_through_a_normalised_surface_is_refused_naming_the_property() {
+    let (code, err) = run_fails(&["trim", "--aircraft", "Camel"], &[]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("fcs/elevator-pos-norm") && err.contains("docs/airframe.md"),
+        "{err}"
+    );
+}

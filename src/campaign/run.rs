@@ -72,7 +72,8 @@ impl Worker {
             self.sim.is_some() && self.key.as_ref().is_some_and(|(a, _)| *a == case.aircraft);
         if !same_aircraft {
             self.key = None;
-            let cfg = crate::aircraft::load(&case.aircraft).map_err(|e| e.to_string())?;
+            let cfg =
+                crate::sim::derived::aircraft_config(&case.aircraft).map_err(|e| e.to_string())?;
             // another aircraft in the running process saves a process start
             let mut sim = match self.sim.take() {
                 Some(old) => old.reload(&cfg, rate_hz),

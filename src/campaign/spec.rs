@@ -262,7 +262,6 @@ impl CampaignSpec {
         if self.configurations.is_empty() || self.maneuvers.is_empty() {
             return Err("a campaign needs at least one configuration and one maneuver".into());
         }
-        let known = crate::aircraft::known();
         let mut names = std::collections::BTreeSet::new();
         for c in &self.configurations {
             if !names.insert(c.name.clone()) {
@@ -278,13 +277,8 @@ impl CampaignSpec {
                     c.name
                 ));
             }
-            if crate::aircraft::load(&c.aircraft).is_err() {
-                return Err(format!(
-                    "configuration '{}': unknown aircraft '{}' (known: {})",
-                    c.name,
-                    c.aircraft,
-                    known.join(", ")
-                ));
+            if let Err(e) = crate::sim::derived::aircraft_config(&c.aircraft) {
+                return Err(format!("configuration '{}': {e}", c.name));
             }
             if c.conditions.is_empty() {
                 return Err(format!("configuration '{}' has no conditions", c.name));

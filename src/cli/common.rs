@@ -1,6 +1,6 @@
 //! Argument groups and output helpers shared by several commands.
 
-use crate::aircraft::{self, AircraftConfig};
+use crate::aircraft::AircraftConfig;
 use crate::cli::UsageError;
 use crate::data::{self, ColumnMap, FlightRecord};
 use crate::sim::{JsbsimSim, Simulator, TrimPoint, TrimState};
@@ -23,7 +23,8 @@ pub struct LoadingArg {
 /// Which aircraft and where to trim it.
 #[derive(clap::Args, Debug, Clone)]
 pub struct TrimArgs {
-    /// Aircraft configuration: a name from aircraft/ (c172x, 737, f16) or a path to an aircraft .toml.
+    /// Aircraft configuration: a name from aircraft/ (c172x, 737, f16), a path to an aircraft .toml, or any
+    /// JSBSim model (c172p, c310, B747, …: configured from the model, docs/airframe.md).
     #[arg(long, default_value = "c172x")]
     pub aircraft: String,
     #[command(flatten)]
@@ -42,7 +43,7 @@ pub struct TrimArgs {
 impl TrimArgs {
     /// Loads the aircraft configuration (unknown names are a usage error).
     pub fn config(&self) -> anyhow::Result<AircraftConfig> {
-        aircraft::load(&self.aircraft)
+        crate::sim::derived::aircraft_config(&self.aircraft)
             .and_then(|c| c.with_properties(&self.loading.properties))
             .map_err(|e| UsageError(e.to_string()).into())
     }

@@ -147,7 +147,7 @@ pub fn run(args: &DiagnoseCmd) -> anyhow::Result<()> {
     };
     summary(&d, workers.len(), &mut out)?;
     let mut ext = d.extension_file(&args.aircraft);
-    ext.properties = crate::aircraft::load(&args.aircraft)?
+    ext.properties = crate::sim::derived::aircraft_config(&args.aircraft)?
         .with_properties(&args.loading.properties)?
         .properties;
     ext.notes

@@ -99,7 +99,7 @@ impl ExtendedModel {
         &self,
         settings: &[String],
     ) -> Result<AircraftConfig, crate::aircraft::AircraftError> {
-        let mut cfg = crate::aircraft::load(&self.extension.aircraft)?;
+        let mut cfg = crate::sim::derived::aircraft_config(&self.extension.aircraft)?;
         cfg.properties.extend(self.extension.properties.clone());
         cfg.with_properties(settings)
     }

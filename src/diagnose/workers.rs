@@ -7,7 +7,6 @@ use super::model::ExtendedModel;
 use super::replay::LinearReplay;
 use super::search::Worker;
 use super::DiagnoseError;
-use crate::aircraft;
 use crate::sim::JsbsimSim;
 
 /// Where the simulation comes from: the aircraft's JSBSim model, an exported extended model, or a linear model.
@@ -49,7 +48,7 @@ fn start_worker(source: &SimSource, rate_hz: f64) -> Result<Worker, DiagnoseErro
     };
     Ok(match source {
         SimSource::Aircraft(name, loading) => {
-            let cfg = aircraft::load(name)?.with_properties(loading)?;
+            let cfg = crate::sim::derived::aircraft_config(name)?.with_properties(loading)?;
             let sim = JsbsimSim::start(&cfg, rate_hz)
                 .map_err(starting(format!("starting JSBSim for {}", cfg.name)))?;
             Worker::new(Box::new(sim))

@@ -6,6 +6,7 @@
 pub mod aero_truth;
 pub mod atmosphere;
 pub mod bridge;
+pub mod derived;
 pub mod env;
 pub mod jsbsim;
 pub mod linear;

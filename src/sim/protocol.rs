@@ -247,6 +247,27 @@ pub struct AirframeReply {
     pub values: PropertyValues,
     /// The thrust line.
     pub thrust: Option<ThrustLineReply>,
+    /// What a configuration of the model needs.
+    pub model: ModelFacts,
+}
+
+/// What an aircraft configuration needs from a JSBSim model's XML and its flight control system (`model_facts`
+/// and `command_responses` in the bridge).
+#[derive(Debug, Clone, Deserialize)]
+pub struct ModelFacts {
+    /// The model's own name for itself (`<fdm_config name=…>`).
+    pub name: String,
+    /// The `fcs/…` properties its aerodynamics read.
+    pub aero_reads: Vec<String>,
+    /// Engines in its propulsion section.
+    pub engines: usize,
+    /// Whether a landing gear contact retracts.
+    pub retractable_gear: bool,
+    /// The command levels of `responses`.
+    pub levels: Vec<f64>,
+    /// Per pilot command (`elevator`, `aileron`, `rudder`): the values of `aero_reads` once the FCS has followed
+    /// the command held at each of `levels`, the other commands at 0.
+    pub responses: BTreeMap<String, Vec<PropertyValues>>,
 }
 
 /// The engines' mean thrust line (`thrust_line` in the bridge).
