@@ -242,7 +242,7 @@ fn surfaces(facts: &ModelFacts) -> Result<BTreeMap<String, SurfaceConfig>, Strin
         }
         let spans: Vec<f64> = SURFACES.iter().map(|(s, _)| span(s, p)).collect();
         let largest = spans.iter().copied().fold(0.0, f64::max);
-        if !(largest > MOVES) {
+        if largest <= MOVES {
             continue; // a flap, a speed brake: no pilot command of the three moves it
         }
         let owners: Vec<&str> = SURFACES
