@@ -6,8 +6,10 @@
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
 //! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--backward-elimination] [--estimate-rate]
-//! [--without COLUMNS] [--reverse COLUMNS] [--log-from S] [--aircraft c172x|737] [--out DIR]`
+//! [--without COLUMNS] [--reverse COLUMNS] [--log-from S] [--aircraft c172x|c182|737] [--out DIR]`
 //! - `--aircraft 737`: records of JSBSim's 737 in cruise, diagnosed with flightid's `737` configuration.
+//! - `--aircraft c182`: records of JSBSim's c182, diagnosed with the configuration flightid derives from the model
+//!   (it has none of its own).
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
 //! - `--noise-weights`: weight every channel by its sensor noise only (`flightid diagnose --noise-weights`).
@@ -33,7 +35,6 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-use flightid::aircraft;
 use flightid::data::read_csv;
 use flightid::diagnose::search::Worker;
 use flightid::diagnose::{diagnose, replay::ReplayCase, DiagnoseOptions, Diagnosis};
@@ -258,7 +259,8 @@ fn main() {
     let a = args();
     let t0 = Instant::now();
     generate(&a);
-    let cfg = aircraft::load(&a.aircraft).expect("a configured aircraft (c172x, 737)");
+    let cfg = flightid::sim::derived::aircraft_config(&a.aircraft)
+        .expect("an aircraft flightid knows or JSBSim has");
     let (mut n, mut exact, mut values, mut clean, mut clean_named, mut multi, mut multi_ok) =
         (0, 0, 0, 0, 0, 0, 0);
     let mut grouped = 0;

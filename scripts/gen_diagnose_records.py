@@ -26,8 +26,10 @@ range ends at 13 deg) and at most 340 kts calibrated; smaller maneuver amplitude
 and CL_alpha2 in 1-2 and 5-10 (the same share of the local slope at the median trim alpha as 4-8 and 15-30 on the
 c172x; 4-8 makes the 737 diverge). The aero reads the script's own deflection as on the c172x, so the 737's yaw
 damper (in its FCS) does not act. The 737 has no Cm_0, Cn_p, Cn_da: they are never drawn for it.
+--aircraft c182 flies JSBSim's c182 (its own aero tables and names), at 2000-7000 ft and 85-125 kts, with the c172x's
+maneuvers; flightid has no configuration of it and derives one from the model.
 
-Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--aircraft c172x|737] [--turbulence]
+Usage: gen_diagnose_records.py --out DIR --cases N --seed S [--aircraft c172x|c182|737] [--turbulence]
        [--clean-share 0.25] [--stratified] [--first K] [--effects JSON]
        [--duration S | --min-duration S --max-duration S] [--plan NAME|random] [--max-noise L] [--without COLUMNS]
 Writes DIR/case_NNN_train.csv, DIR/case_NNN_valid.csv and DIR/case_NNN_truth.json (flight-data CSV schema; the
@@ -85,6 +87,32 @@ AIRCRAFT = {
         "pre_ic": {},
         "pre_trim": {"fcs/mixture-cmd-norm": 1.0},
         "envelope": {"altitude_ft": (2000, 8000), "speed_kts": (85, 115)},
+        "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
+        "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
+        "ranges": {},
+    },
+    # JSBSim's c182 (another author's model than the c172x: its own tables, CLalpha/CmDe/ClDa/CnDr names, the
+    # left aileron read). flightid has no configuration for it and derives one from the model.
+    "c182": {
+        "model": "c182",
+        "surfaces": {
+            "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
+            "aileron": ("fcs/left-aileron-pos-rad", None, "fcs/aileron-cmd-norm"),
+            "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
+        },
+        "derivatives": {
+            "CL_alpha": "CLalpha", "CD_0": "CDo", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "CmDe",
+            "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "ClDa", "Cn_beta": "Cnb",
+            "Cn_r": "Cnr", "Cn_dr": "CnDr", "Cm_alphadot": "Cmadot", "Cn_p": "Cnp", "Cl_dr": "ClDr",
+            "Cn_da": "CnDa", "Cm_0": "Cmo",
+        },
+        "added": {
+            "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
+            "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
+        },
+        "pre_ic": {},
+        "pre_trim": {"fcs/mixture-cmd-norm": 1.0},
+        "envelope": {"altitude_ft": (2000, 7000), "speed_kts": (85, 125)},
         "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
         "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
         "ranges": {},

@@ -13,7 +13,6 @@
 use std::path::Path;
 use std::process::Command;
 
-use flightid::aircraft;
 use flightid::data::{read_csv, Channel, FlightRecord};
 use flightid::diagnose::replay::ReplayCase;
 use flightid::diagnose::search::Worker;
@@ -117,7 +116,9 @@ fn check_generated_opts(
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(file("truth.json")).unwrap()).unwrap();
     let hidden = truth["effects"].as_array().unwrap().clone();
-    let cfg = aircraft::load(truth["aircraft"].as_str().unwrap_or("c172x")).unwrap();
+    let cfg =
+        flightid::sim::derived::aircraft_config(truth["aircraft"].as_str().unwrap_or("c172x"))
+            .unwrap();
     let rate = ReplayCase::new(&train).unwrap().sim_rate_hz();
     let mut workers: Vec<Worker> = (0..2)
         .map(|_| Worker::new(Box::new(JsbsimSim::start(&cfg, rate).unwrap())))
@@ -189,6 +190,25 @@ fn check_generated_opts(
         );
     }
     d
+}
+
+/// JSBSim's c182, which flightid has no configuration of: the configuration derived from the model
+/// (`sim::derived`) replays its records, and a hidden yaw stiffness ×1.42 is named (case 5 of
+/// `cargo bench --bench diagnose_eval -- --aircraft c182 --seed 1`: 66 s at 40 Hz, still air).
+#[test]
+fn a_c182_record_is_diagnosed_with_the_configuration_derived_from_its_model() {
+    let args = [
+        "--cases",
+        "1",
+        "--first",
+        "5",
+        "--seed",
+        "1",
+        "--stratified",
+        "--aircraft",
+        "c182",
+    ];
+    check_generated(&args, 5);
 }
 
 #[test]
