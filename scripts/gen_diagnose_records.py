@@ -115,7 +115,9 @@ AIRCRAFT = {
         "envelope": {"altitude_ft": (2000, 7000), "speed_kts": (85, 125)},
         "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
         "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
-        "ranges": {},
+        # Its static stability is a third of the c172x's (Cmalpha -0.61 to -0.65 against -1.8): the c172x's Cm_alpha2
+        # of 4-8 left it statically unstable and a turbulent record tumbled (phi 177 deg); scaled by the same third.
+        "ranges": {("aero_nonlinearity", "Cm_alpha2"): (1.5, 3.0)},
     },
     "737": {
         "model": "737",
