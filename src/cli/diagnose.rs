@@ -21,7 +21,8 @@ use crate::diagnose::{diagnose, report, DiagnoseOptions, Diagnosis};
     after_help = "Examples:\n  flightid diagnose --aircraft c172x --data train.csv --validate valid.csv --json out.json --report rep --model-out model\n  flightid diagnose --linear lin.json --data train.csv --validate valid.csv"
 )]
 pub struct DiagnoseCmd {
-    /// Aircraft configuration (c172x, 737, f16, or a path to an aircraft .toml).
+    /// Aircraft configuration (c172x, 737, f16, a path to an aircraft .toml, or any JSBSim model:
+    /// c182, c310, B747, …, configured from the model, docs/airframe.md).
     #[arg(long, default_value = "c172x")]
     pub aircraft: String,
     #[command(flatten)]
