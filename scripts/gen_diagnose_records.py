@@ -110,7 +110,9 @@ AIRCRAFT = {
             "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
             "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
         },
-        "pre_ic": {},
+        # The tanks filled as in c182.xml before every trim (as for the 737): a record flown after the earlier ones burned
+        # fuel would be lighter, with its CG elsewhere, than the model flightid replays.
+        "pre_ic": {"propulsion/tank[0]/contents-lbs": 200.0, "propulsion/tank[1]/contents-lbs": 200.0},
         "pre_trim": {"fcs/mixture-cmd-norm": 1.0},
         "envelope": {"altitude_ft": (2000, 7000), "speed_kts": (85, 125)},
         "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
