@@ -55,6 +55,17 @@ FT = 0.3048
 SLUG_FT3 = 515.378818  # kg/m^3 per slug/ft^3
 KT = 0.514444
 
+# The added terms, the same on every aircraft: the properties that make each coefficient a force or moment.
+ADDED_TERMS = {
+    "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
+    "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
+}
+# The maneuvers' surface amplitude (rad) and pulse width (s) ranges of the light aircraft (c172x, c182).
+LIGHT_AIRCRAFT_MANEUVERS = {
+    "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
+    "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
+}
+
 AIRCRAFT = {
     # One entry per aircraft:
     #   model: the JSBSim model (aircraft/<model>/<model>.xml of the jsbsim package);
@@ -80,15 +91,11 @@ AIRCRAFT = {
             "Cn_r": "Cnr", "Cn_dr": "Cndr", "Cm_alphadot": "Cmadot", "Cn_p": "Cnp", "Cl_dr": "Cldr",
             "Cn_da": "Cnda", "Cm_0": "Cmo",
         },
-        "added": {
-            "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
-            "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
-        },
+        "added": ADDED_TERMS,
         "pre_ic": {},
         "pre_trim": {"fcs/mixture-cmd-norm": 1.0},
         "envelope": {"altitude_ft": (2000, 8000), "speed_kts": (85, 115)},
-        "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
-        "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
+        **LIGHT_AIRCRAFT_MANEUVERS,
         "ranges": {},
     },
     # JSBSim's c182 (another author's model than the c172x: its own tables, CLalpha/CmDe/ClDa/CnDr names, the
@@ -106,19 +113,15 @@ AIRCRAFT = {
             "Cn_r": "Cnr", "Cn_dr": "CnDr", "Cm_alphadot": "Cmadot", "Cn_p": "Cnp", "Cl_dr": "ClDr",
             "Cn_da": "CnDa", "Cm_0": "Cmo",
         },
-        "added": {
-            "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
-            "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
-        },
-        # The tanks filled as in c182.xml before every trim (as for the 737): a record flown after the earlier ones burned
-        # fuel would be lighter, with its CG elsewhere, than the model flightid replays.
+        "added": ADDED_TERMS,
+        # The tanks filled as in c182.xml before every trim (as for the 737): a record flown after the earlier ones
+        # burned fuel would be lighter, with its CG elsewhere, than the model flightid replays.
         "pre_ic": {"propulsion/tank[0]/contents-lbs": 200.0, "propulsion/tank[1]/contents-lbs": 200.0},
         "pre_trim": {"fcs/mixture-cmd-norm": 1.0},
         "envelope": {"altitude_ft": (2000, 7000), "speed_kts": (85, 125)},
-        "amplitude": {"e3211": (0.025, 0.045), "ad": (0.04, 0.08), "rd": (0.05, 0.09), "ed": (0.025, 0.045)},
-        "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
-        # Its static stability is a third of the c172x's (Cmalpha -0.61 to -0.65 against -1.8): the c172x's Cm_alpha2
-        # of 4-8 left it statically unstable and a turbulent record tumbled (phi 177 deg); scaled by the same third.
+        **LIGHT_AIRCRAFT_MANEUVERS,
+        # Its static stability is a third of the c172x's (Cmalpha -0.61 to -0.65 against -1.8): the c172x's
+        # Cm_alpha2 of 4-8 left it statically unstable and a turbulent record tumbled (phi 177 deg); scaled by a third.
         "ranges": {("aero_nonlinearity", "Cm_alpha2"): (1.5, 3.0)},
     },
     "737": {
@@ -133,10 +136,7 @@ AIRCRAFT = {
             "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "Clda", "Cn_beta": "Cnb",
             "Cn_r": "Cnr", "Cn_dr": "Cndr", "Cm_alphadot": "Cmadot", "Cl_dr": "Cldr",
         },
-        "added": {
-            "Cm_alpha2": ("PITCH", ["aero/qbar-psf", "metrics/Sw-sqft", "metrics/cbarw-ft"]),
-            "CL_alpha2": ("LIFT", ["aero/qbar-psf", "metrics/Sw-sqft"]),
-        },
+        "added": ADDED_TERMS,
         # The tanks filled as in 737.xml before every trim: the fuel an earlier flight burned would otherwise change
         # the weight and balance, and a trim point found trimmable before a record might not trim for the next.
         "pre_ic": {"propulsion/tank[0]/contents-lbs": 10000.0, "propulsion/tank[1]/contents-lbs": 10000.0,

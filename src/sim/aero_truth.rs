@@ -401,13 +401,7 @@ impl AeroTruth {
 /// `airframe` command: loaded, run to its initial condition, dropped). A name JSBSim has no model of is
 /// [`SimError::UnknownModel`].
 pub fn model_mass_and_wing(aircraft: &str) -> Result<ModelMassAndWing, SimError> {
-    let mut bridge = super::bridge::Bridge::spawn()?;
-    let req = Request::Airframe {
-        aircraft: aircraft.to_string(),
-        scratch_dir: bridge.scratch_dir().display().to_string(),
-        aircraft_dir: None,
-    };
-    let got: super::protocol::AirframeReply = bridge.request(&req, &[])?.reply;
+    let got = model_airframe(aircraft)?;
     let c = |k: &str| got.values.get(k).copied().unwrap_or(f64::NAN);
     Ok(ModelMassAndWing {
         mass_kg: c("inertia/mass-slugs") * SLUG_TO_KG,
@@ -422,6 +416,18 @@ pub fn model_mass_and_wing(aircraft: &str) -> Result<ModelMassAndWing, SimError>
         chord_m: c("metrics/cbarw-ft") * FT_TO_M,
         thrust_line: got.thrust.map(|t| (t.moment_arm_m, t.inclination_rad)),
     })
+}
+
+/// The bridge's `airframe` reply for the JSBSim model `aircraft`, from a bridge process of its own (loaded, run
+/// to its initial condition, dropped). A name JSBSim has no model of is [`SimError::UnknownModel`].
+pub fn model_airframe(aircraft: &str) -> Result<super::protocol::AirframeReply, SimError> {
+    let mut bridge = super::bridge::Bridge::spawn()?;
+    let req = Request::Airframe {
+        aircraft: aircraft.to_string(),
+        scratch_dir: bridge.scratch_dir().display().to_string(),
+        aircraft_dir: None,
+    };
+    Ok(bridge.request(&req, &[])?.reply)
 }
 
 /// JSBSim's wind-to-body rotation (`FGAuxiliary::Tw2b`) applied to a wind-axis vector.

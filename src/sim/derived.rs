@@ -15,7 +15,7 @@
 //! JSBSim's trim succeeds, at 5 000 ft for a wing loading below [`HIGH_WING_LOADING_PSF`] and 15 000 ft above. The configuration is written to the cache
 //! directory (`aircraft/NAME.toml`), where it can be read, copied into `FLIGHTID_AIRCRAFT_DIR` and changed.
 
-use super::protocol::{ModelFacts, Request};
+use super::protocol::ModelFacts;
 use super::{SimError, FT_TO_M, KTS_TO_M_S};
 use crate::aircraft::{self, AircraftConfig, AircraftError, Drive, SurfaceConfig, TrimDefaults};
 use std::collections::{BTreeMap, HashMap};
@@ -97,17 +97,7 @@ enum Derivation {
 
 /// Loads the model in a bridge of its own and derives its configuration.
 fn derive(name: &str) -> Result<AircraftConfig, Derivation> {
-    let reply = (|| {
-        let mut bridge = super::bridge::Bridge::spawn()?;
-        let req = Request::Airframe {
-            aircraft: name.to_string(),
-            scratch_dir: bridge.scratch_dir().display().to_string(),
-            aircraft_dir: None,
-        };
-        let got: super::protocol::AirframeReply = bridge.request(&req, &[])?.reply;
-        Ok::<_, SimError>(got)
-    })()
-    .map_err(|e| match e {
+    let reply = super::aero_truth::model_airframe(name).map_err(|e| match e {
         SimError::UnknownModel(why) => Derivation::NoModel(why),
         other => Derivation::Refused(format!("loading it in JSBSim failed: {other}")),
     })?;
