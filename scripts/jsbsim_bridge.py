@@ -831,7 +831,8 @@ def command_responses(fdm, reads):
             for _ in range(steps):
                 fdm.run()
             # (a property JSBSim leaves at NaN is left out: it moves with no command)
-            levels.append({p: fdm[p] for p in reads if math.isfinite(fdm[p])})
+            values = {p: fdm[p] for p in reads}
+            levels.append({p: v for p, v in values.items() if math.isfinite(v)})
         out[surface] = levels
     for other in PILOT_COMMANDS.values():
         fdm[other] = 0.0

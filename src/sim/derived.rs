@@ -12,8 +12,9 @@
 //! it wants a configuration written by hand.
 //!
 //! The default trim point is level flight at the first lift coefficient of [`TRIM_LIFT_COEFFICIENTS`] at which
-//! JSBSim's trim succeeds, at 5 000 ft for a wing loading below [`HIGH_WING_LOADING_PSF`] and 15 000 ft above. The configuration is written to the cache
-//! directory (`aircraft/NAME.toml`), where it can be read, copied into `FLIGHTID_AIRCRAFT_DIR` and changed.
+//! JSBSim's trim succeeds, at 5 000 ft for a wing loading below [`HIGH_WING_LOADING_PSF`] and 15 000 ft above.
+//! The configuration is written to the cache directory (`aircraft/NAME.toml`), where it can be read, copied
+//! into `FLIGHTID_AIRCRAFT_DIR` and changed.
 
 use super::protocol::ModelFacts;
 use super::{SimError, FT_TO_M, KTS_TO_M_S};
