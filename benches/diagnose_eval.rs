@@ -6,10 +6,10 @@
 //!
 //! Run: `cargo bench --bench diagnose_eval -- [--cases 40] [--seed 1] [--turbulence] [--clean] [--false-alarm]
 //! [--first K] [--random-mix] [--process-noise] [--noise-weights] [--backward-elimination] [--estimate-rate]
-//! [--without COLUMNS] [--reverse COLUMNS] [--log-from S] [--aircraft c172x|c182|737] [--out DIR]`
+//! [--without COLUMNS] [--reverse COLUMNS] [--log-from S] [--aircraft c172x|c182|c310|737] [--out DIR]`
 //! - `--aircraft 737`: records of JSBSim's 737 in cruise, diagnosed with flightid's `737` configuration.
-//! - `--aircraft c182`: records of JSBSim's c182, diagnosed with the configuration flightid derives from the model
-//!   (it has none of its own).
+//! - `--aircraft c182`, `--aircraft c310`: records of JSBSim's c182 or c310, diagnosed with the configuration
+//!   flightid derives from the model (it has none of its own).
 //! - `--process-noise`: search on the filter error method's innovations where the records carry process noise
 //!   (`flightid diagnose --process-noise`).
 //! - `--noise-weights`: weight every channel by its sensor noise only (`flightid diagnose --noise-weights`).
