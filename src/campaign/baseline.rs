@@ -89,14 +89,7 @@ pub fn quantities(results: &[CaseResult]) -> Vec<(String, String, f64)> {
 impl Baseline {
     /// Reads a baseline file.
     pub fn load(path: &Path) -> Result<Baseline, CampaignError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CampaignError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        toml::from_str(&text).map_err(|e| CampaignError::Parse {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })
+        super::read_toml(path)
     }
 
     /// A baseline of the given configurations from campaign results, default tolerances.
@@ -135,10 +128,7 @@ impl Baseline {
              # A quantity passes when |new - value| <= abs_tol + rel_tol * |value|; edit tolerances by hand.\n{body}"
         );
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| CampaignError::Io {
-                path: dir.to_path_buf(),
-                source,
-            })?;
+            std::fs::create_dir_all(dir).map_err(CampaignError::io(dir))?;
         }
         crate::report::write_atomic(path, text.as_bytes())
             .map_err(|e| CampaignError::Run(e.to_string()))

@@ -17,7 +17,7 @@ pub use spec::{CampaignSpec, CaseSpec};
 pub use store::{load_results, StorePolicy};
 pub use summary::campaign_report;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Campaign failures, with the file they concern.
 #[derive(Debug, thiserror::Error)]
@@ -49,4 +49,27 @@ pub enum CampaignError {
     /// The run itself failed (cannot write results...).
     #[error("campaign run: {0}")]
     Run(String),
+}
+
+impl CampaignError {
+    /// For `map_err`: a file-system failure on `path`.
+    fn io(path: &Path) -> impl FnOnce(std::io::Error) -> CampaignError + '_ {
+        move |source| CampaignError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}
+
+/// Reads a campaign file (spec, baseline, queue, case result) as text.
+fn read_text(path: &Path) -> Result<String, CampaignError> {
+    std::fs::read_to_string(path).map_err(CampaignError::io(path))
+}
+
+/// Reads a TOML campaign file (spec, baseline) into `T`.
+fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CampaignError> {
+    toml::from_str(&read_text(path)?).map_err(|e| CampaignError::Parse {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
 }

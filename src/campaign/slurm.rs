@@ -84,11 +84,7 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
 
 /// Reads a queue file: one case id a line.
 pub fn read_queue(path: &Path) -> Result<Vec<String>, CampaignError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CampaignError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    Ok(text
+    Ok(super::read_text(path)?
         .lines()
         .map(str::trim)
         .filter(|l| !l.is_empty())
@@ -146,13 +142,6 @@ pub fn sbatch_script(
     s
 }
 
-fn io(path: &Path) -> impl FnOnce(std::io::Error) -> CampaignError + '_ {
-    move |source| CampaignError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// Runs a Slurm client command; its stdout, or an error with its stderr.
 fn slurm_command(program: &str, args: &[&str]) -> Result<String, CampaignError> {
     let out = Command::new(program).args(args).output().map_err(|e| {
@@ -177,9 +166,9 @@ pub fn submit(
     out: &Path,
     opts: &SubmitOptions,
 ) -> Result<Submitted, CampaignError> {
-    std::fs::create_dir_all(out).map_err(io(out))?;
+    std::fs::create_dir_all(out).map_err(CampaignError::io(out))?;
     // absolute paths: the tasks start in whatever directory Slurm gives them
-    let out = &std::fs::canonicalize(out).map_err(io(out))?;
+    let out = &std::fs::canonicalize(out).map_err(CampaignError::io(out))?;
     let prepared = store::prepare(spec, out, opts.policy)?;
     let pending: Vec<String> = spec
         .cases()
@@ -201,7 +190,7 @@ pub fn submit(
         .unwrap_or_else(|| pending.len().div_ceil(DEFAULT_CASES_PER_TASK))
         .clamp(1, pending.len());
     let dir = slurm_dir(out);
-    std::fs::create_dir_all(&dir).map_err(io(&dir))?;
+    std::fs::create_dir_all(&dir).map_err(CampaignError::io(&dir))?;
     let stamp = format!(
         "{}-{}",
         std::time::SystemTime::now()
@@ -240,7 +229,7 @@ pub fn submit(
         .append(true)
         .open(&jobs_txt)
         .and_then(|mut f| f.write_all(line.as_bytes()))
-        .map_err(io(&jobs_txt))?;
+        .map_err(CampaignError::io(&jobs_txt))?;
     Ok(Submitted {
         job_id: Some(job_id),
         tasks,

@@ -174,14 +174,7 @@ fn num_id(x: f64) -> String {
 impl CampaignSpec {
     /// Reads and validates a campaign file.
     pub fn load(path: &Path) -> Result<CampaignSpec, CampaignError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CampaignError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let spec: CampaignSpec = toml::from_str(&text).map_err(|e| CampaignError::Parse {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
+        let spec: CampaignSpec = super::read_toml(path)?;
         spec.validate().map_err(|message| CampaignError::Invalid {
             path: path.to_path_buf(),
             message,

@@ -219,7 +219,7 @@ pub fn prepare(
 ) -> Result<Prepared, CampaignError> {
     for sub in ["cases", "claims"] {
         let d = out.join(sub);
-        std::fs::create_dir_all(&d).map_err(|source| CampaignError::Io { path: d, source })?;
+        std::fs::create_dir_all(&d).map_err(CampaignError::io(&d))?;
     }
     let (states, orphans) = scan(spec, out);
     let changed: Vec<&str> = states
@@ -319,10 +319,7 @@ pub fn claim(out: &Path, id: &str) -> Result<Option<Claim>, CampaignError> {
         .truncate(false)
         .write(true)
         .open(&path)
-        .map_err(|source| CampaignError::Io {
-            path: path.clone(),
-            source,
-        })?;
+        .map_err(CampaignError::io(&path))?;
     match file.try_lock() {
         Ok(()) => {}
         Err(std::fs::TryLockError::WouldBlock) => return Ok(None),
@@ -357,10 +354,7 @@ pub fn write_result(out: &Path, result: &CaseResult) -> Result<(), CampaignError
 /// Reads every `DIR/cases/*.json` (temporary files are ignored), sorted by case id.
 pub fn load_results(out: &Path) -> Result<Vec<CaseResult>, CampaignError> {
     let dir = out.join("cases");
-    let entries = std::fs::read_dir(&dir).map_err(|source| CampaignError::Io {
-        path: dir.clone(),
-        source,
-    })?;
+    let entries = std::fs::read_dir(&dir).map_err(CampaignError::io(&dir))?;
     let mut results = Vec::new();
     for entry in entries.flatten() {
         let path = entry.path();
@@ -368,10 +362,7 @@ pub fn load_results(out: &Path) -> Result<Vec<CaseResult>, CampaignError> {
         if name.starts_with('.') || !name.ends_with(".json") {
             continue;
         }
-        let text = std::fs::read_to_string(&path).map_err(|source| CampaignError::Io {
-            path: path.clone(),
-            source,
-        })?;
+        let text = super::read_text(&path)?;
         let r: CaseResult = serde_json::from_str(&text).map_err(|e| CampaignError::Parse {
             path: path.clone(),
             message: e.to_string(),
