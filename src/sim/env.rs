@@ -49,6 +49,16 @@ pub enum EnvError {
     },
 }
 
+impl EnvError {
+    /// For `map_err`: a file-system failure in the cache directory `dir`.
+    fn io(dir: &Path) -> impl FnOnce(std::io::Error) -> EnvError + '_ {
+        move |source| EnvError::Io {
+            dir: dir.to_path_buf(),
+            source,
+        }
+    }
+}
+
 static PROVISION_LOCK: Mutex<()> = Mutex::new(());
 
 /// `FLIGHTID_PYTHON` interpreters this process has already seen import jsbsim.
@@ -118,20 +128,11 @@ pub fn python() -> Result<PathBuf, EnvError> {
         return Ok(py);
     }
     let _guard = PROVISION_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    std::fs::create_dir_all(&dir).map_err(|source| EnvError::Io {
-        dir: dir.clone(),
-        source,
-    })?;
+    std::fs::create_dir_all(&dir).map_err(EnvError::io(&dir))?;
     // Serialise provisioning across processes too (tests and campaigns start many at once).
     let lock_path = dir.join(".provision.lock");
-    let lock = std::fs::File::create(&lock_path).map_err(|source| EnvError::Io {
-        dir: dir.clone(),
-        source,
-    })?;
-    lock.lock().map_err(|source| EnvError::Io {
-        dir: dir.clone(),
-        source,
-    })?;
+    let lock = std::fs::File::create(&lock_path).map_err(EnvError::io(&dir))?;
+    lock.lock().map_err(EnvError::io(&dir))?;
     if py.exists() {
         return Ok(py);
     }
@@ -151,10 +152,7 @@ fn last_line(text: &str) -> String {
 /// Builds the venv in a temporary sibling directory and renames it into place, so that concurrent processes
 /// never see a half-installed environment (the loser of a race discards its copy).
 fn provision(dir: &Path, venv: &Path) -> Result<(), EnvError> {
-    std::fs::create_dir_all(dir).map_err(|source| EnvError::Io {
-        dir: dir.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir_all(dir).map_err(EnvError::io(dir))?;
     let base = std::env::var("FLIGHTID_BASE_PYTHON").unwrap_or_else(|_| "python3".to_string());
     let tmp = dir.join(format!(".venv-building-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
@@ -216,10 +214,7 @@ fn provision(dir: &Path, venv: &Path) -> Result<(), EnvError> {
 /// Writes the embedded bridge program into the cache (content-addressed) and returns its path.
 pub fn bridge_script() -> Result<PathBuf, EnvError> {
     let dir = cache_dir();
-    std::fs::create_dir_all(&dir).map_err(|source| EnvError::Io {
-        dir: dir.clone(),
-        source,
-    })?;
+    std::fs::create_dir_all(&dir).map_err(EnvError::io(&dir))?;
     let path = dir.join(format!("jsbsim_bridge-{}.py", fnv1a(BRIDGE_SOURCE)));
     if !path.exists() {
         // Unique per process *and* call: threads of one process (parallel tests, campaign workers) may
@@ -227,10 +222,7 @@ pub fn bridge_script() -> Result<PathBuf, EnvError> {
         static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let tmp = dir.join(format!(".bridge-{}-{n}.py", std::process::id()));
-        std::fs::write(&tmp, BRIDGE_SOURCE).map_err(|source| EnvError::Io {
-            dir: dir.clone(),
-            source,
-        })?;
+        std::fs::write(&tmp, BRIDGE_SOURCE).map_err(EnvError::io(&dir))?;
         if let Err(source) = std::fs::rename(&tmp, &path) {
             let _ = std::fs::remove_file(&tmp);
             if !path.exists() {
