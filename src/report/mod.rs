@@ -115,6 +115,16 @@ fn series_color(series: &Series, i: usize) -> RGBColor {
     }
 }
 
+/// The line a series is drawn with, in the plot and in its legend swatch: a reference curve is a wide
+/// translucent band, so it stays visible under models that lie on it.
+fn line_style(series: &Series, color: RGBColor) -> ShapeStyle {
+    if series.reference {
+        color.mix(0.45).stroke_width(7)
+    } else {
+        color.stroke_width(2)
+    }
+}
+
 fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
         .filter(|v| v.is_finite())
@@ -188,13 +198,6 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
                     .draw()
                     .map_err(|e| err(e.to_string()))?;
                 for (s, &color) in plot.series.iter().zip(&colors) {
-                    // a reference curve is a wide translucent band, so it stays visible under models that
-                    // lie on it
-                    let style = if s.reference {
-                        color.mix(0.45).stroke_width(7)
-                    } else {
-                        color.stroke_width(2)
-                    };
                     let points: Vec<(f64, f64)> =
                         s.x.iter()
                             .zip(&s.y)
@@ -209,7 +212,7 @@ pub fn line_plot_svg(plot: &LinePlot) -> Result<String, ReportError> {
                             .map_err(|e| err(e.to_string()))?;
                     }
                     chart
-                        .draw_series(LineSeries::new(points, style))
+                        .draw_series(LineSeries::new(points, line_style(s, color)))
                         .map_err(|e| err(e.to_string()))?;
                 }
             }};
@@ -243,13 +246,11 @@ fn draw_legend<DB: DrawingBackend>(
         if y + row_h > PLOT_H as i32 {
             break;
         }
-        let swatch = if s.reference {
-            color.mix(0.45).stroke_width(7)
-        } else {
-            color.stroke_width(2)
-        };
-        area.draw(&PathElement::new(vec![(6, y), (30, y)], swatch))
-            .map_err(|e| e.to_string())?;
+        area.draw(&PathElement::new(
+            vec![(6, y), (30, y)],
+            line_style(s, color),
+        ))
+        .map_err(|e| e.to_string())?;
         if s.x.len() < MARKER_BELOW_POINTS {
             area.draw(&Circle::new((18, y), 4, color.filled()))
                 .map_err(|e| e.to_string())?;
