@@ -123,17 +123,17 @@ pub fn emit_json<T: serde::Serialize>(target: &str, value: &T) -> anyhow::Result
 }
 
 /// The outputs a command writes after its terminal summary: the HTML report in `report_dir` when given (its
-/// index named on stdout unless `quiet`), then `json` to `json_target` when given (see [`emit_json`]).
+/// index named on stdout unless the JSON goes there), then `json` to `json_target` when given (see
+/// [`emit_json`]).
 pub fn write_report_and_json(
     report_dir: Option<&Path>,
     report: impl FnOnce() -> crate::report::Report,
     json: &serde_json::Value,
     json_target: Option<&str>,
-    quiet: bool,
 ) -> anyhow::Result<()> {
     if let Some(dir) = report_dir {
         let index = crate::report::write_report_dir(dir, &report(), json)?;
-        if !quiet {
+        if json_target != Some("-") {
             println!("\nreport: {}", index.display());
         }
     }

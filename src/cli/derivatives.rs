@@ -202,13 +202,11 @@ pub fn run(args: &DerivativesCmd) -> anyhow::Result<()> {
             }
         }
     }
-    let json = result.to_json();
     write_report_and_json(
         args.report.as_deref(),
         || result.report(),
-        &json,
+        &result.to_json(),
         args.json.as_deref(),
-        quiet,
     )
 }
 

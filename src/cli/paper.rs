@@ -100,12 +100,10 @@ pub fn run(args: &PaperCmd) -> anyhow::Result<()> {
             println!("{v}");
         }
     }
-    let json = run.to_json();
     write_report_and_json(
         args.report.as_deref(),
         || run.report(),
-        &json,
+        &run.to_json(),
         args.json.as_deref(),
-        quiet,
     )
 }
