@@ -211,6 +211,26 @@ fn a_c182_record_is_diagnosed_with_the_configuration_derived_from_its_model() {
     check_generated(&args, 5);
 }
 
+/// JSBSim's c310, a light twin with retractable gear that flightid has no configuration of either: its derived
+/// configuration (both engines running, gear up, the left aileron's own travel) replays the records, and a hidden
+/// aileron effectiveness ×1.36 is named (case 21 of `cargo bench --bench diagnose_eval -- --aircraft c310 --seed 1`:
+/// 38 s at 50 Hz, still air).
+#[test]
+fn a_c310_record_is_diagnosed_with_the_configuration_derived_from_its_model() {
+    let args = [
+        "--cases",
+        "1",
+        "--first",
+        "21",
+        "--seed",
+        "1",
+        "--stratified",
+        "--aircraft",
+        "c310",
+    ];
+    check_generated(&args, 21);
+}
+
 #[test]
 fn clean_record_names_nothing() {
     let d = check(101, "[]");
