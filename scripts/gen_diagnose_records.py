@@ -70,6 +70,13 @@ LIGHT_AIRCRAFT_MANEUVERS = {
     "pulse": {"e3211": (0.35, 0.6), "ad": (0.6, 1.2), "rd": (0.7, 1.3), "ed": (0.6, 1.0)},
 }
 
+# The surfaces of the models whose aerodynamics read the left aileron's deflection (c182, c310, 737).
+LEFT_AILERON_SURFACES = {
+    "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
+    "aileron": ("fcs/left-aileron-pos-rad", None, "fcs/aileron-cmd-norm"),
+    "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
+}
+
 AIRCRAFT = {
     # One entry per aircraft:
     #   model: the JSBSim model (aircraft/<model>/<model>.xml of the jsbsim package);
@@ -106,11 +113,7 @@ AIRCRAFT = {
     # left aileron read). flightid has no configuration for it and derives one from the model.
     "c182": {
         "model": "c182",
-        "surfaces": {
-            "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
-            "aileron": ("fcs/left-aileron-pos-rad", None, "fcs/aileron-cmd-norm"),
-            "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
-        },
+        "surfaces": LEFT_AILERON_SURFACES,
         "derivatives": {
             "CL_alpha": "CLalpha", "CD_0": "CDo", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "CmDe",
             "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "ClDa", "Cn_beta": "Cnb",
@@ -132,11 +135,7 @@ AIRCRAFT = {
     # the c172x's elevator travel trailing edge down). flightid has no configuration for it and derives one.
     "c310": {
         "model": "c310",
-        "surfaces": {
-            "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
-            "aileron": ("fcs/left-aileron-pos-rad", None, "fcs/aileron-cmd-norm"),
-            "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
-        },
+        "surfaces": LEFT_AILERON_SURFACES,
         "derivatives": {
             "CL_alpha": "CLalpha", "CD_0": "CDo", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "CmDe",
             "CY_beta": "CYbeta", "Cl_beta": "Clbeta", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "ClDa",
@@ -162,11 +161,7 @@ AIRCRAFT = {
     },
     "737": {
         "model": "737",
-        "surfaces": {
-            "elevator": ("fcs/elevator-pos-rad", "fcs/mag-elevator-pos-rad", "fcs/elevator-cmd-norm"),
-            "aileron": ("fcs/left-aileron-pos-rad", None, "fcs/aileron-cmd-norm"),
-            "rudder": ("fcs/rudder-pos-rad", None, "fcs/rudder-cmd-norm"),
-        },
+        "surfaces": LEFT_AILERON_SURFACES,
         "derivatives": {
             "CL_alpha": "CLalpha", "CD_0": "CD0", "Cm_alpha": "Cmalpha", "Cm_q": "Cmq", "Cm_de": "Cmde",
             "CY_beta": "CYb", "Cl_beta": "Clb", "Cl_p": "Clp", "Cl_r": "Clr", "Cl_da": "Clda", "Cn_beta": "Cnb",
