@@ -273,6 +273,46 @@ def ic_xml(state):
         '</initialize>\n')
 
 
+# The body accelerations a trim makes zero, and how close to zero is trimmed (JSBSim's FGTrim defaults: 1e-3 on
+# the translational, 1e-4 on the rotational).
+TRIM_ACCELERATIONS = ("accelerations/udot-ft_sec2", "accelerations/vdot-ft_sec2", "accelerations/wdot-ft_sec2",
+                      "accelerations/pdot-rad_sec2", "accelerations/qdot-rad_sec2", "accelerations/rdot-rad_sec2")
+TRIM_TOLERANCES = (1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4)
+# The reply key that says which trim found the state: 0 JSBSim's full trim, 1 flightid's own (Sim.newton_trim).
+TRIM_METHOD = "flightid/trim-method"
+# Newton iterations of flightid's own trim, and the forward-difference step of each unknown (rad, or command).
+NEWTON_TRIM_ITERATIONS = 20
+# A step is halved until the residual falls, down to this share of the Newton step; below it the start has stalled.
+NEWTON_TRIM_SMALLEST_STEP = 1.0 / 16.0
+# The throttles Newton starts from, in turn, until one ends trimmed.
+NEWTON_TRIM_THROTTLES = (0.6, 0.3, 0.9, 0.45, 0.75)
+NEWTON_TRIM_STEP = {"alpha": 1e-4, "throttle": 1e-3, "elevator": 1e-3, "aileron": 1e-3, "rudder": 1e-3,
+                    "phi": 1e-4}
+
+
+def transpose(rows):
+    return [list(c) for c in zip(*rows)]
+
+
+def solve(a, b):
+    """x with a x = b, by Gaussian elimination with partial pivoting (a square, small); ZeroDivisionError when
+    a is singular."""
+    n = len(b)
+    m = [list(r) + [bi] for r, bi in zip(a, b)]
+    for k in range(n):
+        p = max(range(k, n), key=lambda i: abs(m[i][k]))
+        if m[p][k] == 0.0:
+            raise ZeroDivisionError("singular")
+        m[k], m[p] = m[p], m[k]
+        for i in range(k + 1, n):
+            r = m[i][k] / m[k][k]
+            m[i] = [a - r * b for a, b in zip(m[i], m[k])]
+    x = [0.0] * n
+    for k in range(n - 1, -1, -1):
+        x[k] = (m[k][n] - sum(m[k][j] * x[j] for j in range(k + 1, n))) / m[k][k]
+    return x
+
+
 class Sim:
     def __init__(self, req):
         self.aircraft = req["aircraft"]
@@ -298,6 +338,7 @@ class Sim:
         self.fdm = fdm
         self.pm = fdm.get_property_manager()
         self.trimmed = False
+        self.trim_method = 0.0
         # Trimmed states by trim request (see restore_trim): key -> snapshot, or the trim's BridgeError.
         self.snapshots = {}
         self.ic_path = os.path.join(self.root, "flightid-ic.xml")
@@ -334,6 +375,25 @@ class Sim:
             self.node(k).set_double_value(float(v))
 
     def trim(self, req):
+        """JSBSim's full trim at the request's point; where it fails, flightid's own (`newton_trim`)."""
+        self.start_trim(req)
+        try:
+            self.fdm["simulation/do_simple_trim"] = 1
+            self.trim_method = 0.0
+        except Exception as e:  # jsbsim.TrimFailureError; the state is garbage afterwards
+            self.start_trim(req)
+            self.newton_trim(req, e)
+            self.trim_method = 1.0
+        self.trimmed = True
+        self.trim_surface = {s: self.fdm[f"flightid/aero/{s}-rad"] for s in self.surfaces}
+        return self.report(req)
+
+    def report(self, req):
+        """A trim's reply: the request's `report` properties, and which trim found it (TRIM_METHOD)."""
+        return {k: self.fdm[k] for k in req.get("report", [])} | {TRIM_METHOD: self.trim_method}
+
+    def start_trim(self, req):
+        """The request's initial condition, run: the state a trim starts from."""
         fdm = self.fdm
         self.trimmed = False
         # Every trim starts from the same state whatever ran before: reset all models (engines, actuators, FCS
@@ -368,15 +428,108 @@ class Sim:
         if self.gear_up:
             fdm["gear/gear-cmd-norm"] = 0.0
             fdm["gear/gear-pos-norm"] = 0.0
-        try:
-            fdm["simulation/do_simple_trim"] = 1
-        except Exception as e:  # jsbsim.TrimFailureError; the state is garbage afterwards
-            raise BridgeError("trim_failed",
-                              f"{self.aircraft} cannot trim at {req['altitude_ft']} ft, {req['speed_kts']} kts: {e}")
-        self.trimmed = True
-        self.trim_surface = {s: fdm[f"flightid/aero/{s}-rad"] for s in self.surfaces}
-        out = {k: fdm[k] for k in req.get("report", [])}
-        return out
+
+    def newton_trim(self, req, jsbsim_error):
+        """Straight flight at the request's point by Newton's method on all trim unknowns at once, from the state
+        `start_trim` left; raises `trim_failed` naming JSBSim's error and where this one ended.
+
+        JSBSim's trim adjusts one control per acceleration in turn (FGTrim: α for ẇ, throttle for u̇, the pitch
+        trim for q̇, φ for v̇, aileron for ṗ, rudder for ṙ), and on some models it fails at points between points
+        it trims (JSBSim 1.2's c310 at 4 000 ft: 116 and 128 kts trim, 120 and 124 kts do not). Here the unknowns
+        x = (α, throttle, elevator, aileron and rudder commands, φ), with β = 0 and the request's flight path
+        angle, are solved together for zero body accelerations f(x) = (u̇, v̇, ẇ, ṗ, q̇, ṙ): the Jacobian by
+        forward differences, a damped step x ← x − λ J⁻¹ f halved until the scaled residual falls, every unknown
+        kept within its range. Each f(x) restores the state and commands exactly as a trimmed snapshot is
+        restored (`restore`): actuators at their commands, engines at their steady state."""
+        fdm = self.fdm
+        knobs = req.get("knobs", {})
+        position = {k: fdm[k] for k in SNAPSHOT_STATE[:3]}
+        psi = fdm["attitude/psi-rad"]
+        speed = fdm["velocities/vt-fps"]
+        gamma = math.radians(float(req.get("gamma_deg", 0.0)))
+        held = {k: fdm[k] for k in self.trim_commands()}
+        unknowns = [("alpha", -0.10, 0.30), ("throttle", 0.0, 1.0)]
+        unknowns += [(s, -1.0, 1.0) for s in ("elevator", "aileron", "rudder") if s in self.surfaces]
+        unknowns += [("phi", -0.5, 0.5)]
+        names = [u[0] for u in unknowns]
+
+        def accelerations(x):
+            v = dict(zip(names, x))
+            alpha, phi = v["alpha"], v["phi"]
+            # climb rate u sinθ − w cosφ cosθ = V sinγ with β = 0
+            a, b = math.cos(alpha), math.sin(alpha) * math.cos(phi)
+            theta = math.atan2(b, a) + math.asin(max(-1.0, min(1.0, math.sin(gamma) / math.hypot(a, b))))
+            state = position | {
+                "attitude/phi-rad": phi, "attitude/theta-rad": theta, "attitude/psi-rad": psi,
+                "velocities/u-fps": speed * math.cos(alpha), "velocities/v-fps": 0.0,
+                "velocities/w-fps": speed * math.sin(alpha),
+                "velocities/p-rad_sec": 0.0, "velocities/q-rad_sec": 0.0, "velocities/r-rad_sec": 0.0}
+            commands = dict(held)
+            for i in range(self.engines):
+                commands[f"fcs/throttle-cmd-norm[{i}]"] = v["throttle"]
+            for s in ("elevator", "aileron", "rudder"):
+                if s in v:
+                    commands[self.surfaces[s]["command"]] = v[s]
+            self.restore({"state": state, "commands": commands}, knobs)
+            return [fdm[k] for k in TRIM_ACCELERATIONS]
+
+        def merit(f):
+            return sum((fi / tol) ** 2 for fi, tol in zip(f, TRIM_TOLERANCES))
+
+        lo = [u[1] for u in unknowns]
+        hi = [u[2] for u in unknowns]
+
+        def trimmed(f):
+            return all(abs(fi) < tol for fi, tol in zip(f, TRIM_TOLERANCES))
+
+        def newton(x):
+            f = accelerations(x)
+            for _ in range(NEWTON_TRIM_ITERATIONS):
+                if trimmed(f):
+                    break
+                jac = []
+                for j in range(len(x)):
+                    h = NEWTON_TRIM_STEP[names[j]]
+                    xj = list(x)
+                    xj[j] += h if xj[j] + h <= hi[j] else -h
+                    fj = accelerations(xj)
+                    jac.append([(a - b) / (xj[j] - x[j]) for a, b in zip(fj, f)])
+                try:
+                    step = solve(transpose(jac), [-fi for fi in f])
+                except ZeroDivisionError:
+                    break
+                lam, m0 = 1.0, merit(f)
+                while lam >= NEWTON_TRIM_SMALLEST_STEP:
+                    xn = [min(h, max(lo_, xi + lam * d)) for xi, d, lo_, h in zip(x, step, lo, hi)]
+                    fn = accelerations(xn)
+                    if merit(fn) < m0:
+                        x, f = xn, fn
+                        break
+                    lam *= 0.5
+                else:
+                    break
+            return x, f
+
+        # Thrust need not rise with the throttle: the c310's propeller governor makes it dip (at 4 000 ft, 120 kts:
+        # 227.4 lbf at 0.720, 224.3 at 0.727, 229.6 at 0.734), and a Newton step stalls in the dip. So it starts
+        # again from other throttles, the best ending kept.
+        best = None
+        for throttle in NEWTON_TRIM_THROTTLES:
+            x, f = newton([0.05, throttle] + [0.0] * (len(names) - 2))
+            if best is None or merit(f) < merit(best[1]):
+                best = (x, f)
+            if trimmed(f):
+                break
+        x, f = best
+        f = accelerations(x)
+        if not all(abs(fi) < tol for fi, tol in zip(f, TRIM_TOLERANCES)):
+            ended = ", ".join(f"{n} {xi:.4g}" for n, xi in zip(names, x))
+            worst = max(range(len(f)), key=lambda i: abs(f[i]) / TRIM_TOLERANCES[i])
+            raise BridgeError(
+                "trim_failed",
+                f"{self.aircraft} cannot trim at {req['altitude_ft']} ft, {req['speed_kts']} kts: JSBSim's trim "
+                f"failed ({jsbsim_error}), and flightid's own ended at {ended} with "
+                f"{TRIM_ACCELERATIONS[worst]} = {f[worst]:.3g}")
 
     def set_knobs(self, knobs):
         """Sets a trim request's knobs and pre-trim properties (right after a model reset); every property an
@@ -402,6 +555,7 @@ class Sim:
         return {
             "state": {k: fdm[k] for k in SNAPSHOT_STATE},
             "commands": {k: fdm[k] for k in self.trim_commands()},
+            "method": self.trim_method,
         }
 
     def restore(self, snap, knobs):
@@ -479,7 +633,8 @@ class Sim:
             self.trimmed = False
             raise snap
         self.restore(snap, req.get("knobs", {}))
-        return {k: self.fdm[k] for k in req.get("report", [])}
+        self.trim_method = snap["method"]
+        return self.report(req)
 
     def linearize(self, req):
         """JSBSim's FGLinearization at the current trim; per-radian inputs when the surfaces are overridden."""

@@ -834,3 +834,55 @@ fn a_model_read_through_a_normalised_surface_is_refused_naming_the_property() {
         "{err}"
     );
 }
+
+/// JSBSim's full trim fails at points of the c310's envelope between points it trims: 5 050 ft, 113.3 kts is
+/// one, in a freshly started process ("wdot doesn't appear to be trimmable"). flightid's Newton trim finds the
+/// level flight there, says so, and the aircraft holds it: 10 s without an input change the pitch attitude
+/// and the airspeed little. At 4 000 ft, 120 kts no level flight exists in the model (the thrust jumps by 20 lbf
+/// between throttles 0.702 and 0.708, across the thrust the drag needs): the error says where both trims ended.
+#[test]
+fn where_jsbsims_trim_fails_flightids_newton_trim_finds_the_level_flight() {
+    let cfg = flightid::sim::derived::aircraft_config("c310").expect("derived");
+    let rate_hz = 60.0;
+    let mut sim = JsbsimSim::start(&cfg, rate_hz).unwrap();
+    let t = sim
+        .trim(&TrimPoint::level(5050.0, 113.3))
+        .expect("Newton trims where JSBSim does not");
+    assert_eq!(t.method, flightid::sim::TrimMethod::Newton, "{t:?}");
+    assert!(t.alpha_rad > 0.0 && t.alpha_rad < 0.15, "{t:?}");
+    assert!((t.theta_rad - t.alpha_rad).abs() < 1e-3, "{t:?}");
+    let speed_m_s = 113.3 * flightid::sim::KTS_TO_M_S;
+    assert!((t.airspeed_m_s - speed_m_s).abs() < 0.01, "{t:?}");
+    let plan = flightid::compare::single_surface_plan(
+        "elevator",
+        &flightid::signal::Maneuver::Doublet { pulse_s: 1.0 },
+        0.0,
+        1.0,
+        10.0,
+        rate_hz,
+    );
+    let rec = sim.fly(&plan).unwrap();
+    let drift = |col: &str| {
+        let v = rec.column(col).unwrap();
+        v.iter().map(|x| (x - v[0]).abs()).fold(0.0_f64, f64::max)
+    };
+    assert!(
+        drift("theta_rad") < 0.2_f64.to_radians(),
+        "θ drifts {}",
+        drift("theta_rad")
+    );
+    assert!(
+        drift("airspeed_m_s") < 0.2,
+        "airspeed drifts {}",
+        drift("airspeed_m_s")
+    );
+
+    let e = sim
+        .trim(&TrimPoint::level(4000.0, 120.0))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("JSBSim's trim failed") && e.contains("flightid's own ended at"),
+        "{e}"
+    );
+}

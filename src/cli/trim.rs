@@ -24,8 +24,11 @@ pub fn run(args: &TrimCmd) -> anyhow::Result<()> {
         return emit_json(target, &t);
     }
     println!(
-        "{} trimmed at {} ft, {} kts (full trim)",
-        t.aircraft, t.point.altitude_ft, t.point.speed_kts
+        "{} trimmed at {} ft, {} kts ({})",
+        t.aircraft,
+        t.point.altitude_ft,
+        t.point.speed_kts,
+        t.method.describe()
     );
     println!("  alpha     {:9.4} deg", t.alpha_rad.to_degrees());
     println!("  theta     {:9.4} deg", t.theta_rad.to_degrees());

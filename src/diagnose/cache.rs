@@ -122,6 +122,7 @@ mod tests {
             throttle: 0.6,
             surfaces_rad: Default::default(),
             commands_norm: Default::default(),
+            method: Default::default(),
         };
         Arc::new((r, trim))
     }

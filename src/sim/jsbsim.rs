@@ -6,7 +6,8 @@ use super::protocol::{
     ResetState, StateResetAt, SurfaceReads, ValuesReply,
 };
 use super::{
-    FlightPlan, Linearization, SimError, Simulator, StateReset, TrimPoint, TrimState, FT_TO_M,
+    FlightPlan, Linearization, SimError, Simulator, StateReset, TrimMethod, TrimPoint, TrimState,
+    FT_TO_M,
 };
 use crate::aircraft::{AircraftConfig, Drive};
 use crate::data::{Channel, FlightRecord};
@@ -48,6 +49,9 @@ const RECORDED: &[(Channel, &str, f64)] = &[
     (Channel::Ay, "accelerations/a-pilot-y-ft_sec2", FT_TO_M),
     (Channel::Az, "accelerations/a-pilot-z-ft_sec2", FT_TO_M),
 ];
+
+/// The trim reply's key that says which trim found the state: 1 flightid's Newton trim, 0 JSBSim's full trim.
+const TRIM_METHOD_KEY: &str = "flightid/trim-method";
 
 /// Surfaces in CSV column order.
 pub const SURFACES: [&str; 3] = ["elevator", "aileron", "rudder"];
@@ -370,6 +374,11 @@ impl Simulator for JsbsimSim {
             throttle: get("fcs/throttle-pos-norm"),
             surfaces_rad,
             commands_norm,
+            method: if get(TRIM_METHOD_KEY) == 1.0 {
+                TrimMethod::Newton
+            } else {
+                TrimMethod::JsbsimFull
+            },
         };
         let all_finite = [
             state.alpha_rad,

@@ -123,6 +123,30 @@ pub struct TrimState {
     pub surfaces_rad: BTreeMap<String, f64>,
     /// Trim commands (normalised): `pitch-trim`, `aileron`, `rudder`, `throttle`.
     pub commands_norm: BTreeMap<String, f64>,
+    /// The trim that found this state.
+    #[serde(default)]
+    pub method: TrimMethod,
+}
+
+/// The trim that found a [`TrimState`] (docs/jsbsim.md, "Trim").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrimMethod {
+    /// JSBSim's full trim (FGTrim), one control per acceleration in turn.
+    #[default]
+    JsbsimFull,
+    /// flightid's own: Newton's method on every trim unknown at once, where JSBSim's full trim failed.
+    Newton,
+}
+
+impl TrimMethod {
+    /// How `flightid trim` names it.
+    pub fn describe(self) -> &'static str {
+        match self {
+            TrimMethod::JsbsimFull => "JSBSim's full trim",
+            TrimMethod::Newton => "flightid's Newton trim; JSBSim's full trim failed here",
+        }
+    }
 }
 
 /// Input on one surface: deflection relative to trim, one value per simulation step, rad.
