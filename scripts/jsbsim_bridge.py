@@ -278,8 +278,15 @@ def ic_xml(state):
 TRIM_ACCELERATIONS = ("accelerations/udot-ft_sec2", "accelerations/vdot-ft_sec2", "accelerations/wdot-ft_sec2",
                       "accelerations/pdot-rad_sec2", "accelerations/qdot-rad_sec2", "accelerations/rdot-rad_sec2")
 TRIM_TOLERANCES = (1e-3, 1e-3, 1e-3, 1e-4, 1e-4, 1e-4)
+# What flightid's own trim accepts when no start reaches TRIM_TOLERANCES: 0.03 ft/s² (a milli-g) on u̇, v̇, ẇ.
+# The throttle is not a smooth input on every model (the c310's thrust jumps by 20 lbf within 0.006 of
+# throttle), and a milli-g is a tenth of an accelerometer's noise; over a 60 s record it changes the airspeed by
+# half a metre per second, which the replay's segment initial states absorb.
+TRIM_ACCEPTED = (0.03, 0.03, 0.03, 1e-4, 1e-4, 1e-4)
 # The reply key that says which trim found the state: 0 JSBSim's full trim, 1 flightid's own (Sim.newton_trim).
 TRIM_METHOD = "flightid/trim-method"
+# The keys of a trim request that name the point (not the model changes, knobs, the flight asks for).
+TRIM_POINT_KEYS = ("altitude_ft", "speed_kts", "heading_deg", "gamma_deg", "latitude_deg", "longitude_deg", "ic")
 # Newton iterations of flightid's own trim, and the forward-difference step of each unknown (rad, or command).
 NEWTON_TRIM_ITERATIONS = 20
 # A step is halved until the residual falls, down to this share of the Newton step; below it the start has stalled.
@@ -339,6 +346,8 @@ class Sim:
         self.pm = fdm.get_property_manager()
         self.trimmed = False
         self.trim_method = 0.0
+        # Points where JSBSim's trim failed (TRIM_POINT_KEYS of the request) -> flightid's last trim solution there.
+        self.newton_starts = {}
         # Trimmed states by trim request (see restore_trim): key -> snapshot, or the trim's BridgeError.
         self.snapshots = {}
         self.ic_path = os.path.join(self.root, "flightid-ic.xml")
@@ -376,14 +385,23 @@ class Sim:
 
     def trim(self, req):
         """JSBSim's full trim at the request's point; where it fails, flightid's own (`newton_trim`)."""
+        # A point where JSBSim's trim failed once goes to flightid's own straight away, from where it ended there:
+        # a failed JSBSim trim takes seconds, and a search that trims one point with many model changes wants one
+        # trim method for all of them.
+        point = json.dumps({k: v for k, v in req.items() if k in TRIM_POINT_KEYS}, sort_keys=True)
         self.start_trim(req)
-        try:
-            self.fdm["simulation/do_simple_trim"] = 1
-            self.trim_method = 0.0
-        except Exception as e:  # jsbsim.TrimFailureError; the state is garbage afterwards
-            self.start_trim(req)
-            self.newton_trim(req, e)
+        if point in self.newton_starts:
+            self.newton_starts[point] = self.newton_trim(req, "it failed here before", self.newton_starts[point])
             self.trim_method = 1.0
+        else:
+            try:
+                self.fdm["simulation/do_simple_trim"] = 1
+                self.trim_method = 0.0
+            except Exception as e:  # jsbsim.TrimFailureError; the state is garbage afterwards
+                self.start_trim(req)
+                self.newton_starts[point] = None
+                self.newton_starts[point] = self.newton_trim(req, e)
+                self.trim_method = 1.0
         self.trimmed = True
         self.trim_surface = {s: self.fdm[f"flightid/aero/{s}-rad"] for s in self.surfaces}
         return self.report(req)
@@ -429,18 +447,20 @@ class Sim:
             fdm["gear/gear-cmd-norm"] = 0.0
             fdm["gear/gear-pos-norm"] = 0.0
 
-    def newton_trim(self, req, jsbsim_error):
+    def newton_trim(self, req, jsbsim_error, start=None):
         """Straight flight at the request's point by Newton's method on all trim unknowns at once, from the state
         `start_trim` left; raises `trim_failed` naming JSBSim's error and where this one ended.
 
         JSBSim's trim adjusts one control per acceleration in turn (FGTrim: α for ẇ, throttle for u̇, the pitch
         trim for q̇, φ for v̇, aileron for ṗ, rudder for ṙ), and on some models it fails at points between points
-        it trims (JSBSim 1.2's c310 at 4 000 ft: 116 and 128 kts trim, 120 and 124 kts do not). Here the unknowns
+        it trims (JSBSim 1.3.3's c310 at 4 000 ft: 116 and 128 kts trim, 120 and 124 kts do not). Here the unknowns
         x = (α, throttle, elevator, aileron and rudder commands, φ), with β = 0 and the request's flight path
         angle, are solved together for zero body accelerations f(x) = (u̇, v̇, ẇ, ṗ, q̇, ṙ): the Jacobian by
         forward differences, a damped step x ← x − λ J⁻¹ f halved until the scaled residual falls, every unknown
         kept within its range. Each f(x) restores the state and commands exactly as a trimmed snapshot is
-        restored (`restore`): actuators at their commands, engines at their steady state."""
+        restored (`restore`): actuators at their commands, engines at their steady state. Newton starts from
+        `start` (an earlier solution at this point) when given, else from NEWTON_TRIM_THROTTLES in turn; returns
+        the solution."""
         fdm = self.fdm
         knobs = req.get("knobs", {})
         position = {k: fdm[k] for k in SNAPSHOT_STATE[:3]}
@@ -452,6 +472,10 @@ class Sim:
         unknowns += [(s, -1.0, 1.0) for s in ("elevator", "aileron", "rudder") if s in self.surfaces]
         unknowns += [("phi", -0.5, 0.5)]
         names = [u[0] for u in unknowns]
+        if len(names) != len(TRIM_ACCELERATIONS):
+            raise BridgeError("trim_failed", f"{self.aircraft} cannot trim at {req['altitude_ft']} ft, "
+                                             f"{req['speed_kts']} kts: {jsbsim_error} (and without an elevator, "
+                                             "aileron and rudder flightid's own trim cannot run)")
 
         def accelerations(x):
             v = dict(zip(names, x))
@@ -473,36 +497,40 @@ class Sim:
             self.restore({"state": state, "commands": commands}, knobs)
             return [fdm[k] for k in TRIM_ACCELERATIONS]
 
-        def merit(f):
-            return sum((fi / tol) ** 2 for fi, tol in zip(f, TRIM_TOLERANCES))
-
         lo = [u[1] for u in unknowns]
         hi = [u[2] for u in unknowns]
+        every = range(len(names))
 
-        def trimmed(f):
-            return all(abs(fi) < tol for fi, tol in zip(f, TRIM_TOLERANCES))
+        def merit(f, rows=every):
+            return sum((f[i] / TRIM_TOLERANCES[i]) ** 2 for i in rows)
 
-        def newton(x):
+        def trimmed(f, rows=every):
+            return all(abs(f[i]) < TRIM_TOLERANCES[i] for i in rows)
+
+        def newton(x, free=every, rows=every):
+            """Newton on the unknowns `free` for the accelerations `rows` (as many), the other unknowns held."""
             f = accelerations(x)
             for _ in range(NEWTON_TRIM_ITERATIONS):
-                if trimmed(f):
+                if trimmed(f, rows):
                     break
                 jac = []
-                for j in range(len(x)):
+                for j in free:
                     h = NEWTON_TRIM_STEP[names[j]]
                     xj = list(x)
                     xj[j] += h if xj[j] + h <= hi[j] else -h
                     fj = accelerations(xj)
-                    jac.append([(a - b) / (xj[j] - x[j]) for a, b in zip(fj, f)])
+                    jac.append([(fj[i] - f[i]) / (xj[j] - x[j]) for i in rows])
                 try:
-                    step = solve(transpose(jac), [-fi for fi in f])
+                    step = solve(transpose(jac), [-f[i] for i in rows])
                 except ZeroDivisionError:
                     break
-                lam, m0 = 1.0, merit(f)
+                lam, m0 = 1.0, merit(f, rows)
                 while lam >= NEWTON_TRIM_SMALLEST_STEP:
-                    xn = [min(h, max(lo_, xi + lam * d)) for xi, d, lo_, h in zip(x, step, lo, hi)]
+                    xn = list(x)
+                    for j, d in zip(free, step):
+                        xn[j] = min(hi[j], max(lo[j], x[j] + lam * d))
                     fn = accelerations(xn)
-                    if merit(fn) < m0:
+                    if merit(fn, rows) < m0:
                         x, f = xn, fn
                         break
                     lam *= 0.5
@@ -510,26 +538,32 @@ class Sim:
                     break
             return x, f
 
-        # Thrust need not rise with the throttle: the c310's propeller governor makes it dip (at 4 000 ft, 120 kts:
-        # 227.4 lbf at 0.720, 224.3 at 0.727, 229.6 at 0.734), and a Newton step stalls in the dip. So it starts
-        # again from other throttles, the best ending kept.
+        # Thrust need not rise with the throttle, nor continuously: the c310's propeller governor makes it dip (at
+        # 4 000 ft, 120 kts: 227.6 lbf at throttle 0.720, 224.3 at 0.727) and jump (205.9 lbf at 0.702, 225.7 at
+        # 0.708), and a Newton step stalls there. So it starts again from other throttles, the best ending kept;
+        # where none trims, the throttle is held where the best ended and the other five unknowns are solved for
+        # v̇, ẇ, ṗ, q̇, ṙ, which leaves u̇ to the acceptance (TRIM_ACCEPTED).
         best = None
-        for throttle in NEWTON_TRIM_THROTTLES:
-            x, f = newton([0.05, throttle] + [0.0] * (len(names) - 2))
+        starts = [[0.05, throttle] + [0.0] * (len(names) - 2) for throttle in NEWTON_TRIM_THROTTLES]
+        for x0 in ([start] if start else []) + starts:
+            x, f = newton(x0)
             if best is None or merit(f) < merit(best[1]):
                 best = (x, f)
             if trimmed(f):
                 break
+        if not trimmed(best[1]):
+            best = newton(best[0], [i for i in every if names[i] != "throttle"], every[1:])
         x, f = best
         f = accelerations(x)
-        if not all(abs(fi) < tol for fi, tol in zip(f, TRIM_TOLERANCES)):
+        if not all(abs(fi) < tol for fi, tol in zip(f, TRIM_ACCEPTED)):
             ended = ", ".join(f"{n} {xi:.4g}" for n, xi in zip(names, x))
-            worst = max(range(len(f)), key=lambda i: abs(f[i]) / TRIM_TOLERANCES[i])
+            worst = max(range(len(f)), key=lambda i: abs(f[i]) / TRIM_ACCEPTED[i])
             raise BridgeError(
                 "trim_failed",
                 f"{self.aircraft} cannot trim at {req['altitude_ft']} ft, {req['speed_kts']} kts: JSBSim's trim "
                 f"failed ({jsbsim_error}), and flightid's own ended at {ended} with "
                 f"{TRIM_ACCELERATIONS[worst]} = {f[worst]:.3g}")
+        return x
 
     def set_knobs(self, knobs):
         """Sets a trim request's knobs and pre-trim properties (right after a model reset); every property an

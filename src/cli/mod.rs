@@ -38,7 +38,7 @@ pub struct Cli {
 pub enum Command {
     /// The main job on the default aircraft: trim, linearize, three doublets, identification summary.
     Demo(demo::DemoCmd),
-    /// Trim an aircraft at a steady level-flight point (JSBSim full trim).
+    /// Trim an aircraft at a steady level-flight point (JSBSim full trim; flightid's own Newton trim where it fails).
     Trim(trim::TrimCmd),
     /// JSBSim's linearization at a trim point: A, B, C, D, transfer functions, modes.
     Linearize(linearize::LinearizeCmd),
