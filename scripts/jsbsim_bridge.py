@@ -490,7 +490,8 @@ class Sim:
                 "velocities/p-rad_sec": 0.0, "velocities/q-rad_sec": 0.0, "velocities/r-rad_sec": 0.0}
             commands = dict(held)
             for i in range(self.engines):
-                commands[f"fcs/throttle-cmd-norm[{i}]"] = v["throttle"]
+                if f"fcs/throttle-cmd-norm[{i}]" in held:
+                    commands[f"fcs/throttle-cmd-norm[{i}]"] = v["throttle"]
             for s in ("elevator", "aileron", "rudder"):
                 if s in v:
                     commands[self.surfaces[s]["command"]] = v[s]
@@ -576,10 +577,10 @@ class Sim:
 
     def trim_commands(self):
         """Properties that hold the trim: throttles, mixtures, trim tabs, surface commands."""
-        names = [f"fcs/throttle-cmd-norm[{i}]" for i in range(self.engines)]
-        names += [f"fcs/mixture-cmd-norm[{i}]" for i in range(self.engines)]
-        names += [p for p in ("fcs/pitch-trim-cmd-norm", "fcs/roll-trim-cmd-norm", "fcs/yaw-trim-cmd-norm")
-                  if self.pm.hasNode(p)]
+        names = [f"fcs/{c}-cmd-norm[{i}]" for c in ("throttle", "mixture") for i in range(self.engines)]
+        names += ["fcs/pitch-trim-cmd-norm", "fcs/roll-trim-cmd-norm", "fcs/yaw-trim-cmd-norm"]
+        # a glider has no mixture, a model may lack a trim tab
+        names = [p for p in names if self.pm.hasNode(p)]
         names += [spec["command"] for spec in self.surfaces.values()]
         return names
 
