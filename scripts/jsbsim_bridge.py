@@ -287,6 +287,9 @@ TRIM_ACCEPTED = (0.03, 0.03, 0.03, 1e-4, 1e-4, 1e-4)
 TRIM_METHOD = "flightid/trim-method"
 # The keys of a trim request that name the point (not the model changes, knobs, the flight asks for).
 TRIM_POINT_KEYS = ("altitude_ft", "speed_kts", "heading_deg", "gamma_deg", "latitude_deg", "longitude_deg", "ic")
+# The value of a coefficient knob (flightid/knob/…: a factor) and of an added term (flightid/added/…) that leaves
+# the aircraft as configured.
+NEUTRAL_KNOB = {"knob": 1.0, "added": 0.0}
 # Newton iterations of flightid's own trim, and the forward-difference step of each unknown (rad, or command).
 NEWTON_TRIM_ITERATIONS = 20
 # A step is halved until the residual falls, down to this share of the Newton step; below it the start has stalled.
@@ -385,26 +388,48 @@ class Sim:
 
     def trim(self, req):
         """JSBSim's full trim at the request's point; where it fails, flightid's own (`newton_trim`)."""
-        # A point where JSBSim's trim failed once goes to flightid's own straight away, from where it ended there:
-        # a failed JSBSim trim takes seconds, and a search that trims one point with many model changes wants one
-        # trim method for all of them.
+        # Which trim a request gets depends on its point and on the aircraft as configured, never on what the
+        # process trimmed before, and a search that trims one point with many model changes gets one trim for all
+        # of them: a point where JSBSim's trim fails for the aircraft as configured (every coefficient factor 1,
+        # every added term 0) is a Newton point, trimmed by flightid's own for every model. Elsewhere a model
+        # change that JSBSim cannot trim is a failed trim, as it always was (a fit takes it for a trial that
+        # explains nothing). A Newton point is remembered, with the solution found there last: a failed JSBSim
+        # trim takes seconds.
         point = json.dumps({k: v for k, v in req.items() if k in TRIM_POINT_KEYS}, sort_keys=True)
         self.start_trim(req)
-        if point in self.newton_starts:
-            self.newton_starts[point] = self.newton_trim(req, "it failed here before", self.newton_starts[point])
-            self.trim_method = 1.0
-        else:
+        if point not in self.newton_starts:
             try:
                 self.fdm["simulation/do_simple_trim"] = 1
                 self.trim_method = 0.0
             except Exception as e:  # jsbsim.TrimFailureError; the state is garbage afterwards
-                self.start_trim(req)
+                if not self.is_newton_point(req):
+                    raise BridgeError("trim_failed", f"{self.aircraft} cannot trim at {req['altitude_ft']} ft, "
+                                                     f"{req['speed_kts']} kts: {e}")
                 self.newton_starts[point] = None
+                self.start_trim(req)
                 self.newton_starts[point] = self.newton_trim(req, e)
                 self.trim_method = 1.0
+        else:
+            self.newton_starts[point] = self.newton_trim(req, "it fails here", self.newton_starts[point])
+            self.trim_method = 1.0
         self.trimmed = True
         self.trim_surface = {s: self.fdm[f"flightid/aero/{s}-rad"] for s in self.surfaces}
         return self.report(req)
+
+    def is_newton_point(self, req):
+        """Whether JSBSim's trim fails at the point of `req`, where it has just failed, for the aircraft as
+        configured (see `trim`): the request itself when it changes no coefficient, else one more JSBSim trim."""
+        knobs = req.get("knobs", {})
+        neutral = {k: NEUTRAL_KNOB.get(k.split("/")[1], v) if k.startswith(("flightid/knob/", "flightid/added/"))
+                   else v for k, v in knobs.items()}
+        if neutral == knobs:
+            return True
+        self.start_trim(req | {"knobs": neutral})
+        try:
+            self.fdm["simulation/do_simple_trim"] = 1
+            return False
+        except Exception:
+            return True
 
     def report(self, req):
         """A trim's reply: the request's `report` properties, and which trim found it (TRIM_METHOD)."""
