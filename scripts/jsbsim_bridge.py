@@ -41,6 +41,7 @@ import xml.etree.ElementTree as ET
 PROTO = os.fdopen(os.dup(1), "wb", buffering=0)
 os.dup2(2, 1)  # C++ std::cout now goes to stderr
 
+import numpy  # noqa: E402  (jsbsim imports it anyway)
 import jsbsim  # noqa: E402  (after the fd swap so import-time prints cannot reach the protocol)
 
 
@@ -300,29 +301,6 @@ NEWTON_TRIM_STEP = {"alpha": 1e-4, "throttle": 1e-3, "elevator": 1e-3, "aileron"
                     "phi": 1e-4}
 
 
-def transpose(rows):
-    return [list(c) for c in zip(*rows)]
-
-
-def solve(a, b):
-    """x with a x = b, by Gaussian elimination with partial pivoting (a square, small); ZeroDivisionError when
-    a is singular."""
-    n = len(b)
-    m = [list(r) + [bi] for r, bi in zip(a, b)]
-    for k in range(n):
-        p = max(range(k, n), key=lambda i: abs(m[i][k]))
-        if m[p][k] == 0.0:
-            raise ZeroDivisionError("singular")
-        m[k], m[p] = m[p], m[k]
-        for i in range(k + 1, n):
-            r = m[i][k] / m[k][k]
-            m[i] = [a - r * b for a, b in zip(m[i], m[k])]
-    x = [0.0] * n
-    for k in range(n - 1, -1, -1):
-        x[k] = (m[k][n] - sum(m[k][j] * x[j] for j in range(k + 1, n))) / m[k][k]
-    return x
-
-
 class Sim:
     def __init__(self, req):
         self.aircraft = req["aircraft"]
@@ -546,9 +524,9 @@ class Sim:
                     xj[j] += h if xj[j] + h <= hi[j] else -h
                     fj = accelerations(xj)
                     jac.append([(fj[i] - f[i]) / (xj[j] - x[j]) for i in rows])
-                try:
-                    step = solve(transpose(jac), [-f[i] for i in rows])
-                except ZeroDivisionError:
+                try:  # jac holds the Jacobian's columns
+                    step = numpy.linalg.solve(numpy.array(jac).T, [-f[i] for i in rows]).tolist()
+                except numpy.linalg.LinAlgError:  # an unknown that moves no acceleration
                     break
                 lam, m0 = 1.0, merit(f, rows)
                 while lam >= NEWTON_TRIM_SMALLEST_STEP:
