@@ -47,9 +47,10 @@
 //!
 //! β̇ = [q̄S C_Y/m + g cos θ sin φ]/V + p sin α − r cos α
 //! ṗ = (I_zz L' + I_xz N')/Γ,  ṙ = (I_xz L' + I_xx N')/Γ,  Γ = I_xx I_zz − I_xz²,
-//! L' = q̄Sb C_l + (I_yy − I_zz) q r + I_xz p q,  N' = q̄Sb C_n + (I_xx − I_yy) p q − I_xz q r (Etkin & Reid eq. 4.7,5)
+//! L' = q̄Sb C_l + C_lT T + (I_yy − I_zz) q r + I_xz p q,  N' = q̄Sb C_n + (I_xx − I_yy) p q − I_xz q r (Etkin & Reid eq. 4.7,5)
 //! φ̇ = p + tan θ (q sin φ + r cos φ)
-//! C_(Y,l,n) = C_0 + C_β β + C_p p̂ + C_r r̂ + C_δa δa + C_δr δr.
+//! C_(Y,l,n) = C_0 + C_β β + C_p p̂ + C_r r̂ + C_δa δa + C_δr δr; C_lT T the propeller's torque reaction, C_lT
+//! in m (`aero::regression::PROPELLER_TORQUE`), with the thrust T as an input where every record carries it.
 //! Outputs: β_vane = β + (r x_v − p z_v)/V − τ_β β̇; a_y at the IMU = q̄S C_Y/m + (ω̇ × r)_y + (ω × (ω × r))_y.
 
 use super::airframe::SensorPositions;
@@ -80,7 +81,7 @@ pub const LONGITUDINAL_PARAMETERS: [&str; 20] = [
 ];
 
 /// Lateral-directional model parameters, in θ order.
-pub const LATERAL_PARAMETERS: [&str; 19] = [
+pub const LATERAL_PARAMETERS: [&str; 20] = [
     "CY_0",
     "CY_beta",
     "CY_p",
@@ -100,6 +101,7 @@ pub const LATERAL_PARAMETERS: [&str; 19] = [
     "Cn_da",
     "Cn_dr",
     "tau_beta_s",
+    "Cl_T",
 ];
 
 /// Longitudinal states.
@@ -371,6 +373,7 @@ mod lat {
     pub const CL: usize = 6;
     pub const CN: usize = 12;
     pub const TAU: usize = 18;
+    pub const TORQUE: usize = 19;
 }
 
 /// The inputs the lateral equations read at one instant (V, α, θ, q measured).
@@ -390,6 +393,8 @@ pub struct LatInputs {
     pub q_rad_s: f64,
     /// Air density, kg/m³.
     pub density_kg_m3: f64,
+    /// Total thrust, N (0 when the records carry none).
+    pub thrust_n: f64,
 }
 
 /// The lateral model's derivatives and side force.
@@ -420,7 +425,7 @@ pub fn lateral(c: &Constants, theta: &[f64], x: &[f64], u: &LatInputs) -> LatEva
     let mp = &c.mass;
     let (ixx, iyy, izz, ixz) = (mp.ixx_kg_m2, mp.iyy_kg_m2, mp.izz_kg_m2, mp.ixz_kg_m2);
     let q = u.q_rad_s;
-    let l1 = qbar_s * b * cl + (iyy - izz) * q * r + ixz * p * q;
+    let l1 = qbar_s * b * cl + theta[lat::TORQUE] * u.thrust_n + (iyy - izz) * q * r + ixz * p * q;
     let n1 = qbar_s * b * cn + (ixx - iyy) * p * q - ixz * q * r;
     let gam = ixx * izz - ixz * ixz;
     let pdot = (izz * l1 + ixz * n1) / gam;

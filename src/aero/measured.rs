@@ -320,6 +320,7 @@ pub fn equation_error_measured(
             include_alphadot,
             thrust_inclination_rad: thrust.map_or(0.0, |t| t.inclination_rad),
             thrust_moment_arm_m: thrust.map_or(0.0, |t| t.moment_arm_m),
+            propeller_torque: true,
             half_window: 3,
             ..EquationErrorOptions::default()
         };

@@ -56,6 +56,7 @@ use super::measured::{
     AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, Nonlinearity,
     ReferenceCondition,
 };
+use super::regression::PROPELLER_TORQUE;
 use crate::data::{self, Channel, G0_M_S2};
 use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signature, StateModel};
 
@@ -192,24 +193,31 @@ pub struct LateralModel {
     constants: Constants,
     signature: Signature,
     outputs: Vec<LatOutput>,
+    /// Whether `thrust_n` follows [`LATERAL_INPUTS`] (else T = 0).
+    thrust: bool,
 }
 
 impl LateralModel {
-    /// The model with these outputs; inputs [`LATERAL_INPUTS`].
-    pub fn new(constants: Constants, outputs: Vec<LatOutput>) -> Self {
+    /// The model with these outputs; inputs [`LATERAL_INPUTS`], then `thrust_n` with `thrust`.
+    pub fn new(constants: Constants, outputs: Vec<LatOutput>, thrust: bool) -> Self {
+        let mut inputs: Vec<String> = LATERAL_INPUTS.map(String::from).to_vec();
+        if thrust {
+            inputs.push("thrust_n".into());
+        }
         LateralModel {
             constants,
             signature: Signature {
                 parameters: LATERAL_PARAMETERS.map(String::from).to_vec(),
                 states: LATERAL_STATES.map(String::from).to_vec(),
-                inputs: LATERAL_INPUTS.map(String::from).to_vec(),
+                inputs,
                 outputs: outputs.iter().map(|o| o.column().to_string()).collect(),
             },
             outputs,
+            thrust,
         }
     }
 
-    fn inputs(u: &[f64]) -> LatInputs {
+    fn inputs(&self, u: &[f64]) -> LatInputs {
         LatInputs {
             aileron_rad: u[0],
             rudder_rad: u[1],
@@ -218,6 +226,7 @@ impl LateralModel {
             theta_rad: u[4],
             q_rad_s: u[5],
             density_kg_m3: u[6],
+            thrust_n: if self.thrust { u[7] } else { 0.0 },
         }
     }
 }
@@ -228,11 +237,11 @@ impl StateModel for LateralModel {
     }
 
     fn derivatives(&self, theta: &[f64], x: &[f64], u: &[f64], dx: &mut [f64]) {
-        dx.copy_from_slice(&fm::lateral(&self.constants, theta, x, &Self::inputs(u)).dx);
+        dx.copy_from_slice(&fm::lateral(&self.constants, theta, x, &self.inputs(u)).dx);
     }
 
     fn outputs(&self, theta: &[f64], x: &[f64], u: &[f64], y: &mut [f64]) {
-        let inputs = Self::inputs(u);
+        let inputs = self.inputs(u);
         let e = fm::lateral(&self.constants, theta, x, &inputs);
         for (yo, o) in y.iter_mut().zip(&self.outputs) {
             *yo = o.value(&self.constants, theta, x, &inputs, &e);
@@ -414,6 +423,8 @@ fn fit_lateral(
 ) -> Result<AxisFit, MeasuredError> {
     let constants = model_constants(setup.airframe, false, setup.cond.airspeed_m_s)?;
     let outputs = outputs_in_every_record(&LatOutput::ALL, LatOutput::column, records, "lateral")?;
+    // The propeller's torque reaction follows the thrust (`aero::regression::PROPELLER_TORQUE`).
+    let thrust = records.iter().all(|(_, r)| r.column("thrust_n").is_some());
     let mut recs = Vec::new();
     let mut zero_filled = BTreeSet::new();
     for (name, raw) in records {
@@ -425,7 +436,7 @@ fn fit_lateral(
             .collect();
         need(name, raw, "airspeed_m_s", "the lateral model's input")?;
         let n = raw.len();
-        let inputs = LATERAL_INPUTS
+        let mut inputs: Vec<Vec<f64>> = LATERAL_INPUTS
             .iter()
             .map(|&c| {
                 if c == DENSITY {
@@ -440,6 +451,9 @@ fn fit_lateral(
                 }
             })
             .collect();
+        if thrust {
+            inputs.push(need(name, raw, "thrust_n", "")?.to_vec());
+        }
         let columns: Vec<&str> = outputs.iter().map(|o| o.column()).collect();
         recs.push(core_record(name, raw, inputs, &columns, x0)?);
     }
@@ -473,6 +487,9 @@ fn fit_lateral(
     if !outputs.contains(&LatOutput::Beta) {
         still.insert("tau_beta_s");
     }
+    if !thrust {
+        still.insert(PROPELLER_TORQUE);
+    }
     let params = parameters(
         &LATERAL_PARAMETERS,
         &LAT_HELD,
@@ -482,7 +499,7 @@ fn fit_lateral(
         setup.options,
         notes,
     );
-    let model = LateralModel::new(constants, outputs.clone());
+    let model = LateralModel::new(constants, outputs.clone(), thrust);
     let bias = [
         LatOutput::P,
         LatOutput::R,

@@ -165,6 +165,8 @@ pub fn lateral_modes_at(
         theta_rad: cond.theta_rad,
         q_rad_s: 0.0,
         density_kg_m3: cond.density_kg_m3,
+        // the torque is a moment the thrust sets, not the lateral states: no part of the modes
+        thrust_n: 0.0,
     };
     let f = |x: &[f64; 4]| fm::lateral(c, theta, x, &u).dx;
     fm::lateral_modes(&fm::jacobian_eigenvalues(f, [0.0; 4]).unwrap_or_default())

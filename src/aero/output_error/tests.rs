@@ -296,3 +296,178 @@ fn in_a_gust_the_flight_path_equations_are_the_body_forces_projected_on_the_iner
         e.dx[1]
     );
 }
+
+/// A lateral flight whose rolling moment carries a propeller's torque reaction, C_lT T with C_lT = −0.5 m
+/// (`aero::regression::PROPELLER_TORQUE`), and a thrust that swings with the aileron 0.3 s late (a ±1250 N
+/// swing, a quarter of the aileron's moment) plus two slow sines: the same records fitted by output error,
+/// and the aileron record by equation error. Both recover C_lT, C_lp and C_lδa; equation error without the
+/// term puts C_lp 11 % off (the thrust follows the roll rate the aileron built), so the term is what the fits
+/// need.
+#[test]
+fn the_propeller_torque_term_takes_the_thrust_borne_rolling_moment_off_the_roll_derivatives() {
+    use crate::aero::regression::{equation_error, EquationErrorOptions, FlightRecord};
+    let c = constants();
+    let truth: Vec<f64> = LATERAL_PARAMETERS
+        .iter()
+        .map(|n| match *n {
+            "CY_beta" => -0.6,
+            "CY_dr" => 0.15,
+            "Cl_beta" => -0.09,
+            "Cl_p" => -0.5,
+            "Cl_r" => 0.1,
+            "Cl_da" => 0.18,
+            "Cl_dr" => 0.01,
+            "Cn_beta" => 0.07,
+            "Cn_p" => -0.03,
+            "Cn_r" => -0.1,
+            "Cn_da" => -0.01,
+            "Cn_dr" => -0.07,
+            PROPELLER_TORQUE => -0.5,
+            _ => 0.0,
+        })
+        .collect();
+    let outputs = LatOutput::ALL[..5].to_vec();
+    let model = LateralModel::new(c, outputs.clone(), true);
+    let n = 600;
+    let time_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.02).collect();
+    let mut records = Vec::new();
+    for r in 0..2 {
+        let step = multistep(n, 0.05, 0.0);
+        let (da, dr) = if r == 0 {
+            (step, vec![0.0; n])
+        } else {
+            (vec![0.0; n], step)
+        };
+        let thrust: Vec<f64> = (0..n)
+            .map(|k| {
+                let t = time_s[k];
+                let lagged = da[k.saturating_sub(15)];
+                2500.0
+                    + 25000.0 * lagged
+                    + 400.0 * (0.9 * t).sin()
+                    + 300.0 * (2.3 * t + r as f64).sin()
+            })
+            .collect();
+        let inputs = vec![
+            da,
+            dr,
+            vec![55.0; n],
+            vec![0.05; n],
+            vec![0.05; n],
+            vec![0.0; n],
+            vec![1.1; n],
+            thrust,
+        ];
+        let run = Run {
+            record: r,
+            time_s: &time_s,
+            input: InputSignal::measured(&time_s, &inputs, InputHold::Linear),
+            max_step_s: 0.01,
+        };
+        let clean = simulate_states(&model, &truth, &[0.0; 4], &run).unwrap();
+        let sigma = [0.001, 0.001, 0.001, 0.001, 0.02];
+        let measured = clean
+            .iter()
+            .enumerate()
+            .map(|(o, y)| {
+                let e = noise(100 + 10 * r as u64 + o as u64, n, sigma[o]);
+                y.iter().zip(e).map(|(v, e)| v + e).collect()
+            })
+            .collect();
+        records.push(Record {
+            name: format!("rec{r}"),
+            time_s: time_s.clone(),
+            inputs,
+            outputs: measured,
+            initial_state: vec![0.001, 0.0, 0.0, 0.002],
+        });
+    }
+    let check = |name: &str, value: f64, tolerance: f64| {
+        let k = LATERAL_PARAMETERS.iter().position(|n| *n == name).unwrap();
+        let err = (value - truth[k]).abs() / truth[k].abs();
+        assert!(err < tolerance, "{name}: {value} vs {}", truth[k]);
+    };
+
+    // Output error, every parameter but the held ones started 25 % off.
+    let starts: BTreeMap<String, f64> = LATERAL_PARAMETERS
+        .iter()
+        .zip(&truth)
+        .map(|(n, v)| (n.to_string(), 1.25 * v))
+        .collect();
+    let mut notes = Vec::new();
+    let options = OutputErrorOptions::default();
+    let params = parameters(
+        &LATERAL_PARAMETERS,
+        &LAT_HELD,
+        &starts,
+        &BTreeMap::new(),
+        &BTreeSet::new(),
+        &options,
+        &mut notes,
+    );
+    let nuisance = Nuisance {
+        initial_state: (0..4).collect(),
+        ..Nuisance::default()
+    };
+    let fit = fit_model(&model, &params, &records, &nuisance, &options, c).unwrap();
+    assert!(fit.estimate.converged, "{:?}", fit.estimate.stop);
+    for name in ["Cl_p", "Cl_da", PROPELLER_TORQUE] {
+        check(name, fit.estimate.parameter(name).unwrap().value, 0.03);
+    }
+
+    // Equation error on the aileron record's states, with and without the term.
+    let rec = &records[0];
+    let state = |s: usize| -> Vec<f64> {
+        let run = Run {
+            record: 0,
+            time_s: &time_s,
+            input: InputSignal::measured(&time_s, &rec.inputs, InputHold::Linear),
+            max_step_s: 0.01,
+        };
+        simulate_states(&model, &truth, &[0.0; 4], &run).unwrap()[s].clone()
+    };
+    let (beta, p, r) = (state(0), state(1), state(2));
+    let flight = FlightRecord {
+        time_s: &time_s,
+        beta_rad: Some(&beta),
+        p_rad_s: Some(&p),
+        r_rad_s: Some(&r),
+        airspeed_m_s: Some(&rec.inputs[2]),
+        aileron_rad: Some(&rec.inputs[0]),
+        rudder_rad: Some(&rec.inputs[1]),
+        thrust_n: Some(&rec.inputs[7]),
+        ..Default::default()
+    };
+    let roll = |propeller_torque: bool| {
+        let opts = EquationErrorOptions {
+            air_density_kg_m3: 1.1,
+            g_m_s2: c.g_m_s2,
+            propeller_torque,
+            ..Default::default()
+        };
+        let res = equation_error(&flight, &c.mass, &c.geometry, &opts).unwrap();
+        let cl = res
+            .equations
+            .iter()
+            .find(|e| e.coefficient == "Cl")
+            .unwrap();
+        let value = |name: &str| cl.terms.iter().find(|t| t.name == name).map(|t| t.value);
+        (value("Cl_p"), value("Cl_da"), value(PROPELLER_TORQUE))
+    };
+    let (clp, clda, clt) = roll(true);
+    check("Cl_p", clp.unwrap(), 0.03);
+    check("Cl_da", clda.unwrap(), 0.03);
+    check(PROPELLER_TORQUE, clt.unwrap(), 0.05);
+    let (clp, _, clt) = roll(false);
+    assert!(clt.is_none());
+    let k = LATERAL_PARAMETERS
+        .iter()
+        .position(|n| *n == "Cl_p")
+        .unwrap();
+    assert!(
+        (clp.unwrap() - truth[k]).abs() > 0.08 * truth[k].abs(),
+        "without the term C_lp {} vs {}",
+        clp.unwrap(),
+        truth[k]
+    );
+}
