@@ -193,6 +193,9 @@ class Aircraft:
                             ("fcs/throttle-cmd-norm", 0.7)):
                 with contextlib.suppress(Exception):
                     f[f"{prop}[{e}]"] = v
+        # Models flown in FlightGear (the fokker50, the p51d's autothrottle) read the throttle levers from
+        # FlightGear's /controls tree, which nothing creates outside it: create it before the FCS first runs.
+        self.set_throttle(0.7)
         f["propulsion/magneto_cmd"] = 3
         f["propulsion/starter_cmd"] = 1
         with quiet():
@@ -206,9 +209,9 @@ class Aircraft:
         for e in range(4):
             with contextlib.suppress(Exception):
                 self.fdm[f"fcs/throttle-cmd-norm[{e}]"] = v
-        # The p51d's manifold-pressure autothrottle reads the FlightGear throttle.
-        with contextlib.suppress(Exception):
-            self.fdm["/controls/engines/engine/throttle"] = v
+            # FlightGear's throttle levers, which some models' FCS copy onto throttle-cmd-norm
+            with contextlib.suppress(Exception):
+                self.fdm[f"/controls/engines/engine[{e}]/throttle"] = v
 
     def settle(self, seconds):
         """Fly the trim: PI loops on airspeed (throttle), flight path (pitch trim) and bank (aileron trim),
