@@ -76,8 +76,10 @@ SURFACE_READS = {
     "aileron": ["fcs/effective-aileron-pos", "fcs/left-aileron-pos-rad", "fcs/aileron-pos-rad"],
     "rudder": ["fcs/rudder-pos-rad"],
 }
-# Trim altitude (ft) and true airspeed (kts) per aircraft; others fly at 6000 ft, 180 kts unless told.
-DEFAULTS = {"p51d": (6000.0, 200.0), "c310": (5000.0, 150.0), "pa28": (4000.0, 110.0), "737": (15000.0, 280.0)}
+# Trim altitude (ft) and true airspeed (kts) per aircraft; others fly at 6000 ft and the speed of a cruise
+# lift coefficient (Aircraft.cruise_speed_kts) unless told.
+DEFAULTS = {"p51d": (6000.0, 200.0), "c310": (5000.0, 150.0), "pa28": (4000.0, 110.0), "737": (15000.0, 280.0),
+            "pc7": (6000.0, 180.0)}
 
 
 @contextlib.contextmanager
@@ -204,6 +206,15 @@ class Aircraft:
         f["gear/gear-cmd-norm"] = 0.0
         f["gear/gear-pos-norm"] = 0.0
         self.h0_ft, self.v0_kts = altitude_ft, speed_kts
+
+    def cruise_speed_kts(self, lift_coefficient=0.4):
+        """The true airspeed at which the loaded aircraft (after start()) flies level at the lift coefficient
+        given, at the initial altitude: V = sqrt(2 W / (ρ S C_L)). A speed for models without a default (a fixed
+        180 kts would be past the never-exceed speed of a c182 or a J3 Cub)."""
+        f = self.fdm
+        v_fps = math.sqrt(2.0 * f["inertia/weight-lbs"]
+                          / (f["atmosphere/rho-slugs_ft3"] * f["metrics/Sw-sqft"] * lift_coefficient))
+        return v_fps * FT / KT
 
     def set_throttle(self, v):
         for e in range(4):
@@ -605,7 +616,7 @@ def main():
                     help="JSBSim's integrator of the body rates and attitude (module doc)")
     ap.add_argument("--records", default="lon1,lon2,lat1,lat2")
     args = ap.parse_args()
-    alt, spd = DEFAULTS.get(args.aircraft, (6000.0, 180.0))
+    alt, spd = DEFAULTS.get(args.aircraft, (6000.0, None))
     alt = args.altitude_ft or alt
     spd = args.speed_kts or spd
     rng = np.random.default_rng(args.seed)
@@ -615,6 +626,9 @@ def main():
     vane_m = (0.0, 0.0, 0.0) if ideal else (3.0, 0.0, 0.1)
     with tempfile.TemporaryDirectory() as work:
         ac = Aircraft(args.aircraft, args.sim_hz, work, args.integrator)
+        if spd is None:
+            ac.start(alt, 150.0)
+            spd = round(ac.cruise_speed_kts())
         ac.start(alt, spd)
         ac.settle(args.settle_s)
         if not ac.steady():
