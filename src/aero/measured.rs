@@ -18,8 +18,8 @@ use serde::Serialize;
 
 use super::airframe::{Airframe, AirframeError, SensorPositions};
 use super::regression::{
-    equation_error, lesq, savitzky_golay_derivative, EquationErrorOptions,
-    FlightRecord as Channels, RegressionResult,
+    consider_held_terms, equation_error, held_alphadot_note, lesq, savitzky_golay_derivative,
+    EquationErrorOptions, FlightRecord as Channels, RegressionResult,
 };
 use super::AeroError;
 use crate::data::{self, G0_M_S2};
@@ -225,10 +225,18 @@ pub struct MeasuredEquationError {
     /// Per coefficient, the angle of attack of its regression's rows (records stacked as the rows are) where
     /// every record has one: the structure screen's cross terms ([`structure_screen`]).
     pub alpha: BTreeMap<String, Vec<f64>>,
+    /// Terms held at 0 whose physical range the σ carry ([`consider_held_terms`]): name and σ.
+    pub considered: Vec<(String, f64)>,
 }
 
-/// One coefficient's regression over all records: term names, regressor columns, response.
-type Stacked = (Vec<String>, Vec<Vec<f64>>, Vec<f64>);
+/// One coefficient's regression over all records: term names, regressor columns, response, and the columns
+/// of the terms held and considered ([`RegressionResult::considered`]).
+type Stacked = (
+    Vec<String>,
+    Vec<Vec<f64>>,
+    Vec<f64>,
+    Vec<(String, Vec<f64>)>,
+);
 
 /// Equation error (Morelli & Klein §5.1, [`equation_error`]) over several measured records: each record's
 /// coefficients are reconstructed with its own airspeed, dynamic pressure and density and its sensors moved
@@ -318,6 +326,7 @@ pub fn equation_error_measured(
             air_density_kg_m3: ad.density_kg_m3,
             g_m_s2: G0_M_S2,
             include_alphadot,
+            consider_alphadot: true,
             thrust_inclination_rad: thrust.map_or(0.0, |t| t.inclination_rad),
             thrust_moment_arm_m: thrust.map_or(0.0, |t| t.moment_arm_m),
             propeller_torque: true,
@@ -369,10 +378,21 @@ pub fn equation_error_measured(
                 continue;
             }
             let names: Vec<String> = eq.terms.iter().map(|t| t.name.clone()).collect();
-            let entry = stacked
-                .entry(eq.coefficient)
-                .or_insert_with(|| (names.clone(), vec![Vec::new(); names.len()], Vec::new()));
-            if entry.0 != names {
+            let entry = stacked.entry(eq.coefficient).or_insert_with(|| {
+                let considered = eq.considered.iter().map(|(c, _)| (c.clone(), Vec::new()));
+                (
+                    names.clone(),
+                    vec![Vec::new(); names.len()],
+                    Vec::new(),
+                    considered.collect(),
+                )
+            });
+            let same_considered = entry
+                .3
+                .iter()
+                .map(|c| &c.0)
+                .eq(eq.considered.iter().map(|c| &c.0));
+            if entry.0 != names || !same_considered {
                 skipped.push((
                     eq.coefficient.to_string(),
                     format!(
@@ -385,6 +405,9 @@ pub fn equation_error_measured(
                 col.extend_from_slice(x);
             }
             entry.2.extend_from_slice(&eq.response);
+            for (col, (_, x)) in entry.3.iter_mut().zip(&eq.considered) {
+                col.1.extend_from_slice(x);
+            }
             let rows = alpha_rows.entry(eq.coefficient).or_insert(Some(Vec::new()));
             match (rows.as_mut(), rec.column(data::Channel::Alpha)) {
                 (Some(a), Some(alpha)) if alpha.len() == eq.response.len() => {
@@ -397,8 +420,11 @@ pub fn equation_error_measured(
     }
     let mut equations = Vec::new();
     let mut derivatives = BTreeMap::new();
-    for (coefficient, (names, cols, z)) in stacked {
-        let res = lesq(coefficient, &names, &cols, &z, None)?;
+    let mut considered = Vec::new();
+    for (coefficient, (names, cols, z, held)) in stacked {
+        let mut res = lesq(coefficient, &names, &cols, &z, None)?;
+        res.considered = held;
+        considered.extend(consider_held_terms(&mut res));
         for t in &res.terms {
             derivatives.insert(
                 t.name.clone(),
@@ -433,6 +459,7 @@ pub fn equation_error_measured(
             .into_iter()
             .filter_map(|(c, a)| Some((c.to_string(), a?)))
             .collect(),
+        considered,
     })
 }
 
@@ -752,6 +779,12 @@ pub fn equation_error_report(
              than a data system's skew can be: not shifted (in turbulence the vane reads gusts the kinematics \
              do not see)",
             1000.0 * v
+        ));
+    }
+    for (_, sd) in &ee.considered {
+        notes.push(held_alphadot_note(
+            *sd,
+            "add it as a regressor with --alphadot",
         ));
     }
     notes.extend(sign_convention_notes(&ee.derivatives));

@@ -56,7 +56,7 @@ use super::measured::{
     AirData, AxisChoice, Estimate, MeasuredError, MeasuredReport, ModeEstimate, Nonlinearity,
     ReferenceCondition,
 };
-use super::regression::PROPELLER_TORQUE;
+use super::regression::{held_alphadot_note, PROPELLER_TORQUE};
 use crate::data::{self, Channel, G0_M_S2};
 use crate::estimate::{self, Method, Model, Nuisance, Parameter, Record, Signature, StateModel};
 
@@ -713,14 +713,9 @@ pub fn output_error_report(
                 },
             );
         }
-        for (held_name, sd) in &est.considered {
-            notes.push(format!(
-                "{name}: {held_name} is held at 0 but the records cannot tell it from the other pitch \
-                 derivatives; the σ reported carries its physical range (0 ± {sd:.2}, from downwash lag), so \
-                 read C_mα, C_mq and C_mδe with that σ: held, C_mq stands for C_mq + C_mα̇ and C_mα for \
-                 C_mα + C_mα̇ Z_α c̄/(2V), the equivalent derivatives (free it with --free alphadot on records \
-                 that separate it)"
-            ));
+        for (_, sd) in &est.considered {
+            let note = held_alphadot_note(*sd, "free it with --free alphadot");
+            notes.push(format!("{name}: {note}"));
         }
         if !held.is_empty() {
             notes.push(format!("{name}: held (not estimated): {}", held.join(", ")));

@@ -63,6 +63,7 @@ fn synthetic_regression_bias_splits_exactly_into_the_nonlinear_terms() {
         fit_error_std: 0.0,
         regressors: cols.clone(),
         response: z.clone(),
+        considered: Vec::new(),
     };
     let mut rec = data::FlightRecord::new(t.clone());
     rec.push_column("alpha_rad", alpha.clone());

@@ -8,6 +8,7 @@ use super::OutputErrorOptions;
 use crate::aero::airframe::Airframe;
 use crate::aero::flight_models::{LATERAL_PARAMETERS, LONGITUDINAL_PARAMETERS};
 use crate::aero::measured::{equation_error_measured, AxisChoice};
+use crate::aero::regression::CM_ALPHADOT_CONSIDER;
 use crate::data;
 use crate::estimate::Parameter;
 
@@ -90,19 +91,6 @@ pub(super) const GUST_Q_GAIN: &str = "gust_q_gain";
 /// 120), taking the shape of other unmodelled motion.
 pub(super) const GUST_Q_GAIN_BOUND: f64 = 1.5;
 pub(super) const LAT_HELD: [&str; 4] = ["tau_beta_s", "CY_p", "CY_r", "CY_da"];
-
-/// σ of a held C_mα̇ as a fraction of |C_mq| (the start value, which carries C_mα̇ with it), carried into the
-/// covariance as a consider parameter ([`Parameter::considered`]). In level flight, to first order,
-/// α̇ = q + Z_α α + Z_δe δe + Z_V V̂ (the gravity term varies only with sin γ₀), so C_mα̇ α̇ c̄/2V is a
-/// combination of the other regressors and the records cannot separate it (Klein & Morelli §3.5). Held at
-/// 0, it leaves C_mq + C_mα̇ in C_mq, C_mα + C_mα̇ Z_α c̄/2V in C_mα and C_mδe + C_mα̇ Z_δe c̄/2V in C_mδe. On
-/// the JSBSim c310 (C_mα̇ −12.7, C_mq −80, Z_α −1.5 /s, c̄/2V 0.0097 s) that is +0.19 on C_mα (19 %): it came
-/// out 12–16 % high in still air and 15–22 % high in light turbulence, by equation error and output error
-/// alike, and no fit of these records can mend it. Downwash lag at the tail makes C_mα̇ = C_mq,tail dε/dα,
-/// with dε/dα from 0 to about 0.6 on conventional aircraft, i.e. C_mα̇ between 0 and 0.4 (C_mq + C_mα̇);
-/// 0.2 |C_mq| as one σ about the held 0 spans that band at 2σ, and the σ reported for C_mα, C_mq and C_mδe
-/// then says how far they could be off if the aircraft has the α̇ term it physically would.
-const CM_ALPHADOT_CONSIDER: f64 = 0.2;
 
 /// Start value and free flag of every parameter of a model (module doc), with the choices applied.
 #[allow(clippy::too_many_arguments)]
