@@ -106,11 +106,13 @@ pub struct EquationErrorOptions {
     /// Smooth every regressor with the differentiator's own polynomial fit, so that the differentiated
     /// outputs and the regressors see the same filter (otherwise fast surface motion biases the estimates).
     pub smooth_regressors: bool,
-    /// Add α̇ c̄/(2V) as a C_m regressor (separates C_mq from C_mα̇ only with rich, clean data). α̇ from the
-    /// flight-path kinematics ([`kinematic_alphadot`]) when a_x, a_z and θ are measured, else differentiated.
+    /// Add α̇ c̄/(2V) as a C_m regressor, α̇ the differentiated α (separates C_mq from C_mα̇ only with rich,
+    /// clean data).
     pub include_alphadot: bool,
     /// Without the α̇ regressor, keep its column in [`RegressionResult::considered`], so that
-    /// [`consider_held_terms`] can carry the held C_mα̇'s physical range into the σ of the others.
+    /// [`consider_held_terms`] can carry the held C_mα̇'s physical range into the σ of the others. α̇ there
+    /// from the flight-path kinematics ([`kinematic_alphadot`]) when a_x, a_z and θ are measured, else
+    /// differentiated.
     pub consider_alphadot: bool,
     /// Residual autocorrelation lags used by the coloured-residual correction. `None`: up to the first
     /// zero crossing of the residual autocorrelation (summing all lags of an estimated autocorrelation of
@@ -563,21 +565,21 @@ pub fn equation_error(
             let qhat: Vec<f64> = (0..n).map(|i| q[i] * c / (2.0 * v[i])).collect();
             let mut names = vec!["Cm_0", "Cm_alpha", "Cm_q", "Cm_de"];
             let mut cols = vec![ones.clone(), alpha.to_vec(), qhat, de.to_vec()];
-            let alphadot_column = || -> Result<Vec<f64>, AeroError> {
-                let adot = match kinematic_alphadot(record, v, alpha, q, options.g_m_s2) {
-                    Some(adot) => adot,
-                    None => diff(alpha)?,
-                };
-                Ok((0..n).map(|i| adot[i] * c / (2.0 * v[i])).collect())
+            let scaled = |adot: Vec<f64>| -> Vec<f64> {
+                (0..n).map(|i| adot[i] * c / (2.0 * v[i])).collect()
             };
             if options.include_alphadot {
                 names.push("Cm_alphadot");
-                cols.push(alphadot_column()?);
+                cols.push(scaled(diff(alpha)?));
             }
             let names: Vec<String> = names.into_iter().map(String::from).collect();
             let mut res = lesq_smoothed("Cm", &names, &cols, &z, options)?;
             if options.consider_alphadot && !options.include_alphadot {
-                let column = regressor_filter(&alphadot_column()?, "Cm", options)?;
+                let adot = match kinematic_alphadot(record, v, alpha, q, options.g_m_s2) {
+                    Some(adot) => adot,
+                    None => diff(alpha)?,
+                };
+                let column = regressor_filter(&scaled(adot), "Cm", options)?;
                 res.considered.push(("Cm_alphadot".to_string(), column));
             }
             Ok(res)
