@@ -22,7 +22,6 @@
 //! Time derivatives come from [`savitzky_golay_derivative`], a local polynomial fit (Savitzky & Golay 1964).
 //! It lives here until `crate::signal` provides a differentiator; it assumes uniform sampling.
 
-use faer::prelude::Solve;
 use faer::Mat;
 
 use crate::estimate::covariance;
@@ -30,6 +29,13 @@ use crate::signal::{sum_sq, LeastSquares, LeastSquaresError};
 
 use super::params::{Derivative, Geometry, MassProperties};
 use super::AeroError;
+
+mod held;
+mod smoothing;
+use held::kinematic_alphadot;
+pub use held::{consider_held_terms, held_alphadot_note, CM_ALPHADOT_CONSIDER};
+use smoothing::central_difference;
+pub use smoothing::{savitzky_golay_derivative, savitzky_golay_smooth};
 
 /// Measured time histories in SI units (radians), all the same length as `time_s`; absent channels `None`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -238,119 +244,6 @@ impl EquationErrorResult {
     pub fn term(&self, d: Derivative) -> Option<&RegressionTerm> {
         self.equations.iter().find_map(|e| e.term(d))
     }
-}
-
-/// First derivative of a uniformly sampled signal by a local polynomial least-squares fit of `order` over
-/// 2 `half_window` + 1 samples (Savitzky & Golay 1964); near the ends the window is shifted inside the record.
-pub fn savitzky_golay_derivative(
-    y: &[f64],
-    dt_s: f64,
-    half_window: usize,
-    order: usize,
-) -> Result<Vec<f64>, AeroError> {
-    savitzky_golay(y, dt_s, half_window, order, 1)
-}
-
-/// The same local polynomial fit, evaluated (not differentiated): the matching smoother, so that regressors
-/// can be filtered exactly like the differentiated outputs (Morelli & Klein §11.1 smooth every channel).
-pub fn savitzky_golay_smooth(
-    y: &[f64],
-    half_window: usize,
-    order: usize,
-) -> Result<Vec<f64>, AeroError> {
-    savitzky_golay(y, 1.0, half_window, order, 0)
-}
-
-fn savitzky_golay(
-    y: &[f64],
-    dt_s: f64,
-    half_window: usize,
-    order: usize,
-    deriv: usize,
-) -> Result<Vec<f64>, AeroError> {
-    let width = 2 * half_window + 1;
-    if !(dt_s.is_finite() && dt_s > 0.0) {
-        return Err(AeroError::BadRecord(format!(
-            "sample interval must be positive, got {dt_s}"
-        )));
-    }
-    if order == 0 || order >= width {
-        return Err(AeroError::BadRecord(format!(
-            "Savitzky–Golay order {order} needs 1 ≤ order < window {width}"
-        )));
-    }
-    if y.len() < width {
-        return Err(AeroError::BadRecord(format!(
-            "{} samples are fewer than the differentiation window of {width}",
-            y.len()
-        )));
-    }
-    let n = y.len();
-    let mut cache: Vec<Option<Vec<f64>>> = vec![None; width];
-    let mut out = vec![0.0; n];
-    for (i, o) in out.iter_mut().enumerate() {
-        let start = i.saturating_sub(half_window).min(n - width);
-        let pos = i - start; // position of sample i inside its window
-        if cache[pos].is_none() {
-            cache[pos] = Some(sg_weights(
-                pos,
-                width,
-                order,
-                half_window.max(1) as f64,
-                deriv,
-            )?);
-        }
-        let w = cache[pos].as_deref().unwrap_or(&[]);
-        *o = w
-            .iter()
-            .zip(&y[start..start + width])
-            .map(|(a, b)| a * b)
-            .sum::<f64>()
-            / dt_s.powi(deriv as i32);
-    }
-    Ok(out)
-}
-
-/// Derivative by the 5-point central difference (4th order) inside, 2nd-order differences at the ends.
-fn central_difference(y: &[f64], dt_s: f64) -> Vec<f64> {
-    let n = y.len();
-    (0..n)
-        .map(|i| {
-            if i >= 2 && i + 2 < n {
-                (y[i - 2] - 8.0 * y[i - 1] + 8.0 * y[i + 1] - y[i + 2]) / (12.0 * dt_s)
-            } else if i == 0 {
-                (-3.0 * y[0] + 4.0 * y[1] - y[2]) / (2.0 * dt_s)
-            } else if i + 1 == n {
-                (3.0 * y[n - 1] - 4.0 * y[n - 2] + y[n - 3]) / (2.0 * dt_s)
-            } else {
-                (y[i + 1] - y[i - 1]) / (2.0 * dt_s)
-            }
-        })
-        .collect()
-}
-
-/// Weights giving the value (`deriv` 0) or the slope (`deriv` 1) at window position `pos` of a polynomial LS fit (offsets scaled by `h`).
-fn sg_weights(
-    pos: usize,
-    width: usize,
-    order: usize,
-    h: f64,
-    deriv: usize,
-) -> Result<Vec<f64>, AeroError> {
-    let m = order + 1;
-    let x: Vec<f64> = (0..width).map(|j| (j as f64 - pos as f64) / h).collect();
-    let vtv = Mat::from_fn(m, m, |a, b| {
-        x.iter().map(|t| t.powi((a + b) as i32)).sum::<f64>()
-    });
-    let vt = Mat::from_fn(m, width, |a, j| x[j].powi(a as i32));
-    let sol = vtv.partial_piv_lu().solve(&vt);
-    let w: Vec<f64> = (0..width)
-        .map(|j| sol[(deriv, j)] / h.powi(deriv as i32))
-        .collect();
-    if w.iter().any(|v| !v.is_finite()) {
-        return Err(AeroError::Numerical("Savitzky–Golay weights"));
-    }
-    Ok(w)
 }
 
 fn channel<'a>(
@@ -734,93 +627,6 @@ type Outcome = Result<Result<RegressionResult, AeroError>, String>;
 
 /// Files one equation's [`Outcome`]: a regression into `equations`; a missing channel or collinear regressors
 /// (a flight that does not excite this axis) into `skipped`, not fatal; any other error ends the regression.
-/// α̇ from the flight-path kinematics, without differentiating the vane: with u = V cos α cos β,
-/// v = V sin β, w = V sin α cos β and the body accelerations from the measured specific forces,
-/// u̇ = a_x − g sin θ + r v − q w, ẇ = a_z + g cos θ cos φ + q u − p v (Klein & Morelli §3.2),
-/// α̇ = (u ẇ − w u̇)/(u² + w²). `None` without a_x, a_z or θ. Gusts move the vane's α but not this α̇, the
-/// rate of the airframe's own incidence (JSBSim's α̇ coefficients read the same kinematic one).
-fn kinematic_alphadot(
-    record: &FlightRecord<'_>,
-    v: &[f64],
-    alpha: &[f64],
-    q: &[f64],
-    g: f64,
-) -> Option<Vec<f64>> {
-    let n = v.len();
-    fn full(x: Option<&[f64]>, n: usize) -> Option<&[f64]> {
-        x.filter(|x| x.len() == n)
-    }
-    let (ax, az) = (full(record.ax_m_s2, n)?, full(record.az_m_s2, n)?);
-    let theta = full(record.theta_rad, n)?;
-    let or_zero = |x: Option<&[f64]>, i: usize| full(x, n).map_or(0.0, |x| x[i]);
-    Some(
-        (0..n)
-            .map(|i| {
-                let (beta, phi) = (or_zero(record.beta_rad, i), or_zero(record.phi_rad, i));
-                let (p, r) = (or_zero(record.p_rad_s, i), or_zero(record.r_rad_s, i));
-                let u = v[i] * alpha[i].cos() * beta.cos();
-                let vs = v[i] * beta.sin();
-                let w = v[i] * alpha[i].sin() * beta.cos();
-                let udot = ax[i] - g * theta[i].sin() + r * vs - q[i] * w;
-                let wdot = az[i] + g * theta[i].cos() * phi.cos() + q[i] * u - p * vs;
-                (u * wdot - w * udot) / (u * u + w * w)
-            })
-            .collect(),
-    )
-}
-
-/// σ of a held C_mα̇ as a fraction of |C_mq| (an estimate that carries C_mα̇ with it), carried into the
-/// covariance as a consider parameter (Jategaonkar §4.17; [`crate::estimate::Parameter::considered`] in the
-/// estimation core). In level flight, to first order, α̇ = q + Z_α α + Z_δe δe + Z_V V̂ (the gravity term
-/// varies only with sin γ₀), so C_mα̇ α̇ c̄/2V is a combination of the other regressors and the records cannot
-/// separate it (Klein & Morelli §3.5). Held at 0, it leaves C_mq + C_mα̇ in C_mq, C_mα + C_mα̇ Z_α c̄/2V in
-/// C_mα and C_mδe + C_mα̇ Z_δe c̄/2V in C_mδe. On the JSBSim c310 (C_mα̇ −12.7, C_mq −80, Z_α −1.5 /s,
-/// c̄/2V 0.0097 s) that is +0.19 on C_mα (19 %): it came out 12–16 % high in still air and 15–22 % high in
-/// light turbulence, by equation error and output error alike, and no fit of these records can mend it.
-/// Downwash lag at the tail makes C_mα̇ = C_mq,tail dε/dα, with dε/dα from 0 to about 0.6 on conventional
-/// aircraft, i.e. C_mα̇ between 0 and 0.4 (C_mq + C_mα̇); 0.2 |C_mq| as one σ about the held 0 spans that
-/// band at 2σ, and the σ reported for C_mα, C_mq and C_mδe then says how far they could be off if the
-/// aircraft has the α̇ term it physically would.
-pub const CM_ALPHADOT_CONSIDER: f64 = 0.2;
-
-/// The note on a held C_mα̇ whose range the σ carry ([`CM_ALPHADOT_CONSIDER`], σ `sd`); `free_it` says how
-/// to estimate it instead.
-pub fn held_alphadot_note(sd: f64, free_it: &str) -> String {
-    format!(
-        "Cm_alphadot is held at 0 but the records cannot tell it from the other pitch derivatives; the σ \
-         reported carries its physical range (0 ± {sd:.2}, from downwash lag), so read C_mα, C_mq and C_mδe \
-         with that σ: held, C_mq stands for C_mq + C_mα̇ and C_mα for C_mα + C_mα̇ Z_α c̄/(2V), the \
-         equivalent derivatives ({free_it} on records that separate it)"
-    )
-}
-
-/// Carries the held terms of [`RegressionResult::considered`] into the standard errors (a consider
-/// parameter in linear regression): a held term c with column x_c and σ_c shifts the estimates by
-/// d c, d = (XᵀX)⁻¹ Xᵀ x_c (the regression of x_c on the regressors), so the covariance grows by
-/// σ_c² d dᵀ. C_mα̇'s σ_c is [`CM_ALPHADOT_CONSIDER`] |C_mq|. Returns each term considered with its σ_c.
-pub fn consider_held_terms(res: &mut RegressionResult) -> Vec<(String, f64)> {
-    let mut done = Vec::new();
-    for (name, column) in std::mem::take(&mut res.considered) {
-        let sd = match name.as_str() {
-            "Cm_alphadot" => match res.terms.iter().find(|t| t.name == "Cm_q") {
-                Some(t) => CM_ALPHADOT_CONSIDER * t.value.abs(),
-                None => continue,
-            },
-            _ => continue,
-        };
-        let Ok(shift) = LeastSquares::fit(&res.regressors, &column) else {
-            continue;
-        };
-        for (t, d) in res.terms.iter_mut().zip(&shift.theta) {
-            let add = (sd * d).powi(2);
-            t.std_error = (t.std_error.powi(2) + add).sqrt();
-            t.std_error_colored = (t.std_error_colored.powi(2) + add).sqrt();
-        }
-        done.push((name, sd));
-    }
-    done
-}
-
 fn file_outcome(
     eq: &'static str,
     outcome: Outcome,
