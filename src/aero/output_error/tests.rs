@@ -5,6 +5,25 @@ use crate::aero::airframe::SensorPositions;
 use crate::aero::params::{Geometry, MassProperties};
 use crate::estimate::{simulate_states, InputHold, InputSignal, Run};
 
+/// The parameters of a model started at `starts`, no equation-error fallback, no still surface.
+fn started_parameters(
+    names: &[&'static str],
+    held: &[&str],
+    starts: &BTreeMap<String, f64>,
+    options: &OutputErrorOptions,
+    notes: &mut Vec<String>,
+) -> Vec<crate::estimate::Parameter> {
+    parameters(
+        names,
+        held,
+        starts,
+        &BTreeMap::new(),
+        &BTreeSet::new(),
+        options,
+        notes,
+    )
+}
+
 fn constants() -> Constants {
     Constants {
         mass: MassProperties {
@@ -168,12 +187,10 @@ fn recovers(extra: &[(&str, f64)], free: &[&str], check: &[&str]) {
         free: parse_free(&free.iter().map(|f| f.to_string()).collect::<Vec<_>>()).unwrap(),
         ..OutputErrorOptions::default()
     };
-    let params = parameters(
+    let params = started_parameters(
         &LONGITUDINAL_PARAMETERS,
         &LON_HELD,
         &starts,
-        &BTreeMap::new(),
-        &BTreeSet::new(),
         &options,
         &mut notes,
     );
@@ -396,12 +413,10 @@ fn the_propeller_torque_term_takes_the_thrust_borne_rolling_moment_off_the_roll_
         .collect();
     let mut notes = Vec::new();
     let options = OutputErrorOptions::default();
-    let params = parameters(
+    let params = started_parameters(
         &LATERAL_PARAMETERS,
         &LAT_HELD,
         &starts,
-        &BTreeMap::new(),
-        &BTreeSet::new(),
         &options,
         &mut notes,
     );
