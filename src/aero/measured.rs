@@ -175,14 +175,18 @@ pub struct MeasuredEquationError {
     pub considered: Vec<(String, f64)>,
 }
 
-/// One coefficient's regression over all records: term names, regressor columns, response, and the columns
-/// of the terms held and considered ([`RegressionResult::considered`]).
-type Stacked = (
-    Vec<String>,
-    Vec<Vec<f64>>,
-    Vec<f64>,
-    Vec<(String, Vec<f64>)>,
-);
+/// One coefficient's regression over all records, each column the records' rows one after another.
+struct Stacked {
+    /// Term names.
+    names: Vec<String>,
+    /// Regressor columns.
+    columns: Vec<Vec<f64>>,
+    /// Response.
+    response: Vec<f64>,
+    /// The terms held and considered ([`RegressionResult::considered`]): the same for every record, since
+    /// the options that decide them are.
+    considered: Vec<(String, Vec<f64>)>,
+}
 
 /// Equation error (Morelli & Klein §5.1, [`equation_error`]) over several measured records: each record's
 /// coefficients are reconstructed with its own airspeed, dynamic pressure and density and its sensors moved
@@ -324,21 +328,17 @@ pub fn equation_error_measured(
                 continue;
             }
             let names: Vec<String> = eq.terms.iter().map(|t| t.name.clone()).collect();
-            let entry = stacked.entry(eq.coefficient).or_insert_with(|| {
-                let considered = eq.considered.iter().map(|(c, _)| (c.clone(), Vec::new()));
-                (
-                    names.clone(),
-                    vec![Vec::new(); names.len()],
-                    Vec::new(),
-                    considered.collect(),
-                )
+            let entry = stacked.entry(eq.coefficient).or_insert_with(|| Stacked {
+                names: names.clone(),
+                columns: vec![Vec::new(); names.len()],
+                response: Vec::new(),
+                considered: eq
+                    .considered
+                    .iter()
+                    .map(|(c, _)| (c.clone(), Vec::new()))
+                    .collect(),
             });
-            let same_considered = entry
-                .3
-                .iter()
-                .map(|c| &c.0)
-                .eq(eq.considered.iter().map(|c| &c.0));
-            if entry.0 != names || !same_considered {
+            if entry.names != names {
                 skipped.push((
                     eq.coefficient.to_string(),
                     format!(
@@ -347,11 +347,11 @@ pub fn equation_error_measured(
                 ));
                 continue;
             }
-            for (col, x) in entry.1.iter_mut().zip(&eq.regressors) {
+            for (col, x) in entry.columns.iter_mut().zip(&eq.regressors) {
                 col.extend_from_slice(x);
             }
-            entry.2.extend_from_slice(&eq.response);
-            for (col, (_, x)) in entry.3.iter_mut().zip(&eq.considered) {
+            entry.response.extend_from_slice(&eq.response);
+            for (col, (_, x)) in entry.considered.iter_mut().zip(&eq.considered) {
                 col.1.extend_from_slice(x);
             }
             let rows = alpha_rows.entry(eq.coefficient).or_insert(Some(Vec::new()));
@@ -367,9 +367,9 @@ pub fn equation_error_measured(
     let mut equations = Vec::new();
     let mut derivatives = BTreeMap::new();
     let mut considered = Vec::new();
-    for (coefficient, (names, cols, z, held)) in stacked {
-        let mut res = lesq(coefficient, &names, &cols, &z, None)?;
-        res.considered = held;
+    for (coefficient, st) in stacked {
+        let mut res = lesq(coefficient, &st.names, &st.columns, &st.response, None)?;
+        res.considered = st.considered;
         considered.extend(consider_held_terms(&mut res));
         for t in &res.terms {
             derivatives.insert(
