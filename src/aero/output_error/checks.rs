@@ -49,12 +49,30 @@ fn wider_fit(
         fit_longitudinal(records, wider_setup, &mut wider_notes).ok()?
     };
     let drop = held.estimate.cost - fit.estimate.cost;
-    let converged = fit.estimate.stop == estimate::StopReason::Converged;
+    let converged =
+        fit.estimate.stop == estimate::StopReason::Converged && !drove_onto_bound(held, &fit);
     Some(Wider {
         fit,
         drop,
         converged,
         user_chose,
+    })
+}
+
+/// Whether the wider fit left on a bound a parameter that the held fit estimated off it (the rotary gust's
+/// gain, a vane skew). The new terms then buy their fall in cost by pushing another parameter as far as it may
+/// go: the model with them does not describe the records better, it trades one misfit for another, and at a
+/// bound neither the likelihood-ratio test nor the Cramér–Rao σ holds (Klein & Morelli §5.4 and §6.5 assume an
+/// interior optimum). On the JSBSim global5000 in light turbulence (`derivatives_eval --aircraft global5000`,
+/// seed 1) filter error's α̇ check adopted C_mα̇ −14.6 ± 2.2 (JSBSim −6) with k_q driven from 0.67 to its bound
+/// 1.5, and C_mq came out 44 % off and outside 3σ; output error found C_mα̇ not significant on the same records.
+fn drove_onto_bound(held: &AxisFit, wider: &AxisFit) -> bool {
+    wider.estimate.parameters.iter().any(|w| {
+        w.at_bound
+            && held
+                .estimate
+                .parameter(&w.name)
+                .is_some_and(|h| !h.fixed && !h.at_bound)
     })
 }
 
@@ -255,8 +273,8 @@ pub(super) fn speed_check(
     let verdict = g.verdict(
         "the records carry them (the phugoid is excited): C_LV, C_DV and C_mV are estimated (hold them with \
          --free=-speed)",
-        "the wider fit is not trusted (it did not converge, or moved C_mα, C_mq or C_mδe off their range): the \
-         speed derivatives stay held",
+        "the wider fit is not trusted (it did not converge, drove another parameter onto its bound, or moved \
+         C_mα, C_mq or C_mδe off their range): the speed derivatives stay held",
         "not significant: the speed derivatives stay held",
     );
     let note = format!(
@@ -304,8 +322,8 @@ pub(super) fn curvature_check(
     let verdict = g.verdict(
         "the coefficients curve over the α flown: C_Lα² and C_mα² are estimated, C_Lα and C_mα are the slopes \
          at the records' mean α (hold them with --free=-curvature)",
-        "the wider fit is not trusted (it did not converge, or moved C_mα, C_mq or C_mδe off their range): the \
-         curvature terms stay held",
+        "the wider fit is not trusted (it did not converge, drove another parameter onto its bound, or moved \
+         C_mα, C_mq or C_mδe off their range): the curvature terms stay held",
         "not significant: the curvature terms stay held",
     );
     let note = format!(
@@ -353,8 +371,8 @@ pub(super) fn side_force_rate_check(
         .any(|c| c.names.iter().any(|n| SIDE_RATES.contains(n)));
     let verdict = g.verdict(
         "the records carry them: C_Yp and C_Yr are estimated (hold them with --free=-CY_p,-CY_r)",
-        "the wider fit is not trusted (it did not converge, moved C_lp, C_lβ, C_nr or C_nβ off their range, or \
-         wants a β skew beyond the bound): they stay held",
+        "the wider fit is not trusted (it did not converge, drove another parameter onto its bound, moved C_lp, \
+         C_lβ, C_nr or C_nβ off their range, or wants a β skew beyond the bound): they stay held",
         "not significant: they stay held",
     );
     let note = format!(
@@ -503,7 +521,8 @@ fn vane_skew_check(
     } else if 2.0 * w.drop > CHI2_1_1PCT && t > 3.0 && !within {
         beyond.as_str()
     } else if !w.converged || !plausible {
-        "the wider fit is not trusted (it did not converge, or moved C_mα, C_mq or C_mδe off their range): held"
+        "the wider fit is not trusted (it did not converge, drove another parameter onto its bound, or moved \
+         C_mα, C_mq or C_mδe off their range): held"
     } else {
         "not significant: held"
     };
@@ -569,8 +588,8 @@ pub(super) fn alphadot_check(
     } else if supported {
         adopted.as_str()
     } else if p.value < 0.0 && t.abs() > 3.0 && !(vane && converged) {
-        "negative, but the wider fit is not trusted (no α vane, it did not converge, or it moved C_mα, C_mq or \
-         C_mδe off their range): the α̇ terms stay held"
+        "negative, but the wider fit is not trusted (no α vane, it did not converge, drove another parameter \
+         onto its bound, or moved C_mα, C_mq or C_mδe off their range): the α̇ terms stay held"
     } else if p.value > 0.0 {
         "positive, which downwash lag does not produce: another unmodelled effect takes the α̇ shape; the \
          α̇ terms stay held"
