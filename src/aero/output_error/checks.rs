@@ -12,12 +12,13 @@ use crate::estimate::{self, Method};
 
 /// A wider fit of an axis: `names` freed on top of the options' choices. Returns the fit, the fall
 /// in cost from `held` (J is the negative log-likelihood, so 2 ΔJ is the likelihood-ratio statistic, Klein &
-/// Morelli §5.4), whether it converged, and whether the user named any of `names` in `--free` (then a check only
-/// reports). `None` when the wider fit fails.
+/// Morelli §5.4), whether it converged to an interior optimum, and whether the user named any of `names` in
+/// `--free` (then a check only reports). `None` when the wider fit fails.
 struct Wider {
     fit: AxisFit,
     drop: f64,
-    converged: bool,
+    /// Converged, with no parameter pushed onto a bound ([`drove_onto_bound`]).
+    interior: bool,
     user_chose: bool,
 }
 
@@ -49,12 +50,12 @@ fn wider_fit(
         fit_longitudinal(records, wider_setup, &mut wider_notes).ok()?
     };
     let drop = held.estimate.cost - fit.estimate.cost;
-    let converged =
+    let interior =
         fit.estimate.stop == estimate::StopReason::Converged && !drove_onto_bound(held, &fit);
     Some(Wider {
         fit,
         drop,
-        converged,
+        interior,
         user_chose,
     })
 }
@@ -440,7 +441,7 @@ fn group_check(
     // χ² at 1 % for 1, 2, 3 degrees of freedom
     let chi2 = [CHI2_1_1PCT, CHI2_2_1PCT, CHI2_3_1PCT][newly_free.clamp(1, 3) - 1];
     let t_max = largest_t(&wider.fit, tested);
-    let trusted = wider.converged && key_derivatives_plausible(held, &wider.fit);
+    let trusted = wider.interior && key_derivatives_plausible(held, &wider.fit);
     let supported = 2.0 * wider.drop > chi2 && t_max > 3.0 && trusted;
     Some(GroupCheck {
         wider,
@@ -507,7 +508,7 @@ fn vane_skew_check(
     let plausible = key_derivatives_plausible(held, &w.fit);
     let bound_s = skew_bound_of(records);
     let within = p.value.abs() <= bound_s;
-    let supported = 2.0 * w.drop > CHI2_1_1PCT && t > 3.0 && w.converged && plausible && within;
+    let supported = 2.0 * w.drop > CHI2_1_1PCT && t > 3.0 && w.interior && plausible && within;
     let beyond = format!(
         "longer than a data system's skew can be (one sample interval, {:.0} ms): the lag of something the \
          model does not describe (gusts the vane reads, a filter); held — free it with --free skew if the vane \
@@ -520,7 +521,7 @@ fn vane_skew_check(
         "supported: estimated (hold it with --free=-skew)"
     } else if 2.0 * w.drop > CHI2_1_1PCT && t > 3.0 && !within {
         beyond.as_str()
-    } else if !w.converged || !plausible {
+    } else if !w.interior || !plausible {
         "the wider fit is not trusted (it did not converge, drove another parameter onto its bound, or moved \
          C_mα, C_mq or C_mδe off their range): held"
     } else {
@@ -571,7 +572,7 @@ pub(super) fn alphadot_check(
     let vane = records
         .iter()
         .all(|(_, r)| r.column(Channel::Alpha).is_some());
-    let converged = w.converged && key_derivatives_plausible(held, &w.fit);
+    let converged = w.interior && key_derivatives_plausible(held, &w.fit);
     let supported =
         p.value < 0.0 && t.abs() > 3.0 && 2.0 * w.drop > CHI2_2_1PCT && vane && converged;
     let partner = if setup.options.method == Method::Fem {
