@@ -50,8 +50,8 @@ fn wider_fit(
         fit_longitudinal(records, wider_setup, &mut wider_notes).ok()?
     };
     let drop = held.estimate.cost - fit.estimate.cost;
-    let interior =
-        fit.estimate.stop == estimate::StopReason::Converged && !drove_onto_bound(held, &fit);
+    let interior = fit.estimate.stop == estimate::StopReason::Converged
+        && !drove_onto_bound(&held.estimate, &fit.estimate);
     Some(Wider {
         fit,
         drop,
@@ -67,11 +67,10 @@ fn wider_fit(
 /// interior optimum). On the JSBSim global5000 in light turbulence (`derivatives_eval --aircraft global5000`,
 /// seed 1) filter error's α̇ check adopted C_mα̇ −14.6 ± 2.2 (JSBSim −6) with k_q driven from 0.67 to its bound
 /// 1.5, and C_mq came out 44 % off and outside 3σ; output error found C_mα̇ not significant on the same records.
-fn drove_onto_bound(held: &AxisFit, wider: &AxisFit) -> bool {
-    wider.estimate.parameters.iter().any(|w| {
+pub(super) fn drove_onto_bound(held: &estimate::Estimate, wider: &estimate::Estimate) -> bool {
+    wider.parameters.iter().any(|w| {
         w.at_bound
             && held
-                .estimate
                 .parameter(&w.name)
                 .is_some_and(|h| !h.fixed && !h.at_bound)
     })

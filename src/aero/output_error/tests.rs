@@ -486,3 +486,85 @@ fn the_propeller_torque_term_takes_the_thrust_borne_rolling_moment_off_the_roll_
         truth[k]
     );
 }
+
+/// A filter-error estimate holding `parameters` (name, fixed, at its bound); the rest is what a converged fit
+/// leaves.
+fn estimate_with(parameters: &[(&str, bool, bool)]) -> estimate::Estimate {
+    estimate::Estimate {
+        method: Method::Fem,
+        outputs: Vec::new(),
+        parameters: parameters
+            .iter()
+            .map(|&(name, fixed, at_bound)| estimate::ParameterEstimate {
+                name: name.to_string(),
+                kind: None,
+                record: None,
+                value: 1.0,
+                std_error: if fixed { 0.0 } else { 0.1 },
+                std_error_white: if fixed { 0.0 } else { 0.1 },
+                t: if fixed { 0.0 } else { 10.0 },
+                fixed,
+                at_bound,
+            })
+            .collect(),
+        nuisance: Vec::new(),
+        free: Vec::new(),
+        covariance: Vec::new(),
+        correlation: Vec::new(),
+        residual_covariance: Vec::new(),
+        records: Vec::new(),
+        iterations: 5,
+        converged: true,
+        stop: estimate::StopReason::Converged,
+        cost: 0.0,
+        cost_history: Vec::new(),
+        wall_s: 0.0,
+        covariance_method: "",
+        warnings: Vec::new(),
+        considered: Vec::new(),
+    }
+}
+
+/// The structure checks' bound rule: a wider fit is not trusted when it ends with a parameter on its bound that
+/// the held fit estimated off it (the global5000's k_q driven to 1.5 by a freed C_mα̇). A parameter already on
+/// its bound in the held fit, one the held fit did not estimate, or one of the freed terms itself on a bound
+/// (absent from the held estimate's free set) does not count against it.
+#[test]
+fn a_wider_fit_that_pushes_a_held_fits_interior_parameter_onto_its_bound_is_not_interior() {
+    use checks::drove_onto_bound;
+    let held = estimate_with(&[
+        ("Cm_q", false, false),
+        ("Cm_alphadot", true, false),
+        ("gust_q_gain", false, false),
+        ("tau_alpha_s", false, true),
+        ("CL_V", true, false),
+    ]);
+    let wider =
+        |k_q_at_bound: bool, tau_at_bound: bool, cm_ad_at_bound: bool, clv_at_bound: bool| {
+            estimate_with(&[
+                ("Cm_q", false, false),
+                ("Cm_alphadot", false, cm_ad_at_bound),
+                ("gust_q_gain", false, k_q_at_bound),
+                ("tau_alpha_s", false, tau_at_bound),
+                ("CL_V", true, clv_at_bound),
+            ])
+        };
+    assert!(!drove_onto_bound(&held, &wider(false, false, false, false)));
+    assert!(
+        drove_onto_bound(&held, &wider(true, false, false, false)),
+        "k_q pushed onto its bound"
+    );
+    assert!(
+        !drove_onto_bound(&held, &wider(false, true, false, false)),
+        "τ_α was on its bound already"
+    );
+    assert!(
+        !drove_onto_bound(&held, &wider(false, false, true, false)),
+        "C_mα̇ was held, not estimated"
+    );
+    assert!(
+        !drove_onto_bound(&held, &wider(false, false, false, true)),
+        "C_LV is held in both"
+    );
+    assert!(drove_onto_bound(&held, &wider(true, true, true, true)));
+}
